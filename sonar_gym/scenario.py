@@ -230,7 +230,7 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
             data = json.loads(path.read_text(encoding="utf-8"))
         else:
             data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError) as error:
+    except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as error:
         raise ScenarioError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from error
     return scenario_from_dict(data, source=str(path), default_name=path.stem)
 
@@ -370,7 +370,7 @@ class _Reader:
         if not isinstance(value, Mapping):
             raise self.error(key, "a table", value)
         self.no_unknown_keys(key, value, allowed)
-        if value:
+        if key in data:
             for name in required:
                 if name not in value:
                     raise self.error(f"{key}.{name}", "present", "missing")
