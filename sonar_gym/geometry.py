@@ -25,6 +25,7 @@ from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Scenario
 
 _MERGE_TOLERANCE_M = 1e-6
+_FLUSH_TOLERANCE_M = 1e-3
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,13 +107,11 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
     vertices, arms = _merge_vertices(
         segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls]
     )
-    # A box corner faces free space with an opening of 270 deg: always a convex edge, which
-    # equal arms encode.
-    box_corners = segment_starts[n_room_and_walls:]
-    box_arms = segment_ends[n_room_and_walls:] - box_corners
-    box_arms /= np.linalg.norm(box_arms, axis=1, keepdims=True)
+    box_corners, box_arms = _box_corner_arms(
+        scenario, segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls]
+    )
     vertices = np.concatenate([vertices, box_corners])
-    arms = np.concatenate([arms, np.stack([box_arms, box_arms], axis=1)])
+    arms = np.concatenate([arms, box_arms])
     circles = np.array(
         [[c.center[0], c.center[1], c.radius] for c in scenario.cylinders], dtype=np.float64
     ).reshape(-1, 3)
@@ -125,6 +124,55 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
         vertices=vertices,
         vertex_arms=arms,
     )
+
+
+def _box_corner_arms(
+    scenario: Scenario, wall_starts: FloatArray, wall_ends: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Corners of every box with their arms.
+
+    A free-standing box corner faces free space with an opening of 270 deg: always a convex
+    edge, which equal arms encode. A corner standing on a wall (a table pushed against it)
+    is hidden; instead the box's side leaving the wall and the wall form a concave 90 deg
+    dihedral there, which the arms ``(side away from the wall, wall away from the box)``
+    encode.
+    """
+    points: list[FloatArray] = []
+    arms: list[list[FloatArray]] = []
+    for box in scenario.boxes:
+        corners = np.array(box.corners, dtype=np.float64)
+        for i, corner in enumerate(corners):
+            to_next = corners[(i + 1) % 4] - corner
+            to_previous = corners[(i - 1) % 4] - corner
+            to_next /= np.linalg.norm(to_next)
+            to_previous /= np.linalg.norm(to_previous)
+            wall = _segment_containing(corner, wall_starts, wall_ends, _FLUSH_TOLERANCE_M)
+            points.append(corner)
+            if wall is None:
+                arms.append([to_next, to_next])
+                continue
+            along_wall_next = abs(float(wall @ to_next)) > 0.99
+            leaving = to_previous if along_wall_next else to_next
+            flush_side = to_next if along_wall_next else to_previous
+            arms.append([leaving, -flush_side])
+    return (
+        np.array(points, dtype=np.float64).reshape(-1, 2),
+        np.array(arms, dtype=np.float64).reshape(-1, 2, 2),
+    )
+
+
+def _segment_containing(
+    point: FloatArray, starts: FloatArray, ends: FloatArray, tolerance_m: float
+) -> FloatArray | None:
+    """Unit direction of a segment passing within ``tolerance_m`` of ``point`` (ends included)."""
+    for start, end in zip(starts, ends, strict=True):
+        span = end - start
+        length = float(np.linalg.norm(span))
+        t = float((point - start) @ span) / length
+        if -tolerance_m <= t <= length + tolerance_m:
+            if np.linalg.norm(point - (start + span * t / length)) <= tolerance_m:
+                return span / length
+    return None
 
 
 def _merge_vertices(starts: FloatArray, ends: FloatArray) -> tuple[FloatArray, FloatArray]:

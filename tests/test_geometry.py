@@ -121,3 +121,16 @@ def test_pillar_corners_are_edges_and_its_roots_concave() -> None:
 def test_arms_are_unit_vectors(name: str) -> None:
     geometry = build_static_geometry(load_scenario(name))
     np.testing.assert_allclose(np.linalg.norm(geometry.vertex_arms, axis=2), 1.0, rtol=1e-12)
+
+
+def test_box_corner_against_a_wall_is_a_concave_dihedral_not_an_edge() -> None:
+    scenario = scenario_from_dict(
+        {"room": {"min": [-3, -2], "max": [3, 2]}, "boxes": [{"center": [0, 1.7], "size": [1.0, 0.6]}]}
+    )
+    geometry = build_static_geometry(scenario)
+    flush_right = int(np.flatnonzero(np.all(np.isclose(geometry.vertices, [0.5, 2.0]), axis=1))[-1])
+    free_right = int(np.flatnonzero(np.all(np.isclose(geometry.vertices, [0.5, 1.4]), axis=1))[0])
+    beside_the_table = np.array([0.7, 1.5])
+    assert geometry.is_concave_from(beside_the_table)[flush_right]
+    assert not geometry.is_concave_from(np.array([0.0, 0.0]))[flush_right]  # behind the table face
+    assert not geometry.is_concave_from(beside_the_table)[free_right]
