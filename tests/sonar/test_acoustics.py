@@ -1,0 +1,150 @@
+"""Speed of sound, the piston beam pattern and air absorption against closed forms and tables."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.optimize import brentq
+from scipy.special import j1
+
+from sonar_gym.sonar.acoustics import (
+    PistonBeam,
+    absorption_amplitude_factor,
+    atmospheric_absorption_db_per_m,
+    first_null_rad,
+    piston_directivity,
+    piston_radius_for_half_width,
+    speed_of_sound_from_round_trip,
+    speed_of_sound_mps,
+    two_way_directivity,
+    wavenumber_per_m,
+)
+
+POLAROID_KA = wavenumber_per_m(50e3, 343.2) * 0.0192
+
+
+def test_speed_of_sound_is_331_3_at_zero_and_343_2_at_twenty_celsius() -> None:
+    assert speed_of_sound_mps(0.0) == 331.3
+    assert speed_of_sound_mps(20.0) == pytest.approx(343.2, abs=0.02)
+    assert speed_of_sound_mps(40.0) == pytest.approx(331.3 * math.sqrt(313.15 / 273.15), rel=1e-12)
+
+
+def test_humidity_adds_about_the_0_35_percent_beom_and_cho_quote_at_saturation() -> None:
+    dry, humid = speed_of_sound_mps(20.0), speed_of_sound_mps(20.0, relative_humidity=100.0)
+    assert 0.003 < humid / dry - 1.0 < 0.004
+
+
+def test_temperature_from_0_to_40_celsius_changes_the_speed_by_about_7_percent() -> None:
+    # Beom & Cho sec. II.A: "7% variation from 0 deg C to 40 deg C".
+    assert speed_of_sound_mps(40.0) / speed_of_sound_mps(0.0) - 1.0 == pytest.approx(
+        0.07, abs=0.005
+    )
+
+
+def test_round_trip_speed_is_twice_distance_over_time() -> None:
+    assert speed_of_sound_from_round_trip(0.515, 0.003) == pytest.approx(
+        2 * 0.515 / 0.003, rel=1e-15
+    )
+
+
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: speed_of_sound_from_round_trip(0.0, 0.003), "distance_m"),
+        (lambda: speed_of_sound_from_round_trip(0.5, -1.0), "tof_s"),
+        (lambda: speed_of_sound_mps(-300.0), "temperature_c"),
+        (lambda: speed_of_sound_mps(20.0, relative_humidity=120.0), "relative_humidity"),
+    ],
+)
+def test_bad_acoustic_arguments_raise_naming_the_argument(call, name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        call()
+
+
+def test_worked_check_ka_17_6_and_first_null_at_12_6_degrees() -> None:
+    # DESIGN sec. 3: 50 kHz, a = 19.2 mm, c = 343.2 m/s.
+    assert POLAROID_KA == pytest.approx(17.6, abs=0.03)
+    assert math.degrees(first_null_rad(POLAROID_KA)) == pytest.approx(12.6, abs=0.03)
+    assert abs(piston_directivity(first_null_rad(POLAROID_KA), POLAROID_KA)) < 1e-12
+
+
+def test_piston_directivity_is_one_on_axis_and_matches_the_bessel_formula() -> None:
+    assert piston_directivity(0.0, POLAROID_KA) == 1.0
+    theta = np.radians([3.0, 7.5, 20.0, 60.0])
+    x = POLAROID_KA * np.sin(theta)
+    np.testing.assert_allclose(piston_directivity(theta, POLAROID_KA), 2 * j1(x) / x, rtol=1e-14)
+
+
+def test_two_way_pattern_is_the_square_and_zero_behind_the_transducer() -> None:
+    theta = np.radians([5.0, 30.0, 89.0])
+    np.testing.assert_allclose(two_way_directivity(theta, 5.0), piston_directivity(theta, 5.0) ** 2)
+    np.testing.assert_array_equal(two_way_directivity(np.radians([91.0, 135.0, 180.0]), 5.0), 0.0)
+
+
+def test_piston_radius_for_half_width_gives_a_minus_6_db_point_there() -> None:
+    radius = piston_radius_for_half_width(math.radians(20.0), 40e3, 343.2)
+    ka = wavenumber_per_m(40e3, 343.2) * radius
+    assert piston_directivity(math.radians(20.0), ka) == pytest.approx(0.5, abs=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("temperature_c", "band_db_per_km"),
+    [
+        # ISO 9613-2 Table 2, 70 % relative humidity, third-octave mid-band frequencies.
+        (20.0, {1000.0: 5.0, 1995.26: 9.0, 3981.07: 22.9, 7943.28: 76.6}),
+        (10.0, {1000.0: 3.7, 1995.26: 9.7, 3981.07: 32.8, 7943.28: 117.0}),
+    ],
+)
+def test_air_absorption_reproduces_the_iso_9613_table(
+    temperature_c: float, band_db_per_km: dict
+) -> None:
+    for frequency, expected in band_db_per_km.items():
+        got = atmospheric_absorption_db_per_m(frequency, temperature_c, 70.0) * 1000.0
+        assert got == pytest.approx(expected, rel=0.02, abs=0.06)
+
+
+def test_air_absorption_at_the_sonar_frequencies_is_over_a_decibel_per_metre() -> None:
+    assert atmospheric_absorption_db_per_m(50e3) == pytest.approx(1.66, abs=0.01)
+    assert atmospheric_absorption_db_per_m(40e3) == pytest.approx(1.32, abs=0.01)
+    assert absorption_amplitude_factor(10.0, 2.0) == pytest.approx(0.1, rel=1e-12)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(0.0, math.pi), st.sampled_from([POLAROID_KA, 6.5, 7.4]))
+def test_tabulated_beam_matches_the_exact_pattern(theta: float, ka: float) -> None:
+    beam = PistonBeam.for_ka(ka, True)
+    assert beam.two_way(theta) == pytest.approx(float(two_way_directivity(theta, ka)), abs=3e-6)
+
+
+def test_main_lobe_beam_is_zero_beyond_the_first_null() -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, False)
+    null = first_null_rad(POLAROID_KA)
+    assert beam.two_way(null + 1e-3) == 0.0
+    assert beam.two_way(math.radians(17.0)) == 0.0  # first side lobe peak of the full pattern
+    assert PistonBeam.for_ka(POLAROID_KA, True).two_way(math.radians(17.0)) > 0.017
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(1e-7, 1.0))
+def test_main_lobe_limit_is_where_the_pattern_falls_to_the_level(level: float) -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, False)
+    limit = float(beam.main_lobe_cos_limits(np.array([level]))[0])
+    exact = brentq(
+        lambda t: two_way_directivity(t, POLAROID_KA) - level, 0.0, first_null_rad(POLAROID_KA)
+    )
+    assert math.acos(limit) == pytest.approx(
+        exact, abs=math.radians(0.004 if level < 1e-4 else 0.001)
+    )
+    assert float(beam.two_way_from_cos(np.array([limit]))[0]) == pytest.approx(
+        level, rel=1e-9, abs=1e-15
+    )
+
+
+def test_a_level_above_one_is_never_reached() -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, False)
+    limits = beam.main_lobe_cos_limits(np.array([1.0, 1.5]))
+    assert limits[0] == pytest.approx(1.0) and limits[1] > 1.0

@@ -1,0 +1,138 @@
+"""One-way beacon ranging: exact 3D distances, the counter, dropouts and firing times."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonar_gym.pose import Pose
+from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.ranging import BeaconRanger
+from tests.sonar.worlds import world
+
+EMITTERS = [
+    {"name": "T1", "position": [0.0, 0.0, 2.4]},
+    {"name": "T2", "position": [0.2, 0.0, 2.4]},
+    {"name": "T3", "position": [0.0, 0.2, 2.4]},
+]
+
+
+def ceiling_room(temperature_c: float = 20.0, **tables):
+    return world(
+        temperature_c,
+        room={"min": [-2, -2], "max": [2, 2]},
+        emitters=EMITTERS,
+        robot={"radius": 0.25, "sensor_height": 0.5},
+        **tables,
+    )
+
+
+def exact_distances(pose: Pose, receivers, height: float, emitters=EMITTERS) -> np.ndarray:
+    out = np.empty((len(receivers), len(emitters)))
+    for j, xy in enumerate(receivers):
+        x, y = pose.transform_point(xy)
+        for i, emitter in enumerate(emitters):
+            ex, ey, ez = emitter["position"]
+            out[j, i] = math.sqrt((ex - x) ** 2 + (ey - y) ** 2 + (ez - height) ** 2)
+    return out
+
+
+def test_noise_free_distances_are_the_3d_distances() -> None:
+    ranger = BeaconRanger.wu_tsai(noise=False, quantisation=False)
+    pose = Pose(0.7, -0.4, 0.6)
+    measured = ranger.measure(ceiling_room(), pose, np.random.default_rng(0))
+    np.testing.assert_allclose(
+        measured.distances, exact_distances(pose, ranger.receivers_xy, 0.5), rtol=1e-12
+    )
+    assert measured.emitter_names == ("T1", "T2", "T3")
+
+
+def test_the_50_khz_counter_reads_whole_counts_at_most_one_count_short() -> None:
+    ranger = BeaconRanger.wu_tsai(noise=False)
+    pose = Pose(-0.3, 0.9, -2.0)
+    measured = ranger.measure(ceiling_room(), pose, np.random.default_rng(0)).distances
+    quantum = ranger.range_quantum_m
+    assert quantum == pytest.approx(343.2 * 20e-6, rel=1e-3)  # 6.9 mm
+    counts = measured / quantum
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-6)
+    shortfall = exact_distances(pose, ranger.receivers_xy, 0.5) - measured
+    assert np.all((shortfall >= 0) & (shortfall < quantum))
+
+
+def test_assumed_speed_scales_the_distances() -> None:
+    ranger = BeaconRanger.wu_tsai(noise=False, quantisation=False)
+    pose = Pose(0.1, 0.2, 0.3)
+    measured = ranger.measure(ceiling_room(27.0), pose, np.random.default_rng(0)).distances
+    exact = exact_distances(pose, ranger.receivers_xy, 0.5)
+    np.testing.assert_allclose(
+        measured / exact, speed_of_sound_mps(20.0) / speed_of_sound_mps(27.0), rtol=1e-12
+    )
+    calibrated = ranger.with_assumed_speed(speed_of_sound_mps(27.0)).measure(
+        ceiling_room(27.0), pose, None
+    )
+    np.testing.assert_allclose(calibrated.distances, exact, rtol=1e-12)
+
+
+def test_a_free_wall_blocks_and_a_box_does_not() -> None:
+    ranger = BeaconRanger(noise=False, quantisation=False)
+    wall = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    box = ceiling_room(boxes=[{"center": [1.0, 0.0], "size": [0.3, 2.0]}])
+    behind = Pose(1.5, 0.0, 0.0)
+    assert np.all(np.isnan(ranger.measure(wall, behind, None).distances))
+    assert np.all(np.isfinite(ranger.measure(box, behind, None).distances))
+    assert np.all(np.isfinite(ranger.measure(wall, Pose(0.5, 0.0, 0.0), None).distances))
+
+
+def test_emitters_out_of_range_are_dropouts() -> None:
+    ranger = BeaconRanger(noise=False, quantisation=False, max_range_m=2.9)
+    measured = ranger.measure(ceiling_room(), Pose(1.6, 1.6, 0.0), None, emitter_names=["T1", "T3"])
+    exact = exact_distances(Pose(1.6, 1.6), ranger.receivers_xy, 0.5, [EMITTERS[0], EMITTERS[2]])
+    np.testing.assert_array_equal(np.isnan(measured.distances), exact > 2.9)
+    assert np.isnan(measured.distances).any() and np.isfinite(measured.distances).any()
+
+
+def test_emitters_fire_in_sequence_and_timestamps_follow() -> None:
+    ranger = BeaconRanger.wu_tsai(firing_interval_s=0.04, noise=False, quantisation=False)
+    measured = ranger.measure(ceiling_room(), Pose(0.0, 0.0, 0.0), None, emitter_names=["T3", "T1"])
+    assert measured.emitter_names == ("T3", "T1")
+    assert measured.duration_s == pytest.approx(0.08)
+    tof = measured.distances / speed_of_sound_mps(20.0)
+    np.testing.assert_allclose(measured.timestamps_s, tof + np.array([0.0, 0.04]), rtol=1e-12)
+
+
+def test_noise_is_seeded_and_unbiased() -> None:
+    ranger = BeaconRanger(range_noise_std_m=0.01, quantisation=False)
+    pose = Pose(0.0, 0.0, 0.0)
+    first = ranger.measure(ceiling_room(), pose, np.random.default_rng(5)).distances
+    again = ranger.measure(ceiling_room(), pose, np.random.default_rng(5)).distances
+    np.testing.assert_array_equal(first, again)
+    samples = np.concatenate(
+        [
+            ranger.measure(ceiling_room(), pose, np.random.default_rng(s)).distances.ravel()
+            for s in range(300)
+        ]
+    )
+    exact = exact_distances(pose, ranger.receivers_xy, 0.5)[0, 0]
+    assert np.mean(samples[::3]) == pytest.approx(exact, abs=0.003)
+    assert np.std(samples[::3]) == pytest.approx(0.01, rel=0.15)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"receivers_xy": ()}, "receivers_xy"),
+        ({"timer_period_s": -1.0}, "timer_period_s"),
+        ({"max_range_m": 0.0}, "max_range_m"),
+        ({"height_m": math.inf}, "height_m"),
+    ],
+)
+def test_bad_ranger_arguments_raise_naming_the_argument(kwargs, name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        BeaconRanger(**kwargs)
+
+
+def test_unknown_emitter_names_raise() -> None:
+    with pytest.raises(ValueError, match="T9"):
+        BeaconRanger().measure(ceiling_room(), Pose(0, 0), None, emitter_names=["T9"])
