@@ -69,7 +69,9 @@ __all__ = [
     "RobotLike",
     "ScenarioLike",
     "TwoCircleSolution",
+    "ASSIGNMENTS",
     "assign_large_and_small",
+    "assigned_pair_distance_error",
     "extract_rcds",
     "filter_beacon_candidates",
     "heading_from_large_beacon",
@@ -85,6 +87,8 @@ __all__ = [
 
 METHODS = ("paper", "least_squares")
 """Values of the ``method`` argument: the paper's closed form, or its least-squares refinement."""
+ASSIGNMENTS = ("extent", "best_fit")
+"""Values of :attr:`BeomChoParameters.assignment`: the paper's rule, or both tried."""
 
 SMALL_BEACON_NAME = "small_beacon"
 LARGE_BEACON_NAME = "large_beacon"
@@ -158,6 +162,12 @@ class BeomChoParameters:
             least-squares refinement only.
         bearing_sigma_rad: standard deviation of an RCD's centre angle ``beta``, radians;
             weights the least-squares refinement only.
+        assignment: which RCD of a pair is the large beacon. ``"extent"`` is the paper's rule
+            (section III.D: the larger ``eta``; on a tie the larger ``delta``). ``"best_fit"``
+            (not in the paper) tries both assignments in eq. (7) and keeps the one with the
+            smaller error: with an ideal piston both beacons' extents crowd below the first
+            null (about 25 deg) and range changes them as much as diameter does, so the
+            paper's rule swaps the beacons wherever the small one is much nearer.
     """
 
     eps_m: float = 0.02
@@ -169,8 +179,13 @@ class BeomChoParameters:
     r_max_m: float = 4.0
     range_sigma_m: float = 0.003
     bearing_sigma_rad: float = math.radians(0.5)
+    assignment: str = "extent"
 
     def __post_init__(self) -> None:
+        if self.assignment not in ASSIGNMENTS:
+            raise ValueError(
+                f"BeomChoParameters.assignment must be one of {ASSIGNMENTS}; got {self.assignment!r}"
+            )
         for name in (
             "eps_m",
             "eta_max_rad",
@@ -513,6 +528,13 @@ def pair_distance_error(
     _require_positive("large_radius", large_radius)
     _require_positive("beacon_distance", beacon_distance)
     small, large = assign_large_and_small(rcd_a, rcd_b)
+    return assigned_pair_distance_error(small, large, small_radius, large_radius, beacon_distance)
+
+
+def assigned_pair_distance_error(
+    small: RCD, large: RCD, small_radius: float, large_radius: float, beacon_distance: float
+) -> float:
+    """Eq. (7) for a pair whose small and large beacon are already assigned, metres."""
     small_distance = small.delta + small_radius
     large_distance = large.delta + large_radius
     squared = (
@@ -697,6 +719,8 @@ def localize_rcds(
     distance_tolerance: float | None = None,
     params: BeomChoParameters = BeomChoParameters(),
     method: str = "paper",
+    prior: Pose | None = None,
+    prior_gate_m: float = 0.5,
 ) -> BeaconLocalization:
     """Sections III.B-IV: the sensor pose from a pan's RCDs and the two known beacons.
 
@@ -715,6 +739,11 @@ def localize_rcds(
             ``params.distance_tolerance_m`` (0.04 m).
         params: filter thresholds and noise levels.
         method: ``"paper"`` or ``"least_squares"``.
+        prior: an optional estimate of the sensor pose (odometry), {W}. Not in the paper:
+            when given, pairs are tried in order of their eq. (7) error and the first whose
+            solution lies within ``prior_gate_m`` of the prior is kept, so a coincidental
+            pair of walls or corners cannot win against the beacons.
+        prior_gate_m: the gate radius around ``prior``, metres, > 0.
 
     Returns:
         Status ``"ok"`` with the pose of the sensor frame {P} (position of the pan axis in
@@ -745,42 +774,58 @@ def localize_rcds(
             message=f"none of {len(rcds)} RCDs passed the extent, symmetry and range filters",
         )
 
-    best: tuple[float, RCD, RCD] | None = None
+    pairs: list[tuple[float, RCD, RCD]] = []
     for rcd_a, rcd_b in itertools.combinations(candidates, 2):
-        error = pair_distance_error(rcd_a, rcd_b, small_radius, large_radius, beacon_distance)
-        if best is None or error < best[0]:
-            best = (error, *assign_large_and_small(rcd_a, rcd_b))
-    if best is None or best[0] > tolerance_m:
+        if params.assignment == "extent":
+            assignments = [assign_large_and_small(rcd_a, rcd_b)]
+        else:
+            assignments = [(rcd_a, rcd_b), (rcd_b, rcd_a)]
+        for small, large in assignments:
+            error = assigned_pair_distance_error(
+                small, large, small_radius, large_radius, beacon_distance
+            )
+            pairs.append((error, small, large))
+    pairs.sort(key=lambda pair: pair[0])
+    if not pairs or pairs[0][0] > tolerance_m:
         return BeaconLocalization(
             "no_pair",
             message=(
                 "a single candidate RCD"
-                if best is None
-                else f"smallest beacon-distance error {best[0]:.4f} m exceeds {tolerance_m} m"
+                if not pairs
+                else f"smallest beacon-distance error {pairs[0][0]:.4f} m exceeds {tolerance_m} m"
             ),
-            pair_error_m=None if best is None else best[0],
+            pair_error_m=None if not pairs else pairs[0][0],
             candidates=candidates,
         )
-    pair_error, small_rcd, large_rcd = best
+    if prior is not None:
+        _require_positive("prior_gate_m", prior_gate_m)
+        gated = _first_pair_near_prior(
+            [pair for pair in pairs if pair[0] <= tolerance_m],
+            small_xy, small_radius, large_xy, large_radius, prior, prior_gate_m,
+        )
+        if gated is None:
+            return BeaconLocalization(
+                "no_pair_near_prior",
+                message=f"no beacon pair within tolerance puts the robot within {prior_gate_m} m of the prior",
+                pair_error_m=pairs[0][0],
+                candidates=candidates,
+            )
+        pairs = [gated]
+    pair_error, small_rcd, large_rcd = pairs[0]
 
-    small_distance = small_rcd.delta + small_radius
-    large_distance = large_rcd.delta + large_radius
-    solution = solve_two_circles(
-        small_xy,
-        small_distance,
-        large_xy,
-        large_distance,
-        angle_difference(small_rcd.beta, large_rcd.beta),
-    )
+    solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, small_rcd, large_rcd)
+    found = {
+        "small_rcd": small_rcd,
+        "large_rcd": large_rcd,
+        "pair_error_m": pair_error,
+        "candidates": candidates,
+        "discriminant": solution.discriminant,
+    }
     if solution.position is None:
         return BeaconLocalization(
             "no_intersection",
             message=f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)",
-            small_rcd=small_rcd,
-            large_rcd=large_rcd,
-            pair_error_m=pair_error,
-            candidates=candidates,
-            discriminant=solution.discriminant,
+            **found,
         )
     heading = heading_from_large_beacon(solution.position, large_xy, large_rcd.beta)
     sensor_pose = Pose(solution.position[0], solution.position[1], heading)
@@ -809,6 +854,41 @@ def localize_rcds(
         candidates=candidates,
         discriminant=solution.discriminant,
     )
+
+
+def _solve_pair(
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    small_rcd: RCD,
+    large_rcd: RCD,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14) for an assigned pair of RCDs."""
+    return solve_two_circles(
+        small_xy,
+        small_rcd.delta + small_radius,
+        large_xy,
+        large_rcd.delta + large_radius,
+        angle_difference(small_rcd.beta, large_rcd.beta),
+    )
+
+
+def _first_pair_near_prior(
+    pairs: Sequence[tuple[float, RCD, RCD]],
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    prior: Pose,
+    gate_m: float,
+) -> tuple[float, RCD, RCD] | None:
+    """The first pair (in the given order) whose eqs (8)-(14) solution lies near ``prior``."""
+    for pair in pairs:
+        solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, pair[1], pair[2])
+        if solution.position is not None and math.dist(solution.position, (prior.x, prior.y)) <= gate_m:
+            return pair
+    return None
 
 
 class BeaconLike(Protocol):
@@ -866,13 +946,17 @@ def localize_scans(
     scenario: _Scenario,
     params: BeomChoParameters = BeomChoParameters(),
     method: str = "paper",
+    prior: Pose | None = None,
+    prior_gate_m: float = 0.5,
 ) -> BeaconLocalization:
     """:func:`localize_scan` over several pans from one robot pose (e.g. sector pans).
 
     Each pan must be equally spaced on its own (sectors at different increments are separate
     pans); RCDs are extracted from each and pooled before the filters and pair selection.
     Angles may be unwrapped past pi (a sector across the robot's back); RCD bearings are
-    wrapped to (-pi, pi] before they are used.
+    wrapped to (-pi, pi] before they are used. ``prior`` (the robot-centre pose from
+    odometry, {W}) and ``prior_gate_m`` gate the pair choice as in :func:`localize_rcds`;
+    without a prior this is the paper's method.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -895,6 +979,8 @@ def localize_scans(
         large_radius=large.radius,
         params=params,
         method=method,
+        prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+        prior_gate_m=prior_gate_m,
     )
     if result.pose is None:
         return result

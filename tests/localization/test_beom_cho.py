@@ -649,3 +649,64 @@ def test_calibrated_speed_removes_the_range_bias_of_an_assumed_speed() -> None:
 def test_bad_arguments_raise_value_error_naming_the_argument(call, name: str) -> None:
     with pytest.raises(ValueError, match=name):
         call()
+
+
+# ------------------------------------------------------------------------------------------
+# Options beside the paper: pair assignment by best fit, the odometry-prior gate
+# ------------------------------------------------------------------------------------------
+
+
+def _rcd_of_beacon(sensor: Pose, center: tuple[float, float], radius: float, eta_deg: float) -> RCD:
+    delta = math.dist(center, (sensor.x, sensor.y)) - radius
+    bearing = math.degrees(
+        math.atan2(center[1] - sensor.y, center[0] - sensor.x) - sensor.theta
+    )
+    return RCD.from_degrees(delta, bearing, eta_deg, 0.001)
+
+
+def test_swapped_extents_defeat_the_papers_rule_but_not_best_fit_assignment() -> None:
+    sensor = Pose(1.6, -0.4, 0.3)
+    # the small beacon is near, so its RCD is the wider one: the paper's rule swaps them
+    small = _rcd_of_beacon(sensor, SMALL_CENTER, SMALL_RADIUS, 24.0)
+    large = _rcd_of_beacon(sensor, LARGE_CENTER, LARGE_RADIUS, 22.0)
+    args = (SMALL_CENTER, SMALL_RADIUS, LARGE_CENTER, LARGE_RADIUS)
+    paper = localize_rcds([small, large], *args)
+    best_fit = localize_rcds([small, large], *args, params=BeomChoParameters(assignment="best_fit"))
+    assert not (paper.ok and position_error_m(paper.pose, sensor) < 0.01)
+    assert best_fit.ok
+    assert position_error_m(best_fit.pose, sensor) < 1e-9
+    assert heading_error_rad(best_fit.pose, sensor) < 1e-9
+
+
+def test_prior_gate_rejects_a_coincidental_pair_that_matches_eq_7_better() -> None:
+    sensor = Pose(-0.5, 0.7, -0.2)
+    exact_small = _rcd_of_beacon(sensor, SMALL_CENTER, SMALL_RADIUS, 22.0)
+    small = RCD(exact_small.delta + 0.005, exact_small.beta, exact_small.eta, exact_small.gamma)
+    large = _rcd_of_beacon(sensor, LARGE_CENTER, LARGE_RADIUS, 24.0)
+    true_error = pair_distance_error(small, large, SMALL_RADIUS, LARGE_RADIUS, BEACON_DISTANCE)
+    # two wall echoes whose implied distance matches d_0 exactly: eq. (7) prefers them
+    decoy_small = RCD.from_degrees(2.0, 10.0, 22.0, 0.001)
+    decoy_large_range = 1.0
+    chord = BEACON_DISTANCE
+    # choose the decoy's bearing so the law of cosines gives exactly d_0
+    d_s, d_l = 2.0 + SMALL_RADIUS, decoy_large_range + LARGE_RADIUS
+    cos_angle = (d_s**2 + d_l**2 - chord**2) / (2 * d_s * d_l)
+    decoy_large = RCD.from_degrees(
+        decoy_large_range, 10.0 - math.degrees(math.acos(cos_angle)), 24.0, 0.001
+    )
+    assert pair_distance_error(decoy_small, decoy_large, SMALL_RADIUS, LARGE_RADIUS, BEACON_DISTANCE) < true_error + 1e-12
+    rcds = [small, large, decoy_small, decoy_large]
+    args = (SMALL_CENTER, SMALL_RADIUS, LARGE_CENTER, LARGE_RADIUS)
+    ungated = localize_rcds(rcds, *args)
+    prior = Pose(sensor.x + 0.15, sensor.y - 0.1, sensor.theta + 0.05)
+    gated = localize_rcds(rcds, *args, prior=prior, prior_gate_m=0.4)
+    assert ungated.small_rcd == decoy_small or ungated.small_rcd == decoy_large
+    assert gated.ok and gated.small_rcd == small
+    assert position_error_m(gated.pose, sensor) < 0.02
+    far_prior = Pose(sensor.x + 3.0, sensor.y, sensor.theta)
+    assert localize_rcds(rcds, *args, prior=far_prior, prior_gate_m=0.4).status == "no_pair_near_prior"
+
+
+def test_bad_assignment_name_is_rejected() -> None:
+    with pytest.raises(ValueError, match="assignment"):
+        BeomChoParameters(assignment="coin_flip")
