@@ -1,0 +1,384 @@
+"""The ``sonar-gym`` command line: parsing, error messages, outputs (fake env), end to end."""
+
+from __future__ import annotations
+
+import importlib.machinery
+import json
+import subprocess
+import sys
+import types
+from pathlib import Path
+
+import pytest
+import torch
+
+from tests.cli_fakes import BOX_ID, DISCRETE_ID
+from train import cli
+
+torch.set_num_threads(1)  # the trainings here use tiny networks: more threads only contend
+
+REPOSITORY = Path(__file__).resolve().parents[1]
+SCRIPT = Path(sys.executable).with_name("sonar-gym")
+
+
+@pytest.fixture(autouse=True)
+def wide_console(monkeypatch):
+    """Tables wide enough not to wrap, whatever terminal the tests run in."""
+    monkeypatch.setenv("COLUMNS", "250")
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    code = cli.main(list(argv))
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+# --------------------------------------------------------------------------------------------
+# parsing
+
+
+def test_evaluate_defaults_are_the_main_job():
+    arguments = cli.build_parser().parse_args(["evaluate"])
+    assert arguments.env is None  # SonarGym/BeaconScan-v0, resolved when run
+    assert arguments.agent is None  # every agent of the env
+    assert arguments.episodes == 50 and arguments.seed == 0
+    assert arguments.json == Path("results/evaluate.json")
+    assert arguments.plot == Path("results/evaluate.png")
+    assert arguments.csv is None and arguments.env_arg == []
+
+
+def test_repeatable_options_collect_every_value():
+    arguments = cli.build_parser().parse_args(
+        ["evaluate", "--env", "all", "--agent", "paper", "runs/x/model.zip",
+         "--env-arg", "a=1", "--env-arg", "b=x"]
+    )
+    assert arguments.env == ["all"]
+    assert arguments.agent == ["paper", "runs/x/model.zip"]
+    assert arguments.env_arg == ["a=1", "b=x"]
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["evaluate", "--episodes", "0"],
+        ["evaluate", "--episodes", "many"],
+        ["train", "--env", DISCRETE_ID, "--algo", "ppo"],  # --timesteps is required
+        ["train", "--timesteps", "-5"],
+        ["frobnicate"],
+        [],
+    ],
+)
+def test_malformed_command_lines_exit_with_status_2(argv, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(argv)
+    assert exit_info.value.code == 2
+    assert "usage:" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------------
+# evaluate
+
+
+def test_evaluate_prints_a_table_and_writes_json_csv_and_plot(tmp_path, capsys):
+    code, out, err = run_cli(
+        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "scripted", "coin",
+        "--episodes", "4", "--seed", "7",
+        "--json", str(tmp_path / "e.json"), "--csv", str(tmp_path / "e.csv"),
+        "--plot", str(tmp_path / "e.png"),
+    )
+    assert code == 0, err
+    assert DISCRETE_ID in out and "scripted" in out and "coin" in out
+    for header in ("success [%]", "E_xy median [cm]", "E_θ p95 [deg]", "sensing time [s]",
+                   "95% CI"):
+        assert header in out
+    assert str(tmp_path / "e.json") in out and str(tmp_path / "e.png") in out
+    data = json.loads((tmp_path / "e.json").read_text())
+    assert data["meta"]["seed"] == 7 and data["meta"]["episodes"] == 4
+    assert data["meta"]["command"][:4] == ["sonar-gym", "evaluate", "--env", DISCRETE_ID]
+    assert data["meta"]["agents"] == {DISCRETE_ID: ["scripted", "coin"]}
+    assert [e["seed"] for e in data["results"][0]["episodes"]] == [7, 8, 9, 10]
+    assert len((tmp_path / "e.csv").read_text().splitlines()) == 1 + 8
+    assert (tmp_path / "e.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_evaluate_writes_to_results_by_default(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run_cli(capsys, "evaluate", "--env", DISCRETE_ID, "--episodes", "2")
+    assert code == 0
+    assert (tmp_path / "results" / "evaluate.json").is_file()
+    assert (tmp_path / "results" / "evaluate.png").is_file()
+    assert "results/evaluate.json" in out and "results/evaluate.png" in out
+    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    assert {"scripted", "coin", "patient", "random"} <= {r["agent"] for r in data["results"]}
+
+
+def test_evaluate_passes_env_args(tmp_path, capsys):
+    code, _, err = run_cli(
+        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "scripted", "--episodes", "2",
+        "--env-arg", "report_heading=false", "--env-arg", "noise_std_m=0",
+        "--json", str(tmp_path / "e.json"), "--plot", str(tmp_path / "e.png"),
+    )
+    assert code == 0, err
+    data = json.loads((tmp_path / "e.json").read_text())
+    assert data["meta"]["env_kwargs"] == {"report_heading": False, "noise_std_m": 0}
+    episode = data["results"][0]["episodes"][0]
+    assert episode["heading_error_rad"] is None and episode["position_error_m"] == 0.0
+
+
+def test_unknown_env_exits_2_naming_the_allowed_ids(capsys):
+    code, out, err = run_cli(capsys, "evaluate", "--env", "SonarGym/Nope-v0")
+    assert code == 2
+    assert "unknown env 'SonarGym/Nope-v0'" in err and "'all'" in err
+    assert "SonarGym/BeaconScan-v0" in err
+    assert "Traceback" not in err + out
+
+
+def test_unknown_agent_exits_2_naming_the_agents_of_the_env(capsys, tmp_path):
+    code, out, err = run_cli(
+        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "wizard",
+        "--json", str(tmp_path / "e.json"),
+    )
+    assert code == 2
+    assert "unknown agent 'wizard'" in err
+    for name in ("coin", "patient", "random", "scripted"):
+        assert name in err
+    assert "Traceback" not in err + out
+    assert not (tmp_path / "e.json").exists()
+
+
+@pytest.mark.parametrize(
+    "env_arg, fragment",
+    [("bogus=1", "has no argument bogus"), ("noise_std_m=5", "must lie in"), ("oops", "KEY=VALUE")],
+)
+def test_bad_env_args_exit_2_with_the_reason(capsys, env_arg, fragment):
+    code, _, err = run_cli(capsys, "evaluate", "--env", DISCRETE_ID, "--env-arg", env_arg)
+    assert code == 2 and fragment in err
+
+
+# --------------------------------------------------------------------------------------------
+# train
+
+
+def test_train_prints_the_evaluation_and_the_command_to_evaluate(tmp_path, capsys):
+    config = tmp_path / "tiny.toml"
+    config.write_text(
+        "n_envs = 2\neval_episodes = 2\n[hyperparameters]\nn_steps = 32\nbatch_size = 32\n"
+        "n_epochs = 1\n[policy_kwargs]\nnet_arch = [8]\n"
+    )
+    out_dir = tmp_path / "run"
+    code, out, err = run_cli(
+        capsys, "train", "--env", DISCRETE_ID, "--algo", "PPO", "--timesteps", "64",
+        "--out", str(out_dir), "--config", str(config), "--no-progress",
+        "--env-arg", "noise_std_m=0.02",
+    )
+    assert code == 0, err
+    assert "64 timesteps" in out and "evaluate_policy, 2 episodes" in out
+    assert (
+        f"sonar-gym evaluate --env {DISCRETE_ID} --agent {out_dir / 'model.zip'} "
+        "--env-arg noise_std_m=0.02"
+    ) in out
+    assert json.loads((out_dir / "run.json").read_text())["env_kwargs"] == {"noise_std_m": 0.02}
+
+
+@pytest.mark.parametrize(
+    "env_id, algo, fragment",
+    [
+        (DISCRETE_ID, "sac", "SAC needs a Box action space"),
+        (BOX_ID, "dqn", "DQN needs a Discrete action space"),
+        (DISCRETE_ID, "trpo", "choose one of ['ppo', 'sac', 'dqn', 'a2c']"),
+        ("SonarGym/Nope-v0", "ppo", "unknown env"),
+    ],
+)
+def test_train_refuses_what_cannot_work(capsys, tmp_path, env_id, algo, fragment):
+    code, _, err = run_cli(
+        capsys, "train", "--env", env_id, "--algo", algo, "--timesteps", "10",
+        "--out", str(tmp_path / "run"),
+    )
+    assert code == 2 and fragment in err
+    assert not (tmp_path / "run").exists()
+
+
+# --------------------------------------------------------------------------------------------
+# benchmark
+
+
+def install_fake_bench_sonar(monkeypatch, rows=None) -> None:
+    """A stand-in ``train.bench_sonar`` (the real one times the sonar for seconds)."""
+    fake = types.ModuleType("train.bench_sonar")
+    if rows is not None:
+        fake.pan_throughput = lambda: rows
+    monkeypatch.setitem(sys.modules, "train.bench_sonar", fake)
+
+
+def test_benchmark_reports_steps_per_second_and_phase_shares(tmp_path, capsys, monkeypatch):
+    install_fake_bench_sonar(monkeypatch, rows=[{"name": "pan", "pans_per_s": 10.0}])
+    path = tmp_path / "b.json"
+    code, out, err = run_cli(
+        capsys, "benchmark", "--env", DISCRETE_ID, BOX_ID, "--steps", "200", "--json", str(path)
+    )
+    assert code == 0, err
+    assert "env steps per second" in out and DISCRETE_ID in out and "sensing" in out
+    data = json.loads(path.read_text())
+    assert data["meta"]["steps"] == 200
+    assert [entry["env_id"] for entry in data["envs"]] == [DISCRETE_ID, BOX_ID]
+    for entry in data["envs"]:
+        assert entry["steps"] == 200 and entry["env_steps_per_s"] > 0
+        assert entry["agent"] == "coin"  # no "paper" agent here: the first registered one
+        assert set(entry["phase_shares"]) == {"sensing", "localization", "other"}
+        assert sum(entry["phase_shares"].values()) == pytest.approx(1.0)
+    assert data["pan"] == [{"name": "pan", "pans_per_s": 10.0}] and data["notes"] == []
+
+
+def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys, monkeypatch):
+    install_fake_bench_sonar(monkeypatch, [{"name": "polaroid 360 pings", "pans_per_s": 123.0}])
+    code, out, _ = run_cli(
+        capsys, "benchmark", "--env", DISCRETE_ID, "--steps", "10",
+        "--json", str(tmp_path / "b.json"),
+    )
+    assert code == 0
+    assert "sonar pan throughput" in out and "polaroid 360 pings" in out
+    assert json.loads((tmp_path / "b.json").read_text())["pan"][0]["pans_per_s"] == 123.0
+
+
+def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, capsys,
+                                                                     monkeypatch):
+    install_fake_bench_sonar(monkeypatch)
+    code, out, _ = run_cli(
+        capsys, "benchmark", "--env", DISCRETE_ID, "--steps", "10",
+        "--json", str(tmp_path / "b.json"),
+    )
+    assert code == 0 and "pan throughput skipped" in out
+
+
+# --------------------------------------------------------------------------------------------
+# reproduce
+
+
+def install_fake_reproduction(monkeypatch, name: str, calls: list) -> None:
+    module_name = f"train.reproduce.{name}"
+    module = types.ModuleType(module_name)
+    module.__spec__ = importlib.machinery.ModuleSpec(module_name, None)
+    module.run = lambda out_dir, console: calls.append((name, out_dir))
+    monkeypatch.setitem(sys.modules, module_name, module)
+
+
+def test_reproduce_dispatches_to_the_module_of_the_paper(tmp_path, capsys, monkeypatch):
+    calls: list = []
+    install_fake_reproduction(monkeypatch, "wu_tsai", calls)
+    assert "wu-tsai" in cli.available_reproductions()
+    code, _, err = run_cli(capsys, "reproduce", "wu-tsai", "--out", str(tmp_path))
+    assert code == 0, err
+    assert calls == [("wu_tsai", tmp_path / "wu_tsai")]
+    assert (tmp_path / "wu_tsai").is_dir()
+
+
+def test_reproduce_all_runs_what_exists(tmp_path, capsys, monkeypatch):
+    calls: list = []
+    install_fake_reproduction(monkeypatch, "beom_cho", calls)
+    monkeypatch.setattr(cli, "available_reproductions", lambda: ["beom-cho"])
+    code, out, _ = run_cli(capsys, "reproduce", "all", "--out", str(tmp_path))
+    assert code == 0
+    assert calls == [("beom_cho", tmp_path / "beom_cho")]
+    assert "not available yet, skipped: kim, wu-tsai, roh, apcs" in out
+
+
+def test_reproduce_unknown_or_missing_paper_exits_2_listing_the_papers(capsys, monkeypatch):
+    monkeypatch.setattr(cli, "available_reproductions", lambda: ["kim"])
+    code, _, err = run_cli(capsys, "reproduce", "smith")
+    assert code == 2
+    assert "unknown paper 'smith'" in err and "beom-cho" in err and "wu-tsai" in err
+    assert "available now: ['kim']" in err
+    code, _, err = run_cli(capsys, "reproduce", "roh")
+    assert code == 2 and "'roh' is not available yet" in err
+    monkeypatch.setattr(cli, "available_reproductions", lambda: [])
+    code, _, err = run_cli(capsys, "reproduce", "all")
+    assert code == 2 and "no reproduction is available yet" in err
+
+
+# --------------------------------------------------------------------------------------------
+# the installed script
+
+
+def test_console_script_is_installed_and_reports_errors_without_traceback():
+    assert SCRIPT.is_file(), "run `pip install -e . --no-deps` to create the sonar-gym script"
+    help_run = subprocess.run(
+        [str(SCRIPT), "--help"], capture_output=True, text=True, cwd=REPOSITORY, timeout=60
+    )
+    assert help_run.returncode == 0
+    for command in ("evaluate", "train", "benchmark", "reproduce"):
+        assert command in help_run.stdout
+    bad = subprocess.run(
+        [str(SCRIPT), "evaluate", "--env", "Nope-v0"],
+        capture_output=True, text=True, cwd=REPOSITORY, timeout=60,
+    )
+    assert bad.returncode == 2 and "unknown env" in bad.stderr
+    assert "Traceback" not in bad.stderr
+
+
+# --------------------------------------------------------------------------------------------
+# end to end on SonarGym/BeaconScan-v0
+
+BEACON_SCAN = "SonarGym/BeaconScan-v0"
+
+
+def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(tmp_path, capsys,
+                                                                         monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    arguments = cli.build_parser().parse_args(["evaluate"])
+    code, out, err = run_cli(capsys, "evaluate", "--episodes", "3")  # all other defaults
+    assert code == 0, err
+    assert arguments.episodes == 50  # what `make evaluate` runs; 3 here to stay fast
+    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    assert data["meta"]["env_ids"] == [BEACON_SCAN]
+    assert [r["agent"] for r in data["results"]] == ["paper", "random", "sector"]
+    for result in data["results"]:
+        assert [e["seed"] for e in result["episodes"]] == [0, 1, 2]
+        assert all(isinstance(e["position_error_m"], float) for e in result["episodes"])
+    assert (tmp_path / "results" / "evaluate.png").is_file()
+    assert "paper" in out and "sector" in out and "results/evaluate.json" in out
+
+
+def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
+    from agents.base import make_agent
+    from agents.learned import PolicyAgent
+    from train.evaluation import make_env
+
+    out_dir = tmp_path / "run"
+    code, out, err = run_cli(
+        capsys, "train", "--env", BEACON_SCAN, "--algo", "ppo", "--timesteps", "512",
+        "--out", str(out_dir), "--eval-episodes", "2", "--no-progress",
+    )
+    assert code == 0, err
+    assert "512 timesteps" in out
+    command = f"sonar-gym evaluate --env {BEACON_SCAN} --agent {out_dir / 'model.zip'}"
+    assert command in out
+    assert (out_dir / "vecnormalize.pkl").is_file()
+    assert json.loads((out_dir / "run.json").read_text())["config_file"].endswith(
+        "beacon_scan.ppo.toml"
+    )
+    agent = make_agent(str(out_dir / "model.zip"), make_env(BEACON_SCAN))
+    assert isinstance(agent, PolicyAgent) and agent.normalizer is not None
+
+    code, out, err = run_cli(
+        capsys, *command.split()[1:], "paper", "--episodes", "2",
+        "--json", str(tmp_path / "e.json"), "--plot", str(tmp_path / "e.png"),
+    )
+    assert code == 0, err
+    data = json.loads((tmp_path / "e.json").read_text())
+    assert [r["agent"] for r in data["results"]] == [str(out_dir / "model.zip"), "paper"]
+    assert all(len(r["episodes"]) == 2 for r in data["results"])
+
+
+def test_benchmark_beacon_scan_with_the_paper_agent(tmp_path, capsys):
+    path = tmp_path / "b.json"
+    code, out, err = run_cli(
+        capsys, "benchmark", "--env", BEACON_SCAN, "--steps", "30", "--json", str(path)
+    )
+    assert code == 0, err
+    assert BEACON_SCAN in out
+    data = json.loads(path.read_text())
+    assert data["failures"] == {}
+    (entry,) = data["envs"]
+    assert entry["agent"] == "paper" and entry["steps"] == 30 and entry["env_steps_per_s"] > 0
+    assert data["pan"] and all(row["pans_per_s"] > 0 for row in data["pan"])  # bench_sonar's
+    assert "sonar pan throughput" in out
