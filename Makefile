@@ -24,7 +24,7 @@ evaluate: $(STAMP)
 	$(BIN)/sonar-gym evaluate
 
 test: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q
+	$(BIN)/python -m pytest -n 2 -q -m "not slow"
 
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q -m slow
