@@ -19,10 +19,22 @@ from train.training import train
 pytestmark = pytest.mark.slow
 
 
+# Environment steps per run: episodes differ from 1 decision (BlockExpansion) to dozens, and a
+# step costs from about 1 ms (BeaconScan) to about 70 ms (BlockExpansion).
+TIMESTEPS = {
+    "SonarGym/BeaconScan-v0": 20_000,
+    "SonarGym/SweepLocalization-v0": 8_192,
+    "SonarGym/Trilateration-v0": 8_192,
+    "SonarGym/BlockExpansion-v0": 2_048,
+    "SonarGym/WallCorrection-v0": 4_096,
+}
+
+
+@pytest.mark.timeout(1800)
 @pytest.mark.parametrize("env_id", sorted(ENVIRONMENTS))
 def test_ppo_trains_saves_loads_and_beats_random(env_id: str, tmp_path: Path) -> None:
     result = train(
-        env_id, "ppo", timesteps=20_000, out_dir=tmp_path / "run", seed=0,
+        env_id, "ppo", timesteps=TIMESTEPS[env_id], out_dir=tmp_path / "run", seed=0,
         progress_bar=False, eval_episodes=0,
     )
     assert result.model_path.exists() and result.vecnormalize_path.exists()
