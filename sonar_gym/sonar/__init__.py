@@ -1,7 +1,8 @@
 """Ultrasonic sensing: transducer presets, echo physics, the rotating pan, beacon ranging.
 
 Modules:
-    acoustics: speed of sound, the piston beam pattern, air absorption.
+    acoustics: speed of sound, the piston beam pattern and its side-lobe leakage, air absorption.
+    receiver: the receiver's time-varying gain.
     presets: the Polaroid 6500, SRF04 and MA40B8 transducers and their calibrated thresholds.
     echoes: echo candidates (walls, cylinders, corners, edges) of a sensor position.
     echo_tables: per-geometry constant tables that make the echo search array arithmetic.
@@ -15,6 +16,7 @@ Modules:
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.presets import PRESET_NAMES, Transducer, preset
 from sonar_gym.sonar.pulse_echo import Readout
+from sonar_gym.sonar.receiver import TimeVaryingGain
 from sonar_gym.sonar.ranging import BeaconRanger, RangeMeasurement
 from sonar_gym.sonar.rotating import RotatingSonar, SpeedCalibration
 from sonar_gym.sonar.scan import Scan
@@ -31,6 +33,7 @@ __all__ = [
     "SideSonars",
     "SpeedCalibration",
     "SweptSonar",
+    "TimeVaryingGain",
     "Transducer",
     "preset",
     "speed_of_sound_mps",

@@ -17,6 +17,19 @@ Beam pattern
     ``a = 19.2 mm``, ``c = 343.2 m/s`` give ``k a = 17.6`` and the first null at
     ``asin(3.8317 / 17.6) = 12.6 deg``.
 
+Side-lobe leakage (filled nulls)
+    A real transducer is no ideal piston (a stretched membrane on a grooved backplate for the
+    Polaroid electrostatic transducers): its nulls are not infinitely deep and the pattern
+    beyond the main lobe keeps a floor of leaked energy. The model: beyond the main lobe the
+    two-way pattern is ``S * 8 / (pi x^3)``, ``x = k a sin(theta)``, where ``8 / (pi x^3)`` is
+    the two-way envelope of the piston's side lobes (``2 J1(x) / x`` falls as
+    ``2 sqrt(2 / (pi x)) / x``, squared ``8 / (pi x^3)``) and ``S`` in ``[0, 1]`` is the leakage
+    (:func:`two_way_pattern`). On the main lobe's flank ``D^2`` holds while it is the larger,
+    i.e. up to the argument ``x_S`` where ``D^2 = S 8 / (pi x^3)`` (between the -6 dB point and
+    the first null for any ``S <= 1``, :func:`leakage_onset_argument`). ``S = 0`` is the ideal
+    piston. Without side lobes the pattern is then monotone over the whole front half-space;
+    with them, ``max(D^2, S 8 / (pi x^3))`` beyond ``x_S`` (side lobes with filled nulls).
+
 Air absorption
     ISO 9613-1 (1993), the pure-tone attenuation coefficient in dB/m as a function of
     frequency, temperature, relative humidity and pressure (its formulae hold at ultrasonic
@@ -31,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
+from scipy.optimize import brentq
 from scipy.special import j1
 
 from sonar_gym.pose import FloatArray
@@ -112,6 +126,72 @@ def two_way_directivity(theta_rad: npt.ArrayLike, wavenumber_ka: float) -> Float
     return np.where(np.cos(theta) > 0.0, d * d, 0.0)
 
 
+def side_lobe_envelope(x: npt.ArrayLike) -> FloatArray:
+    """Two-way envelope ``8 / (pi x^3)`` of the piston's side lobes (``x = k a sin(theta) > 0``)."""
+    x = np.asarray(x, dtype=np.float64)
+    return 8.0 / (math.pi * x * x * x)
+
+
+def _validated_leakage(side_lobe_leakage: float) -> float:
+    value = side_lobe_leakage
+    if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
+        raise ValueError(
+            f"argument 'side_lobe_leakage' must be a number in [0, 1]; got {side_lobe_leakage!r}"
+        )
+    return float(value)
+
+
+@functools.lru_cache(maxsize=32)
+def leakage_onset_argument(side_lobe_leakage: float) -> float:
+    """``x_S``: where the main lobe's ``D^2`` falls to the leakage ``S 8 / (pi x^3)``.
+
+    The unique root of ``(2 J1(x) / x)^2 = S 8 / (pi x^3)`` between the one-way -6 dB point
+    (``x = 2.215``, where ``D^2 = 0.25 > 0.234 S``) and the first null (``x = 3.832``);
+    the first null itself when ``S = 0``.
+    """
+    leakage = _validated_leakage(side_lobe_leakage)
+    if leakage == 0.0:
+        return FIRST_ZERO_OF_J1
+
+    def excess(x: float) -> float:
+        d = 2.0 * float(j1(x)) / x
+        return d * d - leakage * float(side_lobe_envelope(x))
+
+    return float(brentq(excess, HALF_AMPLITUDE_ARGUMENT, FIRST_ZERO_OF_J1, xtol=1e-15))
+
+
+def two_way_pattern(
+    theta_rad: npt.ArrayLike,
+    wavenumber_ka: float,
+    *,
+    side_lobes: bool = True,
+    side_lobe_leakage: float = 0.0,
+) -> FloatArray:
+    """The two-way amplitude pattern of a transducer, exactly (see "Side-lobe leakage").
+
+    Args:
+        theta_rad: off-axis angle(s) in radians.
+        wavenumber_ka: ``k a`` of the piston.
+        side_lobes: keep the piston's side lobes (False: nothing but the main lobe and the
+            leakage floor beyond it).
+        side_lobe_leakage: ``S`` in [0, 1]; 0 is the ideal piston.
+
+    Returns:
+        The pattern with the shape of ``theta_rad``; 1 on the axis, 0 behind the transducer.
+    """
+    theta = np.abs(np.asarray(theta_rad, dtype=np.float64))
+    values = two_way_directivity(theta, wavenumber_ka)
+    if not side_lobes:
+        values = np.where(theta >= first_null_rad(wavenumber_ka), 0.0, values)
+    leakage = _validated_leakage(side_lobe_leakage)
+    if leakage > 0.0:
+        x = wavenumber_ka * np.sin(theta)
+        leaking = (x >= leakage_onset_argument(leakage)) & (np.cos(theta) > 0.0)
+        floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
+        values = np.where(leaking, np.maximum(values, floor), values)
+    return values
+
+
 def first_null_rad(wavenumber_ka: float) -> float:
     """Off-axis angle of the piston's first null, radians (pi/2 if ``k a`` is too small for one)."""
     return math.asin(min(1.0, FIRST_ZERO_OF_J1 / wavenumber_ka))
@@ -177,20 +257,21 @@ _TABLE_SIZE = math.ceil(math.sqrt(2.0) * _TABLE_STEPS_PER_UNIT) + 1
 
 @dataclass(frozen=True, eq=False)
 class PistonBeam:
-    """The two-way pattern ``D^2`` of one piston, tabulated for fast vectorised evaluation.
+    """The two-way pattern of one transducer, tabulated for fast vectorised evaluation.
 
-    The argument is ``cos(theta)`` of the off-axis angle (what a dot product of unit vectors
-    gives), mapped to ``s = sqrt(1 - cos(theta))`` in ``[0, sqrt(2)]``, where ``D^2`` is smooth;
-    ``2^12`` samples per unit of ``s`` (a table small enough to stay in cache) with linear
-    interpolation reproduce the exact pattern to ``3e-6`` absolute (checked in the tests),
-    which moves the edge of a detection window by at most 0.004 deg (under 0.001 deg for
-    echoes less than 40 dB above the threshold, such as the beacons). ``s = 1``
-    (90 deg) is a sample;
-    behind the transducer the pattern is 0. Without side lobes the table is also 0 beyond the
-    first null, and the main lobe, which falls monotonically, can be inverted exactly
-    (:meth:`main_lobe_cos_limits`).
+    The pattern is :func:`two_way_pattern`: the piston's ``D^2``, with or without its side
+    lobes, and with the side-lobe leakage ``S`` filling the nulls. The argument is
+    ``cos(theta)`` of the off-axis angle (what a dot product of unit vectors gives), mapped to
+    ``s = sqrt(1 - cos(theta))`` in ``[0, sqrt(2)]``, where the pattern is smooth; ``2^12``
+    samples per unit of ``s`` (a table small enough to stay in cache) with linear interpolation
+    reproduce the exact pattern to ``3e-6`` absolute (checked in the tests), which moves the
+    edge of a detection window by at most 0.004 deg (under 0.001 deg for echoes less than 40 dB
+    above the threshold, such as the beacons). ``s = 1`` (90 deg) is a sample; behind the
+    transducer the pattern is 0. Without side lobes the pattern falls monotonically from the
+    axis (over the main lobe, and with leakage over the whole front half-space), so it can be
+    inverted exactly (:meth:`main_lobe_cos_limits`).
 
-    Build it with :meth:`for_ka` (cached per ``k a``).
+    Build it with :meth:`for_ka` (cached per ``k a``, side lobes and leakage).
     """
 
     wavenumber_ka: float
@@ -199,13 +280,17 @@ class PistonBeam:
     _slopes: FloatArray = field(repr=False)
     _main_lobe_rising: FloatArray = field(repr=False)
     _reaches_back: bool = field(repr=False)
+    side_lobe_leakage: float = 0.0
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
-    def for_ka(wavenumber_ka: float, side_lobes: bool = True) -> PistonBeam:
-        """The (cached) tabulated beam for a given ``k a``, with or without its side lobes."""
+    def for_ka(
+        wavenumber_ka: float, side_lobes: bool = True, side_lobe_leakage: float = 0.0
+    ) -> PistonBeam:
+        """The (cached) tabulated beam for a given ``k a``, side-lobe switch and leakage ``S``."""
         if not wavenumber_ka > 0.0:
             raise ValueError(f"argument 'wavenumber_ka' must be positive; got {wavenumber_ka!r}")
+        leakage = _validated_leakage(side_lobe_leakage)
         s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / _TABLE_STEPS_PER_UNIT
         front = s <= 1.0
         theta = np.full(len(s), math.pi)
@@ -214,18 +299,26 @@ class PistonBeam:
         beyond_main_lobe = (theta >= first_null_rad(wavenumber_ka)) | ~front
         if not side_lobes:
             values[beyond_main_lobe] = 0.0
-        last_main = int(np.argmax(beyond_main_lobe)) - 1
+        last_monotone = int(np.argmax(beyond_main_lobe)) - 1
+        if leakage > 0.0:
+            x = wavenumber_ka * np.sin(theta[front])
+            leaking = x >= leakage_onset_argument(leakage)
+            floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
+            values[front] = np.where(leaking, np.maximum(values[front], floor), values[front])
+            if not side_lobes:
+                last_monotone = _TABLE_STEPS_PER_UNIT  # monotone up to 90 deg
         return PistonBeam(
             float(wavenumber_ka),
             bool(side_lobes),
             values[:-1].copy(),
             np.diff(values),
-            values[last_main::-1].copy(),
+            values[last_monotone::-1].copy(),
             bool(values[_TABLE_STEPS_PER_UNIT] != 0.0),
+            leakage,
         )
 
     def two_way_from_cos(self, cos_off_axis: FloatArray) -> FloatArray:
-        """``D^2`` at off-axis angles given by their cosines (any shape, values in [-1, 1])."""
+        """The pattern at off-axis angles given by their cosines (any shape, values in [-1, 1])."""
         scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
         index = scaled.astype(np.intp)
         fraction = scaled - index
@@ -235,20 +328,25 @@ class PistonBeam:
         return values
 
     def two_way(self, theta_rad: npt.ArrayLike) -> FloatArray:
-        """``D^2`` of this beam at off-axis angles in radians."""
+        """The pattern of this beam at off-axis angles in radians."""
         return self.two_way_from_cos(np.cos(np.asarray(theta_rad, dtype=np.float64)))
 
     def main_lobe_cos_limits(self, levels: FloatArray) -> FloatArray:
-        """``cos`` of the off-axis angle where the main lobe's ``D^2`` falls to each level.
+        """``cos`` of the off-axis angle where the falling pattern drops to each level.
 
-        On the main lobe ``D^2(theta) >= level`` exactly when ``cos(theta) >=`` the returned
-        limit (the same piecewise-linear pattern as :meth:`two_way_from_cos`). Levels must be
-        positive; a level above 1 (an echo too weak even on the axis) gets the limit 2, which
-        no cosine reaches.
+        The falling part is the main lobe, and without side lobes but with leakage the whole
+        front half-space. On it the pattern is ``>= level`` exactly when ``cos(theta) >=`` the
+        returned limit (the same piecewise-linear pattern as :meth:`two_way_from_cos`). Levels
+        must be positive; a level above 1 (an echo too weak even on the axis) gets the limit 2,
+        which no cosine reaches; a level below the pattern at 90 deg gets the smallest positive
+        cosine (the whole front half-space hears the echo, nothing behind it does).
         """
         rising = self._main_lobe_rising
         reachable = np.minimum(levels, 1.0)
         cell = len(rising) - 1 - np.searchsorted(rising, reachable, side="left")
         upper = self._values[cell]
         s_limit = (cell + (upper - reachable) / -self._slopes[cell]) * (1.0 / _TABLE_STEPS_PER_UNIT)
-        return np.where(levels > 1.0, 2.0, 1.0 - s_limit * s_limit)
+        return np.where(levels > 1.0, 2.0, np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE))
+
+
+_SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))

@@ -39,11 +39,15 @@ small beacon heard to 11.5 deg off axis, 44 dB down its main lobe) it would give
 corner a beacon-like RCD of about 20 deg out to several metres. Real edges (table tops,
 monitor bezels, rounded cabinet corners) are short and blunt, so the default is an empirical
 point-diffractor law with strength :data:`EDGE_ECHO_STRENGTH_M`, chosen so that the Polaroid
-preset hears an edge on its axis only within about 0.75 m, and an edge's RCD spans under
-18 deg (the lower bound of Beom & Cho's filter) even at the 0.3 m minimum range.
-``edge_law="gtd"`` gives the ideal-wedge law instead.
+threshold with a constant receiver gain hears an edge on its axis only within about 0.75 m,
+and an edge's RCD spans under 18 deg (the lower bound of Beom & Cho's filter) even at the
+0.3 m minimum range. Through the Polaroid preset's gain ramp (:mod:`sonar_gym.sonar.receiver`),
+which is low at short range, an edge stays over 20 dB below the threshold at any range: the
+preset hears no edge. ``edge_law="gtd"`` gives the ideal-wedge law instead.
 
-Air absorption multiplies every amplitude by ``10^(-alpha 2 r / 20)``.
+Air absorption multiplies every amplitude by ``10^(-alpha 2 r / 20)``. A receiver with a
+time-varying gain (:mod:`sonar_gym.sonar.receiver`) then multiplies it by its gain ``G(r)``:
+the amplitudes are what the comparator sees, in the units of the threshold.
 
 An echo is kept only if its path ``p -> echo point`` crosses no segment and enters no circle
 before reaching the echo point (the reflector's own primitives touch the path only at its end,
@@ -72,6 +76,7 @@ import numpy.typing as npt
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.receiver import TimeVaryingGain
 
 EDGE_DIFFRACTION_COEFFICIENT = (4.0 / 3.0) * math.sin(2.0 * math.pi / 3.0) / 1.5
 """``|D| sqrt(2 pi k)`` of Keller's diffraction coefficient for backscatter from a rigid wedge of
@@ -135,7 +140,8 @@ class EchoCandidates:
         position: the sensor position in {W}, metres, shape ``(2,)``.
         directions: ``(K, 2)`` unit vectors from ``position`` towards each echo point.
         path_lengths: ``(K,)`` one-way path lengths ``r``, metres.
-        amplitudes: ``(K,)`` on-axis echo amplitudes including air absorption (1/m).
+        amplitudes: ``(K,)`` on-axis echo amplitudes including air absorption and the
+            receiver's gain, if any (1/m, the units of the threshold).
         kinds: ``(K,)`` :class:`EchoKind` codes (computed on first use).
     """
 
@@ -180,6 +186,7 @@ def echo_candidates(
     footprint_center: tuple[float, float] | FloatArray | None = None,
     footprint_radius_m: float = 0.0,
     edge_law: str = "weak",
+    receiver_gain: TimeVaryingGain | None = None,
 ) -> EchoCandidates:
     """Find the echo candidates of a sensor at ``position`` (see the module docstring).
 
@@ -193,6 +200,8 @@ def echo_candidates(
         footprint_center, footprint_radius_m: echo points inside this circle (the robot's
             body, {W}, metres) are dropped.
         edge_law: ``"weak"`` (default) or ``"gtd"``, the edge echo of the module docstring.
+        receiver_gain: the receiver's time-varying gain, applied to every amplitude before the
+            threshold test (None: a constant gain of 1).
     """
     tables = echo_tables(geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
     px, py = float(position[0]), float(position[1])
@@ -228,6 +237,8 @@ def echo_candidates(
     if absorption_db_per_m > 0.0:
         # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
         amplitudes *= np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+    if receiver_gain is not None:
+        amplitudes *= receiver_gain.gain(safe)
 
     valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold)
     facing = tables.solid_side * signed_distance <= 0.0  # not on a segment's solid side

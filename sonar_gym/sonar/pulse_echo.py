@@ -2,7 +2,9 @@
 
 A ping fired along a unit direction from a sensor position hears every echo candidate of that
 position (:mod:`sonar_gym.sonar.echoes`) with amplitude ``A = A_axis D^2(off-axis angle)``
-(:class:`~sonar_gym.sonar.acoustics.PistonBeam`); it detects those with ``A >= threshold`` and
+(:class:`~sonar_gym.sonar.acoustics.PistonBeam`, with the transducer's side-lobe switch and
+leakage; ``A_axis`` includes the receiver's time-varying gain, if the transducer has one, so
+``A`` is what the comparator sees); it detects those with ``A >= threshold`` and
 reports the first of them (smallest time of flight). Many pings from one position are one
 ``(pings x candidates)`` array computation, with no loop over pings.
 
@@ -82,7 +84,8 @@ class FirstEchoes:
         detected: ``(n,)`` whether any echo reached the threshold.
         path_lengths: ``(n,)`` one-way path length of the first detected echo, metres
             (meaningless where not detected).
-        amplitudes: ``(n,)`` its amplitude (1/m), 0 where not detected.
+        amplitudes: ``(n,)`` its amplitude after the receiver's gain (1/m, the units of the
+            threshold), 0 where not detected.
     """
 
     detected: np.ndarray
@@ -230,6 +233,7 @@ class PulseEchoSonar:
             footprint_center=(robot_pose.x, robot_pose.y),
             footprint_radius_m=world.scenario.robot.radius,
             edge_law=self.edge_law,
+            receiver_gain=transducer.time_varying_gain,
         )
 
     def first_echoes_at(
@@ -243,11 +247,14 @@ class PulseEchoSonar:
         unit vectors in the robot frame {R}), before the electronics read them."""
         true_speed = speed_of_sound_mps(world.temperature_c)
         candidates = self.candidates(world, robot_pose, sensor_xy)
+        transducer = self.transducer
         beam = PistonBeam.for_ka(
-            self.transducer.wavenumber_ka(true_speed), self.transducer.side_lobes
+            transducer.wavenumber_ka(true_speed),
+            transducer.side_lobes,
+            transducer.side_lobe_leakage,
         )
         return first_echoes(
-            candidates, beam_directions, beam, self.transducer.detection_threshold, robot_pose.theta
+            candidates, beam_directions, beam, transducer.detection_threshold, robot_pose.theta
         )
 
     def readings(

@@ -174,10 +174,13 @@ class RotatingSonar(PulseEchoSonar):
         transducer = self.transducer
         true_speed = speed_of_sound_mps(world.temperature_c)
         absorption = 10.0 ** (-transducer.absorption_db_per_m * 2.0 * distance / 20.0)
+        amplitude = float(plane_echo_amplitude(distance)) * absorption
+        if transducer.time_varying_gain is not None:
+            amplitude *= float(transducer.time_varying_gain.gain(distance))
         echoes = FirstEchoes(
             detected=np.ones(n_pings, dtype=bool),
             path_lengths=np.full(n_pings, distance),
-            amplitudes=np.full(n_pings, float(plane_echo_amplitude(distance)) * absorption),
+            amplitudes=np.full(n_pings, amplitude),
         )
         tof = float(np.mean(measured_times(echoes, transducer, true_speed, self.readout, rng)))
         if count_reading == "centred" and self.readout.quantisation:

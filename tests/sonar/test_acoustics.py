@@ -12,15 +12,20 @@ from scipy.optimize import brentq
 from scipy.special import j1
 
 from sonar_gym.sonar.acoustics import (
+    FIRST_ZERO_OF_J1,
+    HALF_AMPLITUDE_ARGUMENT,
     PistonBeam,
     absorption_amplitude_factor,
     atmospheric_absorption_db_per_m,
     first_null_rad,
+    leakage_onset_argument,
     piston_directivity,
     piston_radius_for_half_width,
     speed_of_sound_from_round_trip,
+    side_lobe_envelope,
     speed_of_sound_mps,
     two_way_directivity,
+    two_way_pattern,
     wavenumber_per_m,
 )
 
@@ -148,3 +153,95 @@ def test_a_level_above_one_is_never_reached() -> None:
     beam = PistonBeam.for_ka(POLAROID_KA, False)
     limits = beam.main_lobe_cos_limits(np.array([1.0, 1.5]))
     assert limits[0] == pytest.approx(1.0) and limits[1] > 1.0
+
+
+def leakage_formula(theta: float, ka: float, leakage: float) -> float:
+    """``S 8 / (pi x^3)``, ``x = k a sin(theta)``: the two-way side-lobe envelope times ``S``."""
+    x = ka * math.sin(theta)
+    return leakage * 8.0 / (math.pi * x**3)
+
+
+def test_side_lobe_envelope_is_the_asymptote_of_the_squared_piston_pattern() -> None:
+    # 2 J1(x) / x ~ 2 sqrt(2 / (pi x)) cos(x - 3 pi / 4) / x: far out, D^2 peaks touch it.
+    for start in (60.0, 200.0):
+        x = np.linspace(start, start + 2 * math.pi, 20001)
+        ratio = (2 * j1(x) / x) ** 2 / side_lobe_envelope(x)
+        assert ratio.max() == pytest.approx(1.0, abs=0.02)
+
+
+@pytest.mark.parametrize("leakage", [0.066, 0.07, 0.09])
+def test_leakage_starts_where_the_main_lobe_falls_to_it(leakage: float) -> None:
+    onset = leakage_onset_argument(leakage)
+    assert HALF_AMPLITUDE_ARGUMENT < onset < FIRST_ZERO_OF_J1
+    assert (2 * j1(onset) / onset) ** 2 == pytest.approx(
+        leakage * 8 / (math.pi * onset**3), rel=1e-9
+    )
+    assert leakage_onset_argument(0.0) == FIRST_ZERO_OF_J1
+
+
+def leaky_pattern_formula(theta: float, leakage: float) -> float:
+    """The expected pattern without side lobes: ``D^2`` up to the onset, the leakage beyond."""
+    x = POLAROID_KA * math.sin(theta)
+    if x >= leakage_onset_argument(leakage):
+        return leakage_formula(theta, POLAROID_KA, leakage)
+    return float((2 * j1(x) / x) ** 2)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.floats(1e-3, math.pi / 2 - 1e-6), st.sampled_from([0.066, 0.07, 0.08]))
+def test_leaky_beam_table_matches_the_formula(theta: float, leakage: float) -> None:
+    expected = leaky_pattern_formula(theta, leakage)
+    beam = PistonBeam.for_ka(POLAROID_KA, False, leakage)
+    assert beam.two_way(theta) == pytest.approx(expected, rel=1e-4, abs=3e-6)
+    assert float(
+        two_way_pattern(theta, POLAROID_KA, side_lobes=False, side_lobe_leakage=leakage)
+    ) == pytest.approx(expected, rel=1e-12)
+
+
+def test_leakage_fills_the_first_null_and_nothing_behind_the_transducer() -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, False, 0.07)
+    null = first_null_rad(POLAROID_KA)
+    assert beam.two_way(null) == pytest.approx(leakage_formula(null, POLAROID_KA, 0.07), rel=1e-4)
+    assert 10 * math.log10(float(beam.two_way(null))) == pytest.approx(-25.0, abs=0.05)
+    assert float(beam.two_way(math.radians(91.0))) == 0.0
+
+
+def test_with_side_lobes_the_leakage_only_fills_the_nulls() -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, True, 0.07)
+    side_lobe_peak = math.asin(5.1356 / POLAROID_KA)  # first maximum of |J1(x) / x| past the null
+    assert beam.two_way(side_lobe_peak) == pytest.approx(
+        float(two_way_directivity(side_lobe_peak, POLAROID_KA)), abs=3e-6
+    )
+    second_null = math.asin(7.0156 / POLAROID_KA)
+    assert beam.two_way(second_null) == pytest.approx(
+        leakage_formula(second_null, POLAROID_KA, 0.07), rel=1e-3
+    )
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.floats(1e-7, 0.999))
+def test_leaky_beam_limit_is_where_the_pattern_falls_to_the_level(level: float) -> None:
+    beam = PistonBeam.for_ka(POLAROID_KA, False, 0.07)
+    limit = float(beam.main_lobe_cos_limits(np.array([level]))[0])
+    if level <= leakage_formula(math.pi / 2, POLAROID_KA, 0.07):
+        assert 0.0 < limit < 1e-300  # heard over the whole front half-space, not behind
+        return
+    exact = brentq(lambda t: leaky_pattern_formula(t, 0.07) - level, 1e-4, math.pi / 2)
+    assert math.acos(limit) == pytest.approx(exact, abs=math.radians(0.004))
+
+
+def test_the_polaroid_main_lobe_holds_to_11_5_degrees_for_leakage_below_0_1() -> None:
+    # The threshold is fixed at 11.5 deg off axis, on the main lobe, for any S < 0.10.
+    at_threshold = math.radians(11.5)
+    for leakage in (0.06, 0.07, 0.09):
+        assert float(
+            two_way_pattern(at_threshold, POLAROID_KA, side_lobes=False, side_lobe_leakage=leakage)
+        ) == float(two_way_directivity(at_threshold, POLAROID_KA))
+    assert leakage_formula(at_threshold, POLAROID_KA, 0.11) > float(
+        two_way_directivity(at_threshold, POLAROID_KA)
+    )
+
+
+def test_bad_leakage_raises_naming_it() -> None:
+    with pytest.raises(ValueError, match="side_lobe_leakage"):
+        PistonBeam.for_ka(POLAROID_KA, False, 1.5)

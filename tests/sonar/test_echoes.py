@@ -62,8 +62,8 @@ def test_ideal_wedge_edge_is_about_20_db_below_the_small_beacon_and_40_db_below_
     assert 20 * math.log10(plane_echo_amplitude(2.0) / edge) == pytest.approx(40.0, abs=1.5)
 
 
-def test_default_edge_is_heard_by_the_polaroid_only_within_three_quarters_of_a_metre() -> None:
-    polaroid = preset("polaroid-6500")
+def test_default_edge_is_heard_with_constant_gain_only_within_three_quarters_of_a_metre() -> None:
+    polaroid = preset("polaroid-6500")  # its threshold; the constant-gain amplitude below
 
     def heard_on_axis(r: float) -> bool:
         loss = absorption_amplitude_factor(2 * r, polaroid.absorption_db_per_m)

@@ -13,9 +13,16 @@ from sonar_gym.sonar.acoustics import (
     absorption_amplitude_factor,
     speed_of_sound_mps,
     two_way_directivity,
+    two_way_pattern,
 )
 from sonar_gym.sonar.echoes import cylinder_echo_amplitude, plane_echo_amplitude
-from sonar_gym.sonar.presets import PRESET_NAMES, Transducer, beacon_extent_threshold, preset
+from sonar_gym.sonar.presets import (
+    PRESET_NAMES,
+    Transducer,
+    beacon_extent_threshold,
+    polaroid_6500,
+    preset,
+)
 
 
 def test_every_scenario_sensor_name_is_a_preset() -> None:
@@ -111,3 +118,52 @@ def test_transducer_is_frozen() -> None:
     with pytest.raises(dataclasses.FrozenInstanceError):
         preset("srf04").max_range_m = 9.0  # type: ignore[misc]
     assert isinstance(preset("srf04"), Transducer)
+
+
+def test_polaroid_threshold_is_the_same_with_and_without_gain_ramp_and_leakage() -> None:
+    # G(r_ref) = 1 at the small beacon, and 11.5 deg lies on the main lobe for S < 0.10.
+    ideal = polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0)
+    for transducer in (polaroid_6500(), polaroid_6500(time_varying_gain=False)):
+        assert transducer.detection_threshold == pytest.approx(
+            ideal.detection_threshold, rel=1e-15
+        )
+
+
+@pytest.mark.parametrize("absorption", [True, False])
+def test_small_beacon_window_is_23_degrees_with_gain_ramp_and_leakage(absorption: bool) -> None:
+    transducer = preset("polaroid-6500", atmospheric_absorption=absorption)
+    assert transducer.time_varying_gain is not None and transducer.side_lobe_leakage > 0.0
+    ka = transducer.wavenumber_ka(speed_of_sound_mps(20.0))
+    echo_range = math.hypot(2.85, -0.6) - 0.0191
+    at_comparator = (
+        cylinder_echo_amplitude(echo_range, 0.0191)
+        * absorption_amplitude_factor(2 * echo_range, transducer.absorption_db_per_m)
+        * transducer.time_varying_gain.gain(echo_range)
+    )
+    edge = brentq(
+        lambda t: at_comparator
+        * two_way_pattern(
+            t, ka, side_lobes=False, side_lobe_leakage=transducer.side_lobe_leakage
+        )
+        - transducer.detection_threshold,
+        1e-6,
+        math.pi / 2 - 1e-9,
+    )
+    assert 2 * math.degrees(edge) == pytest.approx(23.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("name", ["srf04", "ma40b8"])
+def test_small_transducers_are_ideal_pistons_with_constant_gain(name: str) -> None:
+    transducer = preset(name)
+    assert transducer.time_varying_gain is None
+    assert transducer.side_lobe_leakage == 0.0
+    assert transducer.side_lobes is False
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("side_lobe_leakage", -0.1), ("side_lobe_leakage", 1.2), ("time_varying_gain", 2.0)],
+)
+def test_bad_fidelity_fields_raise_naming_the_field(field: str, value: float) -> None:
+    with pytest.raises(ValueError, match=field):
+        dataclasses.replace(preset("polaroid-6500"), **{field: value})

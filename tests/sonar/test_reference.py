@@ -2,8 +2,9 @@
 
 The reference finds echo points with plain Python loops over the primitives, decides
 occlusion with pymunk's own ``segment_query_first`` cast from the sensor to each echo point,
-and loops over the pings. It shares only the physics (amplitude laws, the beam pattern, the
-corner test of the geometry) with the fast path.
+and loops over the pings. It shares only the physics (amplitude laws, the receiver's gain, the
+beam pattern, the corner test of the geometry) with the fast path. Both the Polaroid preset
+(gain ramp and side-lobe leakage) and the ideal piston with constant gain are checked.
 """
 
 from __future__ import annotations
@@ -27,10 +28,12 @@ from sonar_gym.sonar.echoes import (
     edge_echo_amplitude,
     plane_echo_amplitude,
 )
+from sonar_gym.sonar.presets import Transducer, polaroid_6500
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, Readout
 from sonar_gym.sonar.rotating import RotatingSonar
 from tests.sonar.worlds import StandInWorld, cluttered_room, free_positions, pymunk_space
 
+IDEAL_PISTON = polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0)
 END_TOLERANCE = 1e-6  # pymunk hits within this fraction of the path's end are the reflector itself
 
 
@@ -76,6 +79,8 @@ def reference_echoes(
         if hit is not None and hit.alpha < 1.0 - END_TOLERANCE:
             continue
         amplitude *= float(absorption_amplitude_factor(2.0 * r, transducer.absorption_db_per_m))
+        if transducer.time_varying_gain is not None:
+            amplitude *= float(transducer.time_varying_gain.gain(r))
         echoes.append((r, (point - p) / r, amplitude))
     return echoes
 
@@ -86,7 +91,9 @@ def reference_pan(
     """Ranges of a noise-free pan, ping by ping."""
     transducer = sonar.transducer
     true_speed = speed_of_sound_mps(test_world.temperature_c)
-    beam = PistonBeam.for_ka(transducer.wavenumber_ka(true_speed), transducer.side_lobes)
+    beam = PistonBeam.for_ka(
+        transducer.wavenumber_ka(true_speed), transducer.side_lobes, transducer.side_lobe_leakage
+    )
     echoes = reference_echoes(test_world, space, sonar, pose)
     ranges = []
     for angle in angles:
@@ -110,19 +117,21 @@ def reference_pan(
 
 
 @pytest.mark.parametrize(
-    ("readout", "sensor_offset"),
+    ("readout", "sensor_offset", "transducer"),
     [
-        (IDEAL_READOUT, (0.0, 0.0)),
-        (Readout(range_noise=False), (0.0, 0.0)),
-        (IDEAL_READOUT, (0.12, -0.05)),
+        (IDEAL_READOUT, (0.0, 0.0), polaroid_6500()),
+        (Readout(range_noise=False), (0.0, 0.0), polaroid_6500()),
+        (IDEAL_READOUT, (0.12, -0.05), polaroid_6500()),
+        (IDEAL_READOUT, (0.0, 0.0), IDEAL_PISTON),
+        (Readout(range_noise=False), (0.12, -0.05), IDEAL_PISTON),
     ],
 )
 def test_fast_pan_equals_the_pymunk_reference_in_a_cluttered_room(
-    readout: Readout, sensor_offset
+    readout: Readout, sensor_offset, transducer: Transducer
 ) -> None:
     test_world = cluttered_room(sensor_offset)
     space = pymunk_space(test_world.geometry)
-    sonar = RotatingSonar.preset("polaroid-6500", readout=readout)
+    sonar = RotatingSonar(transducer, readout=readout)
     rng = np.random.default_rng(7)
     angles = np.radians(np.arange(-180, 180))
     for x, y in free_positions(test_world, rng, 6):
@@ -134,10 +143,10 @@ def test_fast_pan_equals_the_pymunk_reference_in_a_cluttered_room(
         assert np.isfinite(scan.ranges).sum() > 100
 
 
-def test_reference_sees_the_same_occlusions_with_side_lobes() -> None:
+@pytest.mark.parametrize("transducer", [polaroid_6500(), IDEAL_PISTON])
+def test_reference_sees_the_same_occlusions_with_side_lobes(transducer: Transducer) -> None:
     test_world = cluttered_room()
     space = pymunk_space(test_world.geometry)
-    transducer = RotatingSonar.preset("polaroid-6500").transducer
     sonar = RotatingSonar(dataclasses.replace(transducer, side_lobes=True), readout=IDEAL_READOUT)
     rng = np.random.default_rng(3)
     angles = np.radians(np.arange(-180, 180))

@@ -14,11 +14,11 @@ from scipy.optimize import brentq
 from sonar_gym.pose import Pose
 from sonar_gym.sonar.acoustics import (
     absorption_amplitude_factor,
-    first_null_rad,
     speed_of_sound_mps,
-    two_way_directivity,
+    two_way_pattern,
 )
 from sonar_gym.sonar.echoes import plane_echo_amplitude
+from sonar_gym.sonar.presets import polaroid_6500
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, Readout
 from sonar_gym.sonar.rotating import RotatingSonar, pan_angles
 from tests.sonar.worlds import beom_cho_room, cluttered_room, degrees, world
@@ -28,6 +28,13 @@ FULL_PAN = (-math.pi, math.pi, math.radians(1.0))
 
 def polaroid(**options) -> RotatingSonar:
     return RotatingSonar.preset("polaroid-6500", **options)
+
+
+def constant_gain_piston(**options) -> RotatingSonar:
+    """The Polaroid as an ideal piston with constant receiver gain (same threshold)."""
+    return RotatingSonar(
+        polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0), **options
+    )
 
 
 def rcd_extent_deg(scan, echo_range: float, tolerance: float = 0.03) -> float:
@@ -94,17 +101,22 @@ def test_walls_are_seen_only_near_normal_incidence_at_their_perpendicular_distan
     # (normal direction, perpendicular distance) of each wall from (0.4, -0.3).
     walls = [(0.0, 2.7), (90.0, 2.8), (180.0, 3.5), (-90.0, 2.2)]
     for normal_deg, distance in walls:
-        on_axis = plane_echo_amplitude(distance) * absorption_amplitude_factor(
-            2 * distance, t.absorption_db_per_m
+        on_axis = (
+            plane_echo_amplitude(distance)
+            * absorption_amplitude_factor(2 * distance, t.absorption_db_per_m)
+            * t.time_varying_gain.gain(distance)
         )
         half_window = brentq(
             lambda x, amplitude=on_axis: (
-                amplitude * two_way_directivity(x, ka) - t.detection_threshold
+                amplitude
+                * two_way_pattern(x, ka, side_lobes=False, side_lobe_leakage=t.side_lobe_leakage)
+                - t.detection_threshold
             ),
             0.0,
-            first_null_rad(ka),
+            math.pi / 2 - 1e-9,
         )
-        assert 2 * math.degrees(half_window) < 40.0
+        # Heard through the leakage beyond the first null (12.6 deg), never beyond 30 deg.
+        assert 26.0 < 2 * math.degrees(half_window) < 60.0
         off_axis = np.abs((np.degrees(scan.angles) - normal_deg + 180.0) % 360.0 - 180.0)
         inside = off_axis < math.degrees(half_window) - 0.01
         np.testing.assert_allclose(scan.ranges[inside], distance, atol=1e-9)
@@ -175,22 +187,34 @@ def test_a_box_in_front_of_a_cylinder_removes_its_echo_from_the_scan() -> None:
     assert not np.any(np.abs(hidden.ranges - 1.95) < 1e-9)
 
 
-def test_a_corner_echoes_like_a_wall_and_an_edge_is_weak_and_narrow() -> None:
-    corner_world = world(
-        walls=[{"a": [2.0, -2.0], "b": [2.0, 0.0]}, {"a": [2.0, 0.0], "b": [0.0, 0.0]}]
+CORNER_WORLD = {"walls": [{"a": [2.0, -2.0], "b": [2.0, 0.0]}, {"a": [2.0, 0.0], "b": [0.0, 0.0]}]}
+EDGE_BOX = {"center": [2.0 + 0.2 * math.sqrt(2), 0.0], "size": [0.4, 0.4], "angle_deg": 45.0}
+
+
+@pytest.mark.parametrize(
+    "sonar", [polaroid(readout=IDEAL_READOUT), constant_gain_piston(readout=IDEAL_READOUT)]
+)
+def test_a_corner_echoes_like_a_wall(sonar: RotatingSonar) -> None:
+    pose = Pose(1.6, -0.4, 0.0)  # looking at the corner (2, 0) from inside its wedge
+    bearing = math.atan2(0.4, 0.4)
+    corner = sonar.pan(
+        world(**CORNER_WORLD), pose, bearing - 0.5, bearing + 0.5, math.radians(0.25), None
     )
-    edge_world = world(
-        boxes=[{"center": [2.0 + 0.2 * math.sqrt(2), 0.0], "size": [0.4, 0.4], "angle_deg": 45.0}]
-    )
-    sonar = polaroid(readout=IDEAL_READOUT)
+    r = math.hypot(0.4, 0.4)
+    t = sonar.transducer
+    gain = 1.0 if t.time_varying_gain is None else float(t.time_varying_gain.gain(r))
+    expected = plane_echo_amplitude(r) * absorption_amplitude_factor(2 * r, t.absorption_db_per_m)
+    assert corner.amplitudes.max() == pytest.approx(expected * gain, rel=1e-3)
+
+
+def test_with_constant_gain_an_edge_is_weak_and_narrower_than_a_corner() -> None:
+    corner_world = world(**CORNER_WORLD)
+    edge_world = world(boxes=[EDGE_BOX])
+    sonar = constant_gain_piston(readout=IDEAL_READOUT)
     pose = Pose(1.6, -0.4, 0.0)  # looking at the corner (2, 0) from inside its wedge
     bearing = math.atan2(0.4, 0.4)
     corner = sonar.pan(corner_world, pose, bearing - 0.5, bearing + 0.5, math.radians(0.25), None)
     r = math.hypot(0.4, 0.4)
-    expected = plane_echo_amplitude(r) * absorption_amplitude_factor(
-        2 * r, sonar.transducer.absorption_db_per_m
-    )
-    assert corner.amplitudes.max() == pytest.approx(expected, rel=1e-3)
     edge_pose = Pose(2.0 - r, 0.0, 0.0)  # the box's corner (2, 0) at the same distance
     edge = sonar.pan(edge_world, edge_pose, -0.5, 0.5, math.radians(0.25), None)
     assert edge.amplitudes.max() < corner.amplitudes.max() / 1000  # over 60 dB weaker
@@ -296,11 +320,13 @@ def test_a_noisy_pan_without_a_random_generator_raises() -> None:
         polaroid().pan(beom_cho_room(), Pose(0, 0), *FULL_PAN, None)
 
 
-def test_an_edge_at_the_minimum_range_spans_less_than_the_18_degree_filter() -> None:
+def test_with_constant_gain_an_edge_at_the_minimum_range_spans_less_than_the_18_degree_filter() -> (
+    None
+):
     box = world(
         boxes=[{"center": [0.3 + 0.2 * math.sqrt(2), 0.0], "size": [0.4, 0.4], "angle_deg": 45.0}]
     )
-    sonar = polaroid(readout=IDEAL_READOUT)
+    sonar = constant_gain_piston(readout=IDEAL_READOUT)
     scan = sonar.pan(box, Pose(0.0, 0.0, 0.0), -0.5, 0.5, math.radians(0.1), None)
     on_edge = np.flatnonzero(np.abs(scan.ranges - 0.3) < 1e-9)
     assert 0 < np.degrees(scan.angles[on_edge[-1]] - scan.angles[on_edge[0]]) < 18.0
