@@ -165,9 +165,11 @@ class BeomChoParameters:
         assignment: which RCD of a pair is the large beacon. ``"extent"`` is the paper's rule
             (section III.D: the larger ``eta``; on a tie the larger ``delta``). ``"best_fit"``
             (not in the paper) tries both assignments in eq. (7) and keeps the one with the
-            smaller error: with an ideal piston both beacons' extents crowd below the first
-            null (about 25 deg) and range changes them as much as diameter does, so the
-            paper's rule swaps the beacons wherever the small one is much nearer.
+            smaller error. It helps a sensor whose extents do not tell the beacons apart
+            (an ideal piston at a fixed threshold, where range changes the extent as much as
+            diameter does); with a sensor like the Polaroid preset, whose extents grow with
+            diameter and not with range (Fig. 4), it swaps the beacons more often than the
+            paper's rule does.
     """
 
     eps_m: float = 0.02

@@ -75,31 +75,26 @@ def _paper_agent_errors(episodes: int, **env_kwargs: object) -> tuple[list[str],
     return statuses, np.array(position_errors), np.degrees(heading_errors)
 
 
-def test_paper_procedure_with_robust_pair_choice_meets_the_papers_bounds() -> None:
-    statuses, position_errors, heading_errors = _paper_agent_errors(
-        100, pair_assignment="best_fit", prior_gate_m=0.4
-    )
-    assert statuses.count("ok") >= 93
+def test_paper_agent_meets_the_papers_error_bounds_whenever_it_localizes() -> None:
+    statuses, position_errors, heading_errors = _paper_agent_errors(100)
+    # A beacon RCD cut short by a nearer wall heard through the filled side-lobe nulls gives
+    # "no_pair" from about one pose in six; when a pose comes out it is the paper's quality.
+    assert statuses.count("ok") >= 75
     assert np.percentile(position_errors, 95) <= 0.03
     assert np.median(position_errors) <= 0.02
     assert np.percentile(heading_errors, 95) <= 2.0
 
 
-def test_papers_own_pair_choice_is_fooled_by_clutter_and_the_robust_choice_is_not() -> None:
-    # The paper's rule (larger extent = large beacon, best eq. (7) pair wins) is right most of
-    # the time in the cluttered lab, but walls and corners give 24-25 deg RCDs too, and a
-    # coincidental pair sometimes beats the beacons; the prior gate removes those.
-    _, paper_errors, _ = _paper_agent_errors(60)
-    _, robust_errors, _ = _paper_agent_errors(60, pair_assignment="best_fit", prior_gate_m=0.4)
-    assert np.median(paper_errors) <= 0.02
-    assert np.mean(paper_errors > 0.1) > np.mean(robust_errors > 0.1)
-    assert np.mean(robust_errors > 0.1) <= 0.02
+def test_walls_no_longer_pair_up_the_paper_method_rarely_returns_a_wrong_pose() -> None:
+    statuses, position_errors, _ = _paper_agent_errors(60)
+    assert np.mean(position_errors > 0.1) <= 0.05
+    gated_statuses, gated_errors, _ = _paper_agent_errors(60, prior_gate_m=0.4)
+    assert np.mean(gated_errors > 0.1) <= np.mean(position_errors > 0.1)
 
 
 def test_uncalibrated_sensor_is_biased_and_calibration_removes_the_bias() -> None:
-    robust = {"pair_assignment": "best_fit", "prior_gate_m": 0.4}
-    hot_no_calibration = gym.make(ENV_ID, temperature_c=40.0, allow_calibration=False, **robust)
-    hot_calibrated = gym.make(ENV_ID, temperature_c=40.0, allow_calibration=True, **robust)
+    hot_no_calibration = gym.make(ENV_ID, temperature_c=40.0, allow_calibration=False)
+    hot_calibrated = gym.make(ENV_ID, temperature_c=40.0, allow_calibration=True)
     biased = [run_episode(hot_no_calibration, "paper", s)[1] for s in range(20)]
     corrected = [run_episode(hot_calibrated, "paper", s)[1] for s in range(20)]
     def within_bounds(infos: list[dict]) -> float:
