@@ -921,7 +921,7 @@ class ScenarioLike(Protocol):
 
 def localize_scan(
     scan: Scan,
-    scenario: _Scenario,
+    scenario: ScenarioLike,
     params: BeomChoParameters = BeomChoParameters(),
     method: str = "paper",
 ) -> BeaconLocalization:
@@ -945,7 +945,7 @@ def localize_scan(
 
 def localize_scans(
     scans: Sequence[Scan],
-    scenario: _Scenario,
+    scenario: ScenarioLike,
     params: BeomChoParameters = BeomChoParameters(),
     method: str = "paper",
     prior: Pose | None = None,

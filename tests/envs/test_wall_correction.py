@@ -347,7 +347,7 @@ def test_odometry_alone_drifts_and_the_paper_agent_corrects_it() -> None:
         odometry.append(info["odometry_position_error_m"])
         matched.append(info["n_matched_walls"])
         for detection in env.unwrapped.trace.detections:
-            (x0, y0), (x1, y1) = detection.wall.start, detection.wall.end
+            (x0, y0), (_, y1) = detection.wall.start, detection.wall.end
             on_b = abs(y0 - 0.7) < 0.05 and abs(y1 - 0.7) < 0.05 and 3.7 < x0 < 4.8
             wall_b_matched += on_b and detection.matched
     assert min(matched) >= 3

@@ -43,9 +43,9 @@ from agents.wall_correction import PaperAgent
 from envs.wall_correction import WallCorrectionEnv, WallDetection
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.pose import angle_difference
+from train.reproduce.common import parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/WallCorrection-v0"
-FLAG = "differs by more than 2x"
 PAPER_VECTORS_ON_LONG_WALL = 5
 """Sec. 6: "a long flat wall is divided to 5 detected wall vectors"."""
 LONG_WALL_X_M = (0.5, 2.0)
@@ -182,13 +182,6 @@ class Study:
         )
 
 
-def ratio_flag(ours: float, paper: float) -> str:
-    """``FLAG`` when ``ours / paper`` lies outside [1/2, 2], else an empty string."""
-    if not (math.isfinite(ours) and math.isfinite(paper)) or paper <= 0.0 or ours <= 0.0:
-        return FLAG
-    ratio = ours / paper
-    return FLAG if ratio > 2.0 or ratio < 0.5 else ""
-
 
 def statements_table(study: Study, preset: Study) -> Table:
     """The paper's statements (sec. 6, Figs 13-15) beside ours."""
@@ -269,15 +262,6 @@ def reasons_table(study: Study) -> Table:
         table.add_row(reason, f"{count / len(study.runs):.1f}")
     return table
 
-
-def parameters_table() -> Table:
-    """What the paper leaves unstated and what we chose."""
-    table = Table(title="Parameters the paper does not state")
-    for header in ("parameter", "value", "where"):
-        table.add_column(header)
-    for row in UNSTATED_PARAMETERS:
-        table.add_row(*row)
-    return table
 
 
 def plot_walls(run: RunResult, env: WallCorrectionEnv, out_dir: Path) -> Path:
@@ -406,7 +390,7 @@ def run(out_dir: Path, console: Console, *, n_runs: int = 30, seed: int = 0) -> 
     study, preset = Study(runs), Study(preset_runs)
     console.print(statements_table(study, preset))
     console.print(reasons_table(study))
-    console.print(parameters_table())
+    console.print(parameters_table(UNSTATED_PARAMETERS))
     assert plotted is not None and plotted_env is not None
     paths = [plot_walls(plotted, plotted_env, out_dir), plot_paths(plotted_env, out_dir)]
     before_y, after_y, before_h, after_h = study.correction_means()

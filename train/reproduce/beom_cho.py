@@ -62,6 +62,7 @@ from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.sonar.scan import Scan
 from sonar_gym.world import World
+from train.reproduce.common import FLAG, parameters_table, ratio_flag
 
 SCENARIO_NAME = "beom_cho_lab"
 SENSOR_PRESET = "polaroid-6500"
@@ -123,7 +124,6 @@ BEACON_RANGE_TOLERANCE_M = 0.05
 and surface distance from the sensor."""
 TABLE_II_MATCH_RAD = math.radians(5.0)
 """Our RCD stands beside a Table II row when their beta differ by at most this."""
-FLAG = "differs by more than 2x"
 _NO_LIMIT_M = 1e9
 """A symmetry threshold and a range limit that pass every RCD (only the extent filter acts)."""
 
@@ -196,13 +196,6 @@ class Fix:
     beacons_identified: bool
     wrong_pair_cause: str = ""
 
-
-def ratio_flag(ours: float, paper: float) -> str:
-    """``FLAG`` when ``ours / paper`` lies outside [1/2, 2] (or is undefined), else ``""``."""
-    if not (math.isfinite(ours) and math.isfinite(paper)) or paper <= 0.0 or ours <= 0.0:
-        return FLAG
-    ratio = ours / paper
-    return FLAG if ratio > 2.0 or ratio < 0.5 else ""
 
 
 def sensor_pose_of(robot_pose: Pose, scenario: Scenario) -> Pose:
@@ -950,17 +943,6 @@ def causes_table(repeated: dict[bool, list[PathRun]]) -> Table:
     return table
 
 
-def parameters_table() -> Table:
-    """The parameters the paper does not state, and ours."""
-    table = Table(
-        title="Parameters the paper does not state", title_justify="left", header_style="bold"
-    )
-    for header in ("parameter", "our value", "where"):
-        table.add_column(escape(header))
-    for row in UNSTATED_PARAMETERS:
-        _add_row(table, *row)
-    return table
-
 
 # --------------------------------------------------------------------------------------------
 # Plots
@@ -1275,7 +1257,7 @@ def run(
         f"{math.degrees(paper_pooled.max_heading_rad):.2f} deg. {verdict}",
         markup=False,
     )
-    console.print(parameters_table())
+    console.print(parameters_table(UNSTATED_PARAMETERS))
 
     paths = [plot_scan(table_ii, out_dir), plot_path(runs, out_dir), plot_errors(runs, out_dir)]
     numbers: dict[str, Any] = {

@@ -39,6 +39,7 @@ from rich.table import Table
 import sonar_gym  # noqa: F401  (registers the ids)
 from agents.sweep_localization import PaperAgent
 from sonar_gym.localization.kim import TABLE_1_ESTIMATED_POSITIONS_M, TABLE_1_TRUE_POSITIONS_M
+from train.reproduce.common import parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/SweepLocalization-v0"
 PAPER_SWEEPS = 3
@@ -50,7 +51,6 @@ PAPER_WORST_ERROR_M = 0.20
 PAPER_ANCHOR = "cell_center"
 BESIDE_ANCHOR = "obstacle_point"
 SWEEP_COUNTS = (1, 2, 3, 4)
-FLAG = "differs by more than 2x"
 
 UNSTATED_PARAMETERS: tuple[tuple[str, str, str], ...] = (
     (
@@ -195,13 +195,6 @@ def sweep_count_study(n_sweeps: int, anchor: str, seeds: int) -> SweepCountResul
         failures,
     )
 
-
-def ratio_flag(ours: float, paper: float) -> str:
-    """``FLAG`` when ``ours / paper`` lies outside [1/2, 2], else an empty string."""
-    if not (math.isfinite(ours) and math.isfinite(paper)) or paper <= 0.0 or ours <= 0.0:
-        return FLAG
-    ratio = ours / paper
-    return FLAG if ratio > 2.0 or ratio < 0.5 else ""
 
 
 def _mean_ci(values: np.ndarray) -> tuple[float, float]:
@@ -348,17 +341,6 @@ def sweeps_table(results: list[SweepCountResult], paper_reference_m: float) -> T
         )
     return table
 
-
-def parameters_table() -> Table:
-    """The parameters the paper does not state, and ours."""
-    table = Table(
-        title="Parameters the paper does not state", title_justify="left", header_style="bold"
-    )
-    for header in ("parameter", "our value", "where"):
-        table.add_column(header)
-    for row in UNSTATED_PARAMETERS:
-        table.add_row(*row)
-    return table
 
 
 def plot_table1(result: Table1Result, out_dir: Path) -> Path:
@@ -513,7 +495,7 @@ def run(out_dir: Path, console: Console, *, table1_seeds: int = 20, sweep_seeds:
         "results with 2-4 sweeps (sec. 3.3) and gives no numbers per count.",
         markup=False,
     )
-    console.print(parameters_table())
+    console.print(parameters_table(UNSTATED_PARAMETERS))
     paths = [
         plot_table1(paper_anchor, out_dir),
         plot_sweeps(results, summary["paper_table_mean_m"], out_dir),

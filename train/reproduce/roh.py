@@ -66,8 +66,8 @@ from sonar_gym.localization.roh import (
 from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.world import World
+from train.reproduce.common import FLAG, parameters_table
 
-FLAG = "differs by more than 2x"
 SEED = 2009
 
 
@@ -331,17 +331,6 @@ def average_row(rows: Sequence[RowResult]) -> dict[str, float]:
     }
 
 
-def parameters_table() -> Table:
-    """The parameters the paper does not state, and ours."""
-    view = Table(
-        title="Parameters the paper does not state", title_justify="left", header_style="bold"
-    )
-    for header in ("parameter", "our value", "where"):
-        view.add_column(header)
-    for row in UNSTATED_PARAMETERS:
-        view.add_row(*row)
-    return view
-
 
 def _counts(counter: Counter[str]) -> str:
     return ", ".join(f"{key} x{count}" for key, count in counter.items())
@@ -567,7 +556,7 @@ def run(out_dir: Path, console: Console, *, n_runs: int = 20, seed: int = SEED) 
     console.print("Differences from the paper:", style="bold")
     for line in differences(results, n_runs):
         console.print(f"- {line}", markup=False)
-    console.print(parameters_table())
+    console.print(parameters_table(UNSTATED_PARAMETERS))
 
     two, three = PAPER_TABLES
     three_rows = results[three.name]

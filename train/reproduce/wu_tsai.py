@@ -49,13 +49,13 @@ from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.world import World
+from train.reproduce.common import parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/Trilateration-v0"
 SCENARIO = "wu_tsai_room"
 PAPER_HEADINGS_DEG = (0.0, 45.0, 90.0, 135.0)
 DEFAULT_JITTER_M = 0.002
 """Timing jitter of the ranger as a distance (the ranger's and the env's default), metres."""
-FLAG = "differs by more than 2x"
 QUANTITIES = ("x_hat", "y_hat", "z_hat", "theta_hat", "max_dx", "max_dy", "max_dz", "max_dtheta")
 """Rows of Tables I-II: the estimates (eqs (13)-(16)) and the largest single-fix deviations."""
 QUANTITY_LABELS = {
@@ -298,13 +298,6 @@ def mean_errors(runs: Sequence[Sequence[Experiment]]) -> dict[str, tuple[float, 
     return summary
 
 
-def ratio_flag(ours: float, paper: float) -> str:
-    """``FLAG`` when ``ours / paper`` lies outside [1/2, 2], else an empty string."""
-    if not (math.isfinite(ours) and math.isfinite(paper)) or paper <= 0.0 or ours <= 0.0:
-        return FLAG
-    ratio = ours / paper
-    return FLAG if ratio > 2.0 or ratio < 0.5 else ""
-
 
 # --------------------------------------------------------------------------------------------
 # Tables
@@ -400,17 +393,6 @@ def sensitivity_table(rows: list[dict[str, Any]]) -> Table:
         )
     return table
 
-
-def parameters_table() -> Table:
-    """The parameters the paper does not state, and ours."""
-    table = Table(
-        title="Parameters the paper does not state", title_justify="left", header_style="bold"
-    )
-    for header in ("parameter", "our value", "where"):
-        table.add_column(header)
-    for row in UNSTATED_PARAMETERS:
-        table.add_row(*row)
-    return table
 
 
 def differences(
@@ -700,7 +682,7 @@ def run(
     console.print("Differences from the paper:", style="bold")
     for line in differences(summaries, sensitivity):
         console.print(f"- {line}", markup=False)
-    console.print(parameters_table())
+    console.print(parameters_table(UNSTATED_PARAMETERS))
 
     paths = [plot_setup(out_dir), plot_fixes(runs_by_table, out_dir), render_scene(out_dir)]
     numbers: dict[str, Any] = {
