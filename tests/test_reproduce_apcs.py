@@ -4,20 +4,12 @@ from __future__ import annotations
 
 import io
 import json
-import math
 from pathlib import Path
 
 from rich.console import Console
 
 from train.reproduce import apcs
 
-
-def test_ratio_flag_marks_only_factors_beyond_two() -> None:
-    assert apcs.ratio_flag(10.0, 5.0) == ""
-    assert apcs.ratio_flag(2.5, 5.0) == ""
-    assert apcs.ratio_flag(10.1, 5.0) == apcs.FLAG
-    assert apcs.ratio_flag(2.4, 5.0) == apcs.FLAG
-    assert apcs.ratio_flag(math.nan, 5.0) == apcs.FLAG
 
 
 def test_reproduction_writes_plots_and_numbers_of_the_paper_order(tmp_path: Path) -> None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -16,13 +15,6 @@ from train.reproduce import kim
 
 TABLE_1_ERRORS_M = np.linalg.norm(TABLE_1_ESTIMATED_POSITIONS_M - TABLE_1_TRUE_POSITIONS_M, axis=1)
 
-
-def test_ratio_flag_marks_only_factors_beyond_two() -> None:
-    assert kim.ratio_flag(2.0, 1.0) == ""
-    assert kim.ratio_flag(0.5, 1.0) == ""
-    assert kim.ratio_flag(2.01, 1.0) == kim.FLAG
-    assert kim.ratio_flag(0.49, 1.0) == kim.FLAG
-    assert kim.ratio_flag(math.nan, 1.0) == kim.FLAG
 
 
 def test_reproduction_writes_plots_and_numbers_of_the_paper_order(tmp_path: Path) -> None:

@@ -9,6 +9,7 @@ import pytest
 from rich.console import Console
 
 from train.reproduce import roh
+from train.reproduce.common import FLAG
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +75,7 @@ def test_three_areas_complete_only_the_rows_a_single_crossing_can_meet(
 
 def test_ratio_flag_marks_more_than_a_factor_two() -> None:
     assert roh.ratio_flag(20.0, 10.0) == ""
-    assert roh.ratio_flag(20.1, 10.0) == roh.FLAG
+    assert roh.ratio_flag(20.1, 10.0) == FLAG
     assert roh.ratio_flag(5.0, 10.0) == ""
-    assert roh.ratio_flag(4.9, 10.0) == roh.FLAG
+    assert roh.ratio_flag(4.9, 10.0) == FLAG
     assert roh.ratio_flag(float("nan"), 10.0) == roh.NO_RUN
