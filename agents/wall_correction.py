@@ -23,6 +23,7 @@ Everything the agents decide on comes from the observation.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 import math
 from typing import Any
 
@@ -37,7 +38,7 @@ PAPER_SPACING_CM = 3
 _TIE_TOLERANCE = 1e-3
 
 
-class _WallCorrectionAgent:
+class _WallCorrectionAgent(ABC):
     """Shared reading of the observation and encoding of the actions."""
 
     name = "scripted"
@@ -65,8 +66,9 @@ class _WallCorrectionAgent:
     def _action(self, side: str) -> Any:
         return self._env.encode_action(side, spacing_cm=self._spacing_cm, standoff_m=0.0)
 
+    @abstractmethod
     def act(self, observation: np.ndarray) -> Any:
-        raise NotImplementedError
+        """The action for this observation."""
 
 
 class PaperAgent(_WallCorrectionAgent):

@@ -393,9 +393,7 @@ def _text_block(title: str | None, extra: Mapping[str, Any] | Sequence[str] | st
     lines: list[str] = []
     if title:
         lines.append(str(title))
-    if extra is None:
-        pass
-    elif isinstance(extra, str):
+    if isinstance(extra, str):
         lines.append(extra)
     elif isinstance(extra, Mapping):
         for key, value in extra.items():
@@ -403,7 +401,7 @@ def _text_block(title: str | None, extra: Mapping[str, Any] | Sequence[str] | st
             lines.append(f"{key}: {shown}")
     elif isinstance(extra, Iterable):
         lines.extend(str(line) for line in extra)
-    else:
+    elif extra is not None:
         raise ValueError(
             "argument 'extra' must be a mapping, a sequence of strings or a string; "
             f"got {type(extra).__name__}"

@@ -20,6 +20,8 @@ Selecting what to run is part of this module too: env ids (``"all"`` = every reg
 
 from __future__ import annotations
 
+import contextlib
+
 import difflib
 import importlib.metadata
 import inspect
@@ -277,10 +279,8 @@ def parse_env_value(text: str) -> Any:
     if lowered in ("none", "null"):
         return None
     for convert in (int, float):
-        try:
+        with contextlib.suppress(ValueError):
             return convert(text)
-        except ValueError:
-            pass
     if text.strip()[:1] in ("[", "{"):
         try:
             return json.loads(text)

@@ -9,21 +9,10 @@ import numpy as np
 import pytest
 
 import sonar_gym  # noqa: F401
-from agents import make_agent
+from tests.envs.episodes import run_episode
 
 ENV_ID = "SonarGym/BeaconScan-v0"
 
-
-def run_episode(env: gym.Env, agent_name: str, seed: int) -> tuple[float, dict]:
-    agent = make_agent(agent_name, env)
-    agent.reset(seed=seed)
-    observation, info = env.reset(seed=seed)
-    total = 0.0
-    while True:
-        observation, reward, terminated, truncated, info = env.step(agent.act(observation))
-        total += reward
-        if terminated or truncated:
-            return total, info
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,7 @@ import pytest
 
 import envs.wall_correction as wall_correction_module
 import sonar_gym  # noqa: F401  (registers the ids)
+from tests.envs.episodes import run_episode
 from agents import make_agent
 from envs.wall_correction import (
     SIDES,
@@ -36,17 +37,6 @@ from sonar_gym.scenario import load_scenario, scenario_from_dict
 ENV_ID = "SonarGym/WallCorrection-v0"
 LEFT_BEAM_RAD = math.pi / 2.0
 
-
-def run_episode(env: gym.Env, agent_name: str, seed: int) -> tuple[float, dict]:
-    agent = make_agent(agent_name, env)
-    agent.reset(seed=seed)
-    observation, info = env.reset(seed=seed)
-    total = 0.0
-    while True:
-        observation, reward, terminated, truncated, info = env.step(agent.act(observation))
-        total += reward
-        if terminated or truncated:
-            return total, info
 
 
 # --- arguments ------------------------------------------------------------------------------
