@@ -19,8 +19,9 @@ class Scan:
         ranges: measured range per ping in metres from the pan axis, converted from time of
             flight with the sensor's *assumed* speed of sound; NaN where no echo crossed the
             threshold (a dropout).
-        amplitudes: amplitude of the detected echo per ping (dimensionless, the units of the
-            echo model), 0.0 where there was none.
+        amplitudes: amplitude of the detected echo per ping as the receiver compares it with
+            its threshold (after any time-varying gain of the preset; the units of the echo
+            model), 0.0 where there was none.
         duration_s: time the pan took in seconds: pan motion plus listening time per ping.
     """
 
