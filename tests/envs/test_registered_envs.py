@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import doctest
+import importlib
 import pickle
 import warnings
 
@@ -136,3 +138,16 @@ def test_action_outside_the_space_is_rejected(env_id: str) -> None:
         bad = np.asarray(space.nvec) + 5
     with pytest.raises(ValueError, match="action"):
         env.unwrapped.step(bad)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_docstring_example_runs_as_written(env_id: str) -> None:
+    module = importlib.import_module(ENVIRONMENTS[env_id].split(":")[0])
+    env_class = getattr(module, ENVIRONMENTS[env_id].split(":")[1])
+    finder = doctest.DocTestFinder()
+    examples = [test for test in finder.find(env_class) if test.examples]
+    assert examples, f"{env_class.__name__} has no >>> example in its docstring"
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    for test in examples:
+        runner.run(test)
+    assert runner.failures == 0
