@@ -1,13 +1,18 @@
-"""What every ``sonar-gym reproduce`` module shares: the factor-of-two flag and the table of
-parameters a paper leaves unstated."""
+"""What every ``sonar-gym reproduce`` module shares: the factor-of-two flag, the table of
+parameters a paper leaves unstated, and a picture of one episode of the paper's agent."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from pathlib import Path
 
+import gymnasium as gym
+import numpy as np
 from rich.markup import escape
 from rich.table import Table
+
+from agents.base import Agent
 
 FLAG = "differs by more than 2x"
 
@@ -30,3 +35,18 @@ def parameters_table(rows: Iterable[Sequence[str]]) -> Table:
     for row in rows:
         table.add_row(*(escape(str(cell)) for cell in row))
     return table
+
+
+def final_frame_png(env: gym.Env, agent: Agent, seed: int, path: Path) -> Path:
+    """Play ``agent`` for one episode from ``reset(seed=seed)`` on ``env`` (made with
+    ``render_mode="rgb_array"``) and save the last rendered frame as a PNG at ``path``."""
+    from sonar_gym.render import save_png
+
+    observation, _ = env.reset(seed=seed)
+    done = False
+    while not done:
+        observation, _, terminated, truncated, _ = env.step(agent.act(observation))
+        done = terminated or truncated
+    image = env.render()
+    env.close()
+    return save_png(np.asarray(image), path)

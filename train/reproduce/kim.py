@@ -39,7 +39,7 @@ from rich.table import Table
 import sonar_gym  # noqa: F401  (registers the ids)
 from agents.sweep_localization import PaperAgent
 from sonar_gym.localization.kim import TABLE_1_ESTIMATED_POSITIONS_M, TABLE_1_TRUE_POSITIONS_M
-from train.reproduce.common import parameters_table, ratio_flag
+from train.reproduce.common import final_frame_png, parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/SweepLocalization-v0"
 PAPER_SWEEPS = 3
@@ -427,7 +427,6 @@ def plot_sweeps(results: list[SweepCountResult], paper_reference_m: float, out_d
 
 def render_scene(out_dir: Path, seed: int = 0) -> Path:
     """The arena after one run of the Table 1 route: route, true and estimated tracks."""
-    from sonar_gym.render import save_png
 
     env = gym.make(
         ENV_ID,
@@ -437,14 +436,7 @@ def render_scene(out_dir: Path, seed: int = 0) -> Path:
         render_mode="rgb_array",
     )
     agent = PaperAgent(env, PAPER_SWEEPS)
-    observation, _ = env.reset(seed=seed)
-    done = False
-    while not done:
-        observation, _, terminated, truncated, _ = env.step(agent.act(observation))
-        done = terminated or truncated
-    image = env.render()
-    env.close()
-    return save_png(np.asarray(image), out_dir / "kim_scene.png")
+    return final_frame_png(env, agent, seed, out_dir / "kim_scene.png")
 
 
 def run(out_dir: Path, console: Console, *, table1_seeds: int = 20, sweep_seeds: int = 12) -> None:

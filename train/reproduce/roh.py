@@ -66,7 +66,7 @@ from sonar_gym.localization.roh import (
 from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.world import World
-from train.reproduce.common import FLAG, parameters_table
+from train.reproduce.common import FLAG, final_frame_png, parameters_table
 
 SEED = 2009
 
@@ -511,18 +511,10 @@ def render_env(out_dir: Path, seed: int = 0) -> Path:
     import gymnasium as gym
 
     from agents.block_expansion import PaperAgent
-    from sonar_gym.render import save_png
 
     env = gym.make(ENV_ID, n_areas=3, render_mode="rgb_array")
     agent = PaperAgent(env)
-    observation, _ = env.reset(seed=seed)
-    done = False
-    while not done:
-        observation, _, terminated, truncated, _ = env.step(agent.act(observation))
-        done = terminated or truncated
-    image = env.render()
-    env.close()
-    return save_png(np.asarray(image), out_dir / "roh_env.png")
+    return final_frame_png(env, agent, seed, out_dir / "roh_env.png")
 
 
 # --------------------------------------------------------------------------------------------

@@ -49,7 +49,7 @@ from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.world import World
-from train.reproduce.common import parameters_table, ratio_flag
+from train.reproduce.common import final_frame_png, parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/Trilateration-v0"
 SCENARIO = "wu_tsai_room"
@@ -588,18 +588,10 @@ def render_scene(out_dir: Path, seed: int = 0) -> Path:
     import gymnasium as gym
 
     from agents.trilateration import PaperAgent
-    from sonar_gym.render import save_png
 
     env = gym.make(ENV_ID, render_mode="rgb_array")
     agent = PaperAgent(env)
-    observation, _ = env.reset(seed=seed)
-    done = False
-    while not done:
-        observation, _, terminated, truncated, _ = env.step(agent.act(observation))
-        done = terminated or truncated
-    image = env.render()
-    env.close()
-    return save_png(np.asarray(image), out_dir / "wu_tsai_scene.png")
+    return final_frame_png(env, agent, seed, out_dir / "wu_tsai_scene.png")
 
 
 # --------------------------------------------------------------------------------------------
