@@ -70,6 +70,7 @@ __all__ = [
     "ScenarioLike",
     "TwoCircleSolution",
     "ASSIGNMENTS",
+    "EXTRACTIONS",
     "assign_large_and_small",
     "assigned_pair_distance_error",
     "extract_rcds",
@@ -78,6 +79,7 @@ __all__ = [
     "localize_rcds",
     "localize_scan",
     "localize_scans",
+    "make_rcd",
     "pair_distance_error",
     "range_from_tof",
     "solve_two_circles",
@@ -89,6 +91,9 @@ METHODS = ("paper", "least_squares")
 """Values of the ``method`` argument: the paper's closed form, or its least-squares refinement."""
 ASSIGNMENTS = ("extent", "best_fit")
 """Values of :attr:`BeomChoParameters.assignment`: the paper's rule, or both tried."""
+EXTRACTIONS = ("paper", "occlusion_aware")
+"""Values of :attr:`BeomChoParameters.extraction`: the paper's RCDs only, or a second try with
+beacons rebuilt from RCDs that nearer echoes cut (:mod:`sonar_gym.localization.beom_cho_occlusion`)."""
 
 SMALL_BEACON_NAME = "small_beacon"
 LARGE_BEACON_NAME = "large_beacon"
@@ -170,6 +175,15 @@ class BeomChoParameters:
             diameter does); with a sensor like the Polaroid preset, whose extents grow with
             diameter and not with range (Fig. 4), it swaps the beacons more often than the
             paper's rule does.
+        extraction: ``"paper"`` (eqs (3)-(5) only) or ``"occlusion_aware"`` (not in the paper):
+            when the paper's RCDs give no pair, try again with RCDs split where another object
+            takes over and beacons rebuilt from RCDs a nearer echo cut short
+            (:mod:`sonar_gym.localization.beom_cho_occlusion`).
+        expected_extents_rad: angular extents of the small and the large beacon's full RCDs,
+            radians (Table II: 22 and 24 deg); used by ``"occlusion_aware"`` only.
+        min_visible_extent_rad: the smallest visible part of a cut RCD that is rebuilt,
+            radians (5 deg: five samples at the paper's 1 deg increment); ``"occlusion_aware"``
+            only.
     """
 
     eps_m: float = 0.02
@@ -182,11 +196,28 @@ class BeomChoParameters:
     range_sigma_m: float = 0.003
     bearing_sigma_rad: float = math.radians(0.5)
     assignment: str = "extent"
+    extraction: str = "paper"
+    expected_extents_rad: tuple[float, float] = (math.radians(22.0), math.radians(24.0))
+    min_visible_extent_rad: float = math.radians(5.0)
 
     def __post_init__(self) -> None:
         if self.assignment not in ASSIGNMENTS:
             raise ValueError(
                 f"BeomChoParameters.assignment must be one of {ASSIGNMENTS}; got {self.assignment!r}"
+            )
+        if self.extraction not in EXTRACTIONS:
+            raise ValueError(
+                f"BeomChoParameters.extraction must be one of {EXTRACTIONS}; got {self.extraction!r}"
+            )
+        extents = self.expected_extents_rad
+        if (
+            not isinstance(extents, tuple)
+            or len(extents) != 2
+            or not all(isinstance(e, (int, float)) and 0.0 < e < math.pi for e in extents)
+        ):
+            raise ValueError(
+                "BeomChoParameters.expected_extents_rad must be (small, large) extents in "
+                f"(0, pi) radians; got {extents!r}"
             )
         for name in (
             "eps_m",
@@ -198,7 +229,7 @@ class BeomChoParameters:
             "bearing_sigma_rad",
         ):
             _require_positive(f"BeomChoParameters.{name}", getattr(self, name))
-        for name in ("eta_min_rad", "r_min_m"):
+        for name in ("eta_min_rad", "r_min_m", "min_visible_extent_rad"):
             _require_non_negative(f"BeomChoParameters.{name}", getattr(self, name))
         if self.eta_min_rad > self.eta_max_rad:
             raise ValueError(
@@ -232,6 +263,9 @@ class RCD:
         sample_ranges: the ranges of those samples in metres, same order (empty when not from
             a scan). Used by the least-squares refinement; the paper's method needs only
             ``delta``.
+        role: ``None`` for an RCD seen in a pan, whose beacon section III.D assigns by
+            extent; ``"small_beacon"`` or ``"large_beacon"`` for an RCD rebuilt as that beacon
+            by the occlusion-aware extraction (not in the paper), which pairs only in that role.
     """
 
     delta: float
@@ -242,6 +276,7 @@ class RCD:
     end_index: int = -1
     indices: tuple[int, ...] = ()
     sample_ranges: tuple[float, ...] = ()
+    role: str | None = None
 
     def __post_init__(self) -> None:
         for name in ("delta", "beta", "eta", "gamma"):
@@ -254,6 +289,10 @@ class RCD:
         object.__setattr__(self, "beta", wrap_angle(self.beta))
         object.__setattr__(self, "indices", tuple(int(i) for i in self.indices))
         object.__setattr__(self, "sample_ranges", tuple(float(r) for r in self.sample_ranges))
+        if self.role not in (None, SMALL_BEACON_NAME, LARGE_BEACON_NAME):
+            raise ValueError(
+                f"RCD.role must be None, {SMALL_BEACON_NAME!r} or {LARGE_BEACON_NAME!r}; got {self.role!r}"
+            )
         if self.sample_ranges and len(self.sample_ranges) != len(self.indices):
             raise ValueError(
                 "RCD.sample_ranges must have one range per entry of RCD.indices "
@@ -348,17 +387,17 @@ def extract_rcds(angles: npt.ArrayLike, ranges: npt.ArrayLike, eps: float = 0.02
         close_to_next = finite[:-1] & finite[1:] & (np.abs(np.diff(ranges_m)) < eps)
     if not _covers_full_turn(angles_rad, increment_rad):
         runs = _runs_of_links(close_to_next)
-        return [_make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
+        return [make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
 
     wrap_link = bool(finite[-1] and finite[0] and abs(ranges_m[0] - ranges_m[-1]) < eps)
     links = np.append(close_to_next, wrap_link)
     if links.all():
-        return [_make_rcd(angles_rad, ranges_m, np.arange(sample_count))]
+        return [make_rcd(angles_rad, ranges_m, np.arange(sample_count))]
     first_break = int(np.flatnonzero(~links)[0])
     order = np.roll(np.arange(sample_count), -(first_break + 1))
     rotated_links = np.roll(links, -(first_break + 1))[:-1]
     rcds = [
-        _make_rcd(angles_rad, ranges_m, order[a : b + 1]) for a, b in _runs_of_links(rotated_links)
+        make_rcd(angles_rad, ranges_m, order[a : b + 1]) for a, b in _runs_of_links(rotated_links)
     ]
     return sorted(rcds, key=lambda rcd: (rcd.start_index > rcd.end_index, rcd.start_index))
 
@@ -419,8 +458,12 @@ def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
 
 
-def _make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:
-    """The parameter set of the RCD made of ``indices`` (angular order), section III.A."""
+def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:
+    """The parameter set of the RCD made of ``indices`` (angular order), section III.A.
+
+    ``angles_rad`` and ``ranges_m`` are the whole pan (radians in {R}, metres); ``indices``
+    may wrap across +-180 deg on a full turn.
+    """
     start, end = int(indices[0]), int(indices[-1])
     beta_start = angles_rad[start]
     beta_end = angles_rad[end] + (2.0 * math.pi if end < start else 0.0)
@@ -503,6 +546,14 @@ def assign_large_and_small(rcd_a: RCD, rcd_b: RCD) -> tuple[RCD, RCD]:
     if abs(rcd_a.eta - rcd_b.eta) > _EXTENT_TOLERANCE_RAD:
         return (rcd_b, rcd_a) if rcd_a.eta > rcd_b.eta else (rcd_a, rcd_b)
     return (rcd_b, rcd_a) if rcd_a.delta > rcd_b.delta else (rcd_a, rcd_b)
+
+
+def _role_assignment(rcd_a: RCD, rcd_b: RCD) -> list[tuple[RCD, RCD]]:
+    """``[(small, large)]`` for a pair in which an RCD has a fixed role; ``[]`` if they clash."""
+    for small, large in ((rcd_a, rcd_b), (rcd_b, rcd_a)):
+        if small.role in (None, SMALL_BEACON_NAME) and large.role in (None, LARGE_BEACON_NAME):
+            return [(small, large)]
+    return []
 
 
 def pair_distance_error(
@@ -778,7 +829,9 @@ def localize_rcds(
 
     pairs: list[tuple[float, RCD, RCD]] = []
     for rcd_a, rcd_b in itertools.combinations(candidates, 2):
-        if params.assignment == "extent":
+        if rcd_a.role is not None or rcd_b.role is not None:
+            assignments = _role_assignment(rcd_a, rcd_b)
+        elif params.assignment == "extent":
             assignments = [assign_large_and_small(rcd_a, rcd_b)]
         else:
             assignments = [(rcd_a, rcd_b), (rcd_b, rcd_a)]
@@ -958,32 +1011,55 @@ def localize_scans(
     Angles may be unwrapped past pi (a sector across the robot's back); RCD bearings are
     wrapped to (-pi, pi] before they are used. ``prior`` (the robot-centre pose from
     odometry, {W}) and ``prior_gate_m`` gate the pair choice as in :func:`localize_rcds`;
-    without a prior this is the paper's method.
+    without a prior, and with ``params.extraction="paper"``, this is the paper's method. With
+    ``"occlusion_aware"``, a pan whose RCDs give no pair is tried once more with
+    :func:`sonar_gym.localization.beom_cho_occlusion.occlusion_aware_rcds`; the paper's answer
+    stands whenever it finds a pair.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    rcds: list[RCD] = []
+    pans = []
     for scan in scans:
         ranges_m = np.asarray(scan.ranges, dtype=np.float64).copy()
         with np.errstate(invalid="ignore"):
             ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
-        rcds += [
-            dataclasses.replace(rcd, beta=wrap_angle(rcd.beta))
-            for rcd in extract_rcds(scan.angles, ranges_m, eps=params.eps_m)
-        ]
+        pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    rcds = [rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)]
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
-    result = localize_rcds(
-        rcds,
-        small_center=small.center,
-        small_radius=small.radius,
-        large_center=large.center,
-        large_radius=large.radius,
-        params=params,
-        method=method,
-        prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
-        prior_gate_m=prior_gate_m,
-    )
+
+    def localize(candidate_rcds: list[RCD]) -> BeaconLocalization:
+        return localize_rcds(
+            [dataclasses.replace(rcd, beta=wrap_angle(rcd.beta)) for rcd in candidate_rcds],
+            small_center=small.center,
+            small_radius=small.radius,
+            large_center=large.center,
+            large_radius=large.radius,
+            params=params,
+            method=method,
+            prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+            prior_gate_m=prior_gate_m,
+        )
+
+    result = localize(rcds)
+    if params.extraction == "occlusion_aware" and result.status in ("no_candidates", "no_pair"):
+        # Imported here: that module builds on this one's RCD and extraction.
+        from sonar_gym.localization.beom_cho_occlusion import occlusion_aware_rcds
+
+        rebuilt = [
+            rcd
+            for angles, ranges_m in pans
+            for rcd in occlusion_aware_rcds(
+                angles,
+                ranges_m,
+                params.eps_m,
+                params.expected_extents_rad,
+                params.min_visible_extent_rad,
+            )
+        ]
+        second_try = localize(rebuilt)
+        if second_try.ok:
+            result = second_try
     if result.pose is None:
         return result
     offset_x, offset_y = _point("scenario.robot.sensor_offset", scenario.robot.sensor_offset)
