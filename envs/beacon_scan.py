@@ -19,6 +19,7 @@ from envs.base import SonarEnv, StepOutcome
 from envs.config import build_config, check_bool, check_choice, check_number
 from sonar_gym.localization.beom_cho import (
     ASSIGNMENTS,
+    EXTRACTIONS,
     METHODS,
     BeaconLocalization,
     BeomChoParameters,
@@ -61,6 +62,7 @@ class BeaconScanConfig:
     start_pose: str = "beacons_visible"
     localization_method: str = "paper"
     pair_assignment: str = "extent"
+    rcd_extraction: str = "paper"
     prior_gate_m: float | None = None
     action_type: str = "multi_discrete"
     time_budget_s: float = 60.0
@@ -103,6 +105,7 @@ class BeaconScanConfig:
         check_choice("start_pose", self.start_pose, ("beacons_visible", "any"))
         check_choice("localization_method", self.localization_method, METHODS)
         check_choice("pair_assignment", self.pair_assignment, ASSIGNMENTS)
+        check_choice("rcd_extraction", self.rcd_extraction, EXTRACTIONS)
         if self.prior_gate_m is not None:
             check_number("prior_gate_m", self.prior_gate_m, low=0.0, low_inclusive=False, high=10.0)
         check_choice("action_type", self.action_type, ("multi_discrete", "discrete"))
@@ -250,6 +253,7 @@ class BeaconScanEnv(SonarEnv):
     | start_pose | ``"beacons_visible"`` | or ``"any"`` |
     | localization_method | ``"paper"`` | or ``"least_squares"`` (refinement beside the paper's) |
     | pair_assignment | ``"extent"`` | the paper's large/small rule, or ``"best_fit"`` (both tried) |
+    | rcd_extraction | ``"paper"`` | or ``"occlusion_aware"``: when no pair is found, retry with beacons rebuilt from RCDs a nearer echo cut (not in the paper) |
     | prior_gate_m | None | not in the paper: keep the best beacon pair whose pose lies this close (m) to the odometry prior |
     | action_type | ``"multi_discrete"`` | or ``"discrete"`` (for DQN) |
     | time_budget_s | 60 | sensing time that fills the time feature |
@@ -453,7 +457,9 @@ class BeaconScanEnv(SonarEnv):
             result = localize_scans(
                 scans,
                 episode.world.scenario,
-                params=BeomChoParameters(assignment=self.config.pair_assignment),
+                params=BeomChoParameters(
+                    assignment=self.config.pair_assignment, extraction=self.config.rcd_extraction
+                ),
                 method=self.config.localization_method,
                 prior=None if self.config.prior_gate_m is None else episode.prior,
                 prior_gate_m=self.config.prior_gate_m or 0.5,

@@ -25,6 +25,7 @@ ENV_ID = "SonarGym/BeaconScan-v0"
         ("n_bins", 7),
         ("start_pose", "anywhere"),
         ("localization_method", "magic"),
+        ("rcd_extraction", "guess"),
         ("action_type", "box"),
         ("scenario", "no_such_room"),
         ("max_steps", 0),
@@ -79,6 +80,25 @@ def test_walls_no_longer_pair_up_the_paper_method_rarely_returns_a_wrong_pose() 
     assert np.mean(position_errors > 0.1) <= 0.05
     gated_statuses, gated_errors, _ = _paper_agent_errors(60, prior_gate_m=0.4)
     assert np.mean(gated_errors > 0.1) <= np.mean(position_errors > 0.1)
+
+
+def test_occlusion_aware_extraction_localizes_more_poses_and_keeps_the_papers_answers() -> None:
+    paper_env = gym.make(ENV_ID, temperature_c=20.0)
+    aware_env = gym.make(ENV_ID, temperature_c=20.0, rcd_extraction="occlusion_aware")
+    paper = [run_episode(paper_env, "paper", seed)[1] for seed in range(200)]
+    aware = [run_episode(aware_env, "paper", seed)[1] for seed in range(200)]
+    paper_ok = [i["status"] == "ok" for i in paper]
+    aware_ok = [i["status"] == "ok" for i in aware]
+    # about 1 pose in 10 has a beacon RCD cut by a nearer echo (200 seeds: 83.5 % -> 94 %)
+    assert sum(aware_ok) >= sum(paper_ok) + 10
+    for by_paper, by_aware in zip(paper, aware, strict=True):
+        if by_paper["status"] == "ok":
+            np.testing.assert_array_equal(by_aware["estimated_pose"], by_paper["estimated_pose"])
+    rebuilt_errors = [
+        a["position_error_m"] for p, a in zip(paper, aware, strict=True)
+        if a["status"] == "ok" and p["status"] != "ok"
+    ]
+    assert np.median(rebuilt_errors) <= 0.03
 
 
 def test_uncalibrated_sensor_is_biased_and_calibration_removes_the_bias() -> None:
