@@ -184,6 +184,12 @@ class BeomChoParameters:
         min_visible_extent_rad: the smallest visible part of a cut RCD that is rebuilt,
             radians (5 deg: five samples at the paper's 1 deg increment); ``"occlusion_aware"``
             only.
+        rebuilt_agreement_m: with ``"occlusion_aware"``, the retry gives a pose only if every
+            beacon pair within eq. (7)'s tolerance puts the sensor within this many metres of
+            the best one (a rebuilt RCD does not tell which beacon it was, so swapped pairs
+            often pass eq. (7) too); ``None`` keeps the best pair regardless. On 1000 lab
+            poses at 20 deg C, 0.1 m takes the retry's gain from +9.2 to +6.5 points of success
+            and the poses it adds off by more than 10 cm from 1.3 % to 0.5 % of all poses.
     """
 
     eps_m: float = 0.02
@@ -199,6 +205,7 @@ class BeomChoParameters:
     extraction: str = "paper"
     expected_extents_rad: tuple[float, float] = (math.radians(22.0), math.radians(24.0))
     min_visible_extent_rad: float = math.radians(5.0)
+    rebuilt_agreement_m: float | None = 0.1
 
     def __post_init__(self) -> None:
         if self.assignment not in ASSIGNMENTS:
@@ -229,6 +236,8 @@ class BeomChoParameters:
             "bearing_sigma_rad",
         ):
             _require_positive(f"BeomChoParameters.{name}", getattr(self, name))
+        if self.rebuilt_agreement_m is not None:
+            _require_positive("BeomChoParameters.rebuilt_agreement_m", self.rebuilt_agreement_m)
         for name in ("eta_min_rad", "r_min_m", "min_visible_extent_rad"):
             _require_non_negative(f"BeomChoParameters.{name}", getattr(self, name))
         if self.eta_min_rad > self.eta_max_rad:
@@ -774,6 +783,7 @@ def localize_rcds(
     method: str = "paper",
     prior: Pose | None = None,
     prior_gate_m: float = 0.5,
+    agreement_m: float | None = None,
 ) -> BeaconLocalization:
     """Sections III.B-IV: the sensor pose from a pan's RCDs and the two known beacons.
 
@@ -797,12 +807,16 @@ def localize_rcds(
             solution lies within ``prior_gate_m`` of the prior is kept, so a coincidental
             pair of walls or corners cannot win against the beacons.
         prior_gate_m: the gate radius around ``prior``, metres, > 0.
+        agreement_m: not in the paper: when given (metres, > 0), every pair within the
+            tolerance must put the sensor within this distance of the best pair's position;
+            otherwise the pan is ``"ambiguous_pair"`` (no pose) rather than a coin toss
+            between places.
 
     Returns:
         Status ``"ok"`` with the pose of the sensor frame {P} (position of the pan axis in
         {W}, heading of the robot's x-axis), or ``"no_candidates"`` (no RCD passed the
-        filters), ``"no_pair"`` (no pair within the tolerance, or a single candidate) or
-        ``"no_intersection"`` (``D < 0``).
+        filters), ``"no_pair"`` (no pair within the tolerance, or a single candidate),
+        ``"ambiguous_pair"`` (see ``agreement_m``) or ``"no_intersection"`` (``D < 0``).
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -827,20 +841,7 @@ def localize_rcds(
             message=f"none of {len(rcds)} RCDs passed the extent, symmetry and range filters",
         )
 
-    pairs: list[tuple[float, RCD, RCD]] = []
-    for rcd_a, rcd_b in itertools.combinations(candidates, 2):
-        if rcd_a.role is not None or rcd_b.role is not None:
-            assignments = _role_assignment(rcd_a, rcd_b)
-        elif params.assignment == "extent":
-            assignments = [assign_large_and_small(rcd_a, rcd_b)]
-        else:
-            assignments = [(rcd_a, rcd_b), (rcd_b, rcd_a)]
-        for small, large in assignments:
-            error = assigned_pair_distance_error(
-                small, large, small_radius, large_radius, beacon_distance
-            )
-            pairs.append((error, small, large))
-    pairs.sort(key=lambda pair: pair[0])
+    pairs = _ranked_pairs(candidates, params, small_radius, large_radius, beacon_distance)
     if not pairs or pairs[0][0] > tolerance_m:
         return BeaconLocalization(
             "no_pair",
@@ -869,6 +870,18 @@ def localize_rcds(
     pair_error, small_rcd, large_rcd = pairs[0]
 
     solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, small_rcd, large_rcd)
+    if agreement_m is not None and solution.position is not None:
+        _require_positive("agreement_m", agreement_m)
+        if not _pairs_agree(
+            [pair for pair in pairs[1:] if pair[0] <= tolerance_m],
+            solution.position, small_xy, small_radius, large_xy, large_radius, agreement_m,
+        ):
+            return BeaconLocalization(
+                "ambiguous_pair",
+                message=f"beacon pairs within tolerance disagree by more than {agreement_m} m",
+                pair_error_m=pair_error,
+                candidates=candidates,
+            )
     found = {
         "small_rcd": small_rcd,
         "large_rcd": large_rcd,
@@ -911,6 +924,31 @@ def localize_rcds(
     )
 
 
+def _ranked_pairs(
+    candidates: Sequence[RCD],
+    params: BeomChoParameters,
+    small_radius: float,
+    large_radius: float,
+    beacon_distance: float,
+) -> list[tuple[float, RCD, RCD]]:
+    """Every assigned pair ``(Delta d_0, small, large)`` of candidates, smallest eq. (7) error first."""
+    pairs: list[tuple[float, RCD, RCD]] = []
+    for rcd_a, rcd_b in itertools.combinations(candidates, 2):
+        if rcd_a.role is not None or rcd_b.role is not None:
+            assignments = _role_assignment(rcd_a, rcd_b)
+        elif params.assignment == "extent":
+            assignments = [assign_large_and_small(rcd_a, rcd_b)]
+        else:
+            assignments = [(rcd_a, rcd_b), (rcd_b, rcd_a)]
+        for small, large in assignments:
+            error = assigned_pair_distance_error(
+                small, large, small_radius, large_radius, beacon_distance
+            )
+            pairs.append((error, small, large))
+    pairs.sort(key=lambda pair: pair[0])
+    return pairs
+
+
 def _solve_pair(
     small_xy: tuple[float, float],
     small_radius: float,
@@ -927,6 +965,23 @@ def _solve_pair(
         large_rcd.delta + large_radius,
         angle_difference(small_rcd.beta, large_rcd.beta),
     )
+
+
+def _pairs_agree(
+    pairs: Sequence[tuple[float, RCD, RCD]],
+    position: tuple[float, float],
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    agreement_m: float,
+) -> bool:
+    """Whether every pair that solves puts the sensor within ``agreement_m`` of ``position``."""
+    for pair in pairs:
+        solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, pair[1], pair[2])
+        if solution.position is not None and math.dist(solution.position, position) > agreement_m:
+            return False
+    return True
 
 
 def _first_pair_near_prior(
@@ -1028,7 +1083,7 @@ def localize_scans(
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
 
-    def localize(candidate_rcds: list[RCD]) -> BeaconLocalization:
+    def localize(candidate_rcds: list[RCD], agreement_m: float | None = None) -> BeaconLocalization:
         return localize_rcds(
             [dataclasses.replace(rcd, beta=wrap_angle(rcd.beta)) for rcd in candidate_rcds],
             small_center=small.center,
@@ -1039,6 +1094,7 @@ def localize_scans(
             method=method,
             prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
             prior_gate_m=prior_gate_m,
+            agreement_m=agreement_m,
         )
 
     result = localize(rcds)
@@ -1057,7 +1113,7 @@ def localize_scans(
                 params.min_visible_extent_rad,
             )
         ]
-        second_try = localize(rebuilt)
+        second_try = localize(rebuilt, agreement_m=params.rebuilt_agreement_m)
         if second_try.ok:
             result = second_try
     if result.pose is None:

@@ -26,6 +26,9 @@ This module rebuilds such beacons from what the pan still shows:
    eq. (7) hardly tells the beacons apart (only their radii enter it), and a rebuilt extent
    says nothing about which beacon it was.
 
+Because a rebuilt RCD may be either beacon, the retry asks by default that every pair within
+eq. (7)'s tolerance agree on the place (``BeomChoParameters.rebuilt_agreement_m``, 0.1 m).
+
 Pieces with no occluded end are ordinary RCDs (with eq. (6) on their own samples); pieces with
 two occluded ends, or one occluded and one unknown, are dropped. The result feeds the paper's
 filters, eq. (7) and eqs (8)-(15) unchanged (:func:`sonar_gym.localization.beom_cho.localize_scans`

@@ -123,7 +123,12 @@ def test_unknown_role_is_rejected() -> None:
 
 @pytest.mark.parametrize(
     ("field", "value"),
-    [("extraction", "guess"), ("expected_extents_rad", (0.4,)), ("min_visible_extent_rad", -0.1)],
+    [
+        ("extraction", "guess"),
+        ("expected_extents_rad", (0.4,)),
+        ("min_visible_extent_rad", -0.1),
+        ("rebuilt_agreement_m", 0.0),
+    ],
 )
 def test_bad_parameters_are_named(field: str, value: object) -> None:
     with pytest.raises(ValueError, match=field):
@@ -164,3 +169,18 @@ def test_the_fallback_leaves_the_papers_answer_alone_when_it_has_one() -> None:
     aware = localize_scan(scan, scenario, BeomChoParameters(extraction="occlusion_aware"))
     assert paper.ok and aware.ok
     assert aware.pose == paper.pose and aware.small_rcd == paper.small_rcd
+
+
+def test_pairs_that_disagree_on_the_place_give_no_pose_when_agreement_is_asked() -> None:
+    small_c, large_c, r_s, r_l = (2.85, -0.6), (0.3, -1.5), 0.0191, 0.07
+    small = RCD(math.dist((0, 0), small_c) - r_s, math.atan2(small_c[1], small_c[0]), math.radians(22))
+    large = RCD(math.dist((0, 0), large_c) - r_l, math.atan2(large_c[1], large_c[0]), math.radians(24))
+    # both assignments tried and a loose tolerance: the swapped pair also passes eq. (7)
+    loose = {"distance_tolerance": 0.1, "params": BeomChoParameters(assignment="best_fit")}
+    chosen = localize_rcds([small, large], small_c, r_s, large_c, r_l, **loose)
+    assert chosen.ok and math.dist((chosen.pose.x, chosen.pose.y), (0.0, 0.0)) < 1e-9
+    strict = localize_rcds([small, large], small_c, r_s, large_c, r_l, agreement_m=0.1, **loose)
+    assert strict.status == "ambiguous_pair" and strict.pose is None
+    # with the paper's tolerance only the right assignment passes, and agreement changes nothing
+    paper = localize_rcds([small, large], small_c, r_s, large_c, r_l, agreement_m=0.1)
+    assert paper.ok and paper.pose == chosen.pose
