@@ -130,6 +130,27 @@ def _check_degree_set(name: str, values: object, allowed: tuple[int, ...] | None
         raise ValueError(f"argument {name!r} must be distinct positive whole degrees{choices}; got {values!r}")
 
 
+def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
+    """Whether both beacons are in the sonar's range and in line of sight from ``pose``.
+
+    In range: the beacon's surface lies between 5 cm beyond the sensor's minimum range and
+    0.2 m short of its maximum. In sight: no shape blocks the segment from the pan axis to the
+    point of the beacon nearest it. ``pose`` is the robot pose in {W}; metres throughout.
+    """
+    sensor = pose.transform_point(world.scenario.robot.sensor_offset)
+    transducer = sonar.transducer
+    for role in ("small_beacon", "large_beacon"):
+        beacon = world.scenario.beacon(role)
+        centre = np.asarray(beacon.center)
+        distance = float(np.linalg.norm(centre - sensor)) - beacon.radius
+        if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
+            return False
+        echo_point = centre + (sensor - centre) * beacon.radius / (distance + beacon.radius)
+        if not world.line_of_sight(sensor, echo_point):
+            return False
+    return True
+
+
 @dataclass(frozen=True)
 class PanCommand:
     """A decoded action. Angles in degrees in the robot frame {R}."""
@@ -384,27 +405,12 @@ class BeaconScanEnv(SonarEnv):
         clearance = 0.05
         for _ in range(2000):
             pose = world.sample_free_pose(rng, clearance=clearance)
-            if self.config.start_pose == "any" or self._beacons_visible(world, sonar, pose):
+            if self.config.start_pose == "any" or beacons_visible(world, sonar, pose):
                 return pose
         raise RuntimeError(
             f"scenario {world.scenario.name!r}: found no free pose from which both beacons are "
             "visible; use start_pose='any' or check the scenario"
         )
-
-    @staticmethod
-    def _beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
-        sensor = pose.transform_point(world.scenario.robot.sensor_offset)
-        transducer = sonar.transducer
-        for role in ("small_beacon", "large_beacon"):
-            beacon = world.scenario.beacon(role)
-            centre = np.asarray(beacon.center)
-            distance = float(np.linalg.norm(centre - sensor)) - beacon.radius
-            if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
-                return False
-            echo_point = centre + (sensor - centre) * beacon.radius / (distance + beacon.radius)
-            if not world.line_of_sight(sensor, echo_point):
-                return False
-        return True
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
