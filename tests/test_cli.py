@@ -279,7 +279,7 @@ def test_reproduce_all_runs_what_exists(tmp_path, capsys, monkeypatch):
     code, out, _ = run_cli(capsys, "reproduce", "all", "--out", str(tmp_path))
     assert code == 0
     assert calls == [("beom_cho", tmp_path / "beom_cho")]
-    assert "not available yet, skipped: kim, wu-tsai, roh, apcs" in out
+    assert "not available yet, skipped: beom-cho-map, kim, wu-tsai, roh, apcs" in out
 
 
 def test_reproduce_unknown_or_missing_paper_exits_2_listing_the_papers(capsys, monkeypatch):

@@ -29,7 +29,7 @@ DEFAULT_EVALUATE_PLOT = Path("results/evaluate.png")
 DEFAULT_BENCHMARK_JSON = Path("results/benchmark.json")
 DEFAULT_BENCHMARK_STEPS = 500
 DEFAULT_REPRODUCE_DIR = Path("results/reproduce")
-REPRODUCIBLE_PAPERS = ("beom-cho", "kim", "wu-tsai", "roh", "apcs")
+REPRODUCIBLE_PAPERS = ("beom-cho", "beom-cho-map", "kim", "wu-tsai", "roh", "apcs")
 PIPED_WIDTH = 160
 
 

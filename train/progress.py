@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from rich.console import Console
@@ -41,3 +41,20 @@ def episode_progress(console: Console, total: int) -> Iterator[EpisodeCallback]:
 
     with progress:
         yield advance
+
+
+@contextmanager
+def task_progress(description: str, total: int) -> Iterator[Callable[[], None]]:
+    """A progress bar over ``total`` steps of one task; yields the function that advances it."""
+    progress = Progress(
+        TextColumn(description),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        TextColumn("eta"),
+        TimeRemainingColumn(),
+        transient=True,
+    )
+    task = progress.add_task(description, total=total)
+    with progress:
+        yield lambda: progress.advance(task)
