@@ -1068,8 +1068,9 @@ def localize_scans(
     odometry, {W}) and ``prior_gate_m`` gate the pair choice as in :func:`localize_rcds`;
     without a prior, and with ``params.extraction="paper"``, this is the paper's method. With
     ``"occlusion_aware"``, a pan whose RCDs give no pair is tried once more with
-    :func:`sonar_gym.localization.beom_cho_occlusion.occlusion_aware_rcds`; the paper's answer
-    stands whenever it finds a pair.
+    :func:`sonar_gym.localization.beom_cho_occlusion.occlusion_aware_rcds` (a pose, or
+    ``"ambiguous_pair"`` when its pairs disagree on the place; otherwise the paper's status
+    stands); the paper's answer stands whenever it finds a pair.
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
@@ -1114,7 +1115,7 @@ def localize_scans(
             )
         ]
         second_try = localize(rebuilt, agreement_m=params.rebuilt_agreement_m)
-        if second_try.ok:
+        if second_try.ok or second_try.status == "ambiguous_pair":
             result = second_try
     if result.pose is None:
         return result

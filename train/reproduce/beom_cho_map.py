@@ -10,7 +10,8 @@ calibration of sec. II.A, a full pan at 1 deg, and the pose from the paper's met
 * within the paper's bounds (E_xy <= 3 cm and E_theta <= 2 deg, sec. V.C);
 * a pose outside those bounds but within 10 cm;
 * a wrong pose (more than 10 cm off);
-* no pair (eq. (7) found none within 0.04 m, or too few RCDs passed the filters);
+* no pair (eq. (7) found none within 0.04 m, too few RCDs passed the filters, or the retry's
+  pairs disagreed on the place);
 * no intersection (D < 0 in eq. (12): the robot near the line through the beacons);
 * beacons not visible (out of range or out of sight; no trial, left out of the shares).
 
