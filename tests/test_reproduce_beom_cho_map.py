@@ -44,17 +44,17 @@ def test_outcome_of_a_localization(status: str, estimate: Pose | None, expected:
     assert outcome_of(status, estimate, Pose(1.0, 2.0, 0.0)) == expected
 
 
-def _cell(pose: Pose, seed: int = 0) -> dict[str, str]:
+def _trial(pose: Pose, seed: int = 0) -> dict[str, str]:
     scenario = load_scenario("beom_cho_lab")
     world = World(scenario, temperature_c=20.0)
     probe = RotatingSonar.preset("polaroid-6500")
-    return beom_cho_map._cell(world, scenario, probe, pose, np.random.default_rng(seed))
+    return beom_cho_map.cell_outcomes(world, scenario, probe, pose, np.random.default_rng(seed))
 
 
 def test_the_origin_of_table_ii_is_within_bounds_and_a_box_is_no_trial() -> None:
-    assert set(_cell(Pose(0.0, 0.0, 0.3)).values()) == {WITHIN_BOUNDS}
-    assert set(_cell(Pose(-1.25, -0.2, 0.0)).values()) == {""}  # inside the hexahedral object
-    assert set(_cell(Pose(-2.3, 1.2, 0.0)).values()) == {NOT_VISIBLE}  # small beacon 5.4 m away
+    assert set(_trial(Pose(0.0, 0.0, 0.3)).values()) == {WITHIN_BOUNDS}
+    assert set(_trial(Pose(-1.25, -0.2, 0.0)).values()) == {""}  # inside the hexahedral object
+    assert set(_trial(Pose(-2.3, 1.2, 0.0)).values()) == {NOT_VISIBLE}  # small beacon 5.4 m away
 
 
 def test_on_the_line_through_the_beacons_no_pose_is_within_bounds() -> None:
@@ -62,7 +62,7 @@ def test_on_the_line_through_the_beacons_no_pose_is_within_bounds() -> None:
     for seed, heading in enumerate((0.0, 1.0, 2.0, -2.0)):
         x = 1.8
         y = -1.5 + (x - 0.3) * (0.9 / 2.55)
-        assert WITHIN_BOUNDS not in _cell(Pose(x, y, heading), seed).values()
+        assert WITHIN_BOUNDS not in _trial(Pose(x, y, heading), seed).values()
 
 
 def test_the_map_run_writes_a_plot_and_shares_that_add_up(tmp_path: Path) -> None:

@@ -119,8 +119,8 @@ def outcome_map(seed: int, spacing_m: float) -> OutcomeMap:
         for y in ys:
             rows = {name: [] for name in EXTRACTIONS}
             for x in xs:
-                heading = float(rng.uniform(-math.pi, math.pi))
-                for name, outcome in _cell(world, scenario, probe, Pose(x, y, heading), rng).items():
+                pose = Pose(x, y, float(rng.uniform(-math.pi, math.pi)))
+                for name, outcome in cell_outcomes(world, scenario, probe, pose, rng).items():
                     rows[name].append(outcome)
                 advance()
             for name in EXTRACTIONS:
@@ -128,9 +128,12 @@ def outcome_map(seed: int, spacing_m: float) -> OutcomeMap:
     return result
 
 
-def _cell(
+def cell_outcomes(
     world: World, scenario: Scenario, probe: RotatingSonar, pose: Pose, rng: np.random.Generator
 ) -> dict[str, str]:
+    """The outcome per extraction of one trial with the robot at ``pose`` ({W}, metres and
+    radians): ``""`` when the robot does not fit there, :data:`NOT_VISIBLE` when a beacon is
+    out of range or sight of ``probe``."""
     if not world.is_free((pose.x, pose.y), radius=world.robot_radius + START_CLEARANCE_M):
         return dict.fromkeys(EXTRACTIONS, "")
     if not beacons_visible(world, probe, pose):
