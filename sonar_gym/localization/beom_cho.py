@@ -45,7 +45,6 @@ Gauss-Newton fit over both beacons' ranges and bearings
 
 from __future__ import annotations
 
-import dataclasses
 import itertools
 import math
 from collections.abc import Sequence
@@ -1086,7 +1085,7 @@ def localize_scans(
 
     def localize(candidate_rcds: list[RCD], agreement_m: float | None = None) -> BeaconLocalization:
         return localize_rcds(
-            [dataclasses.replace(rcd, beta=wrap_angle(rcd.beta)) for rcd in candidate_rcds],
+            candidate_rcds,
             small_center=small.center,
             small_radius=small.radius,
             large_center=large.center,
