@@ -4,6 +4,6 @@
 saved stable-baselines3 model from a path.
 """
 
-from agents.base import Agent, agent_names, make_agent, register_agent
+from sonar_gym.agents.base import Agent, agent_names, make_agent, register_agent
 
 __all__ = ["Agent", "agent_names", "make_agent", "register_agent"]

@@ -57,7 +57,7 @@ def make_agent(name: str, env: gym.Env) -> Agent:
     if factory is not None:
         return factory(env)
     if name.endswith(".zip") or Path(name).exists():
-        from agents.learned import load_policy_agent
+        from sonar_gym.agents.learned import load_policy_agent
 
         return load_policy_agent(name, env)
     raise ValueError(
@@ -68,4 +68,4 @@ def make_agent(name: str, env: gym.Env) -> Agent:
 
 def _load_builtin_agents() -> None:
     """Import the modules that register the built-in agents (once)."""
-    import agents.builtin  # noqa: F401  (registers on import)
+    import sonar_gym.agents.builtin  # noqa: F401  (registers on import)

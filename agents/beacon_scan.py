@@ -17,7 +17,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.base import register_agent
+from sonar_gym.agents.base import register_agent
 
 
 class _ScriptedBeaconAgent:

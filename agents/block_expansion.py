@@ -32,8 +32,8 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from agents.base import register_agent
-from envs.block_expansion import (
+from sonar_gym.agents.base import register_agent
+from sonar_gym.envs.block_expansion import (
     CURVATURE_SCALE_PER_M,
     ENV_ID,
     FRAME_CENTRE_M,

@@ -1,4 +1,4 @@
-"""Registers the built-in agents with :mod:`agents.base` on import.
+"""Registers the built-in agents with :mod:`sonar_gym.agents.base` on import.
 
 Each task's module registers its own agents with ``register_agent`` when imported; the random
 agent serves every environment.
@@ -6,15 +6,15 @@ agent serves every environment.
 
 import importlib
 
-from agents.base import GENERIC, register_agent
-from agents.random_agent import RandomAgent
+from sonar_gym.agents.base import GENERIC, register_agent
+from sonar_gym.agents.random_agent import RandomAgent
 
 TASK_AGENT_MODULES = (
-    "agents.beacon_scan",
-    "agents.sweep_localization",
-    "agents.trilateration",
-    "agents.block_expansion",
-    "agents.wall_correction",
+    "sonar_gym.agents.beacon_scan",
+    "sonar_gym.agents.sweep_localization",
+    "sonar_gym.agents.trilateration",
+    "sonar_gym.agents.block_expansion",
+    "sonar_gym.agents.wall_correction",
 )
 
 register_agent("random", RandomAgent, GENERIC)

@@ -28,7 +28,7 @@ import math
 import gymnasium as gym
 import numpy as np
 
-from agents.base import register_agent
+from sonar_gym.agents.base import register_agent
 from sonar_gym.localization.kim import Sweep, vote_localize
 from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.sonar.swept import SweptSonar
@@ -143,7 +143,7 @@ class CovarianceAgent:
         """The agent is deterministic; nothing to reset."""
 
     def act(self, observation: np.ndarray) -> np.ndarray:
-        from envs.sweep_localization import (
+        from sonar_gym.envs.sweep_localization import (
             HEADING_STD_SCALE_RAD,
             POSITION_STD_SCALE_M,
             SECTOR_CENTRES_RAD,
@@ -169,7 +169,7 @@ class CovarianceAgent:
         estimate, in units of 0.1 m and 5 deg. ``"range_sum"``: minus the sum of the predicted
         ranges (m).
         """
-        from envs.sweep_localization import HEADING_UNIT_RAD, POSITION_UNIT_M
+        from sonar_gym.envs.sweep_localization import HEADING_UNIT_RAD, POSITION_UNIT_M
 
         scan = self._predictor.sweep(self._map_world, estimate, self._rng, sector_centre_rad)
         if self.sector_rule == "range_sum":

@@ -36,7 +36,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.base import register_agent
+from sonar_gym.agents.base import register_agent
 
 ENV_ID = "SonarGym/Trilateration-v0"
 MEAN_OF_RAYLEIGH_PER_RMS = math.sqrt(math.pi) / 2.0

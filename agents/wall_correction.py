@@ -30,7 +30,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.base import register_agent
+from sonar_gym.agents.base import register_agent
 
 ENV_ID = "SonarGym/WallCorrection-v0"
 PAPER_SPACING_CM = 3
@@ -120,7 +120,7 @@ class BothWallsAgent(_WallCorrectionAgent):
         return self._action("both")
 
     def _confident(self, observation: np.ndarray) -> bool:
-        from envs.wall_correction import HEADING_STD_SCALE_RAD, POSITION_STD_SCALE_M
+        from sonar_gym.envs.wall_correction import HEADING_STD_SCALE_RAD, POSITION_STD_SCALE_M
 
         across_std_m = float(observation[self._layout["position_std"]][1]) * POSITION_STD_SCALE_M
         heading_std_rad = float(observation[self._layout["heading_std"]][0]) * HEADING_STD_SCALE_RAD

@@ -15,8 +15,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from envs.base import SonarEnv, StepOutcome
-from envs.config import build_config, check_bool, check_choice, check_number
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_bool, check_choice, check_number
 from sonar_gym.localization.beom_cho import (
     ASSIGNMENTS,
     EXTRACTIONS,

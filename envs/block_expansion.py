@@ -24,8 +24,8 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from envs.base import SonarEnv, StepOutcome
-from envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,

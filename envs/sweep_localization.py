@@ -19,8 +19,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from envs.base import SonarEnv, StepOutcome
-from envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
 from sonar_gym.localization.kim import (
     TABLE_1_TRUE_POSITIONS_M,
     OccupancyGrid,

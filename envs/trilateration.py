@@ -24,8 +24,8 @@ import gymnasium as gym
 import numpy as np
 from scipy.special import ndtr
 
-from envs.base import SonarEnv, StepOutcome
-from envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
 from sonar_gym.localization.kim_ekf import ekf_update, predict
 from sonar_gym.localization.wu_tsai import (
     PAPER_COUNTER_RATE_HZ,
@@ -428,7 +428,7 @@ class TrilaterationEnv(SonarEnv):
     fix costs measurement time (three firings, ``firing_interval_s`` apart); averaging helps,
     but only down to the quantisation error that repeats at a fixed pose. With the defaults
     (a decision point every 0.5 m) the paper's n = 10 is the best *fixed* n, and choosing n
-    from the state does better (see ``agents.trilateration``).
+    from the state does better (see ``sonar_gym.agents.trilateration``).
 
     How the averaged fix corrects the pose (``correction``):
 

@@ -25,8 +25,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from envs.base import SonarEnv, StepOutcome
-from envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
 from sonar_gym.localization.apcs import (
     AMBIGUOUS,
     DEFAULT_PARAMETERS,

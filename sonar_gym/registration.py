@@ -9,11 +9,11 @@ from __future__ import annotations
 import gymnasium as gym
 
 ENVIRONMENTS: dict[str, str] = {
-    "SonarGym/BeaconScan-v0": "envs.beacon_scan:BeaconScanEnv",
-    "SonarGym/SweepLocalization-v0": "envs.sweep_localization:SweepLocalizationEnv",
-    "SonarGym/Trilateration-v0": "envs.trilateration:TrilaterationEnv",
-    "SonarGym/BlockExpansion-v0": "envs.block_expansion:BlockExpansionEnv",
-    "SonarGym/WallCorrection-v0": "envs.wall_correction:WallCorrectionEnv",
+    "SonarGym/BeaconScan-v0": "sonar_gym.envs.beacon_scan:BeaconScanEnv",
+    "SonarGym/SweepLocalization-v0": "sonar_gym.envs.sweep_localization:SweepLocalizationEnv",
+    "SonarGym/Trilateration-v0": "sonar_gym.envs.trilateration:TrilaterationEnv",
+    "SonarGym/BlockExpansion-v0": "sonar_gym.envs.block_expansion:BlockExpansionEnv",
+    "SonarGym/WallCorrection-v0": "sonar_gym.envs.wall_correction:WallCorrectionEnv",
 }
 
 

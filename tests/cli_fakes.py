@@ -21,7 +21,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from agents.base import register_agent
+from sonar_gym.agents.base import register_agent
 
 DISCRETE_ID = "CliFake/Locate-v0"
 BOX_ID = "CliFake/LocateBox-v0"

@@ -13,7 +13,7 @@ import pytest
 import torch
 
 from tests.cli_fakes import BOX_ID, DISCRETE_ID
-from train import cli
+from sonar_gym.train import cli
 
 torch.set_num_threads(1)  # the trainings here use tiny networks: more threads only contend
 
@@ -203,11 +203,11 @@ def test_train_refuses_what_cannot_work(capsys, tmp_path, env_id, algo, fragment
 
 
 def install_fake_bench_sonar(monkeypatch, rows=None) -> None:
-    """A stand-in ``train.bench_sonar`` (the real one times the sonar for seconds)."""
-    fake = types.ModuleType("train.bench_sonar")
+    """A stand-in ``sonar_gym.train.bench_sonar`` (the real one times the sonar for seconds)."""
+    fake = types.ModuleType("sonar_gym.train.bench_sonar")
     if rows is not None:
         fake.pan_throughput = lambda: rows
-    monkeypatch.setitem(sys.modules, "train.bench_sonar", fake)
+    monkeypatch.setitem(sys.modules, "sonar_gym.train.bench_sonar", fake)
 
 
 def test_benchmark_reports_steps_per_second_and_phase_shares(tmp_path, capsys, monkeypatch):
@@ -255,7 +255,7 @@ def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, c
 
 
 def install_fake_reproduction(monkeypatch, name: str, calls: list) -> None:
-    module_name = f"train.reproduce.{name}"
+    module_name = f"sonar_gym.train.reproduce.{name}"
     module = types.ModuleType(module_name)
     module.__spec__ = importlib.machinery.ModuleSpec(module_name, None)
     module.run = lambda out_dir, console: calls.append((name, out_dir))
@@ -339,9 +339,9 @@ def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(tmp_pat
 
 
 def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
-    from agents.base import make_agent
-    from agents.learned import PolicyAgent
-    from train.evaluation import make_env
+    from sonar_gym.agents.base import make_agent
+    from sonar_gym.agents.learned import PolicyAgent
+    from sonar_gym.train.evaluation import make_env
 
     out_dir = tmp_path / "run"
     code, out, err = run_cli(

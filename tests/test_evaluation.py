@@ -10,8 +10,8 @@ import pytest
 
 from tests import cli_fakes
 from tests.cli_fakes import BOX_ID, DISCRETE_ID, MAX_EPISODE_STEPS, SENSE_TIME_S
-from train import UsageError
-from train.evaluation import (
+from sonar_gym.train import UsageError
+from sonar_gym.train.evaluation import (
     EpisodeRecord,
     evaluate_agents,
     make_env,
@@ -21,7 +21,7 @@ from train.evaluation import (
     summarize,
     t_confidence_interval,
 )
-from train.report import (
+from sonar_gym.train.report import (
     plot_results,
     results_to_dict,
     short_agent_label,

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from train.reproduce import apcs
+from sonar_gym.train.reproduce import apcs
 
 
 

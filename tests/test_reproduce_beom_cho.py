@@ -14,8 +14,8 @@ from rich.console import Console
 from sonar_gym.pose import angle_difference
 from sonar_gym.robot import OdometryNoise
 from sonar_gym.scenario import load_scenario
-from train.reproduce import beom_cho
-from train.reproduce.common import FLAG
+from sonar_gym.train.reproduce import beom_cho
+from sonar_gym.train.reproduce.common import FLAG
 
 TABLE_II_AS_PRINTED = (
     "2.8542", "-10.3", "22.0", "0.0027",

@@ -15,8 +15,8 @@ from sonar_gym.pose import Pose
 from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.world import World
-from train.reproduce import beom_cho_map
-from train.reproduce.beom_cho_map import (
+from sonar_gym.train.reproduce import beom_cho_map
+from sonar_gym.train.reproduce.beom_cho_map import (
     NO_INTERSECTION,
     NO_PAIR,
     NOT_VISIBLE,

@@ -7,7 +7,7 @@ import math
 
 from rich.console import Console
 
-from train.reproduce.common import FLAG, parameters_table, ratio_flag
+from sonar_gym.train.reproduce.common import FLAG, parameters_table, ratio_flag
 
 
 def test_ratio_flag_marks_only_factors_beyond_two() -> None:

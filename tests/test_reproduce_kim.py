@@ -11,7 +11,7 @@ import pytest
 from rich.console import Console
 
 from sonar_gym.localization.kim import TABLE_1_ESTIMATED_POSITIONS_M, TABLE_1_TRUE_POSITIONS_M
-from train.reproduce import kim
+from sonar_gym.train.reproduce import kim
 
 TABLE_1_ERRORS_M = np.linalg.norm(TABLE_1_ESTIMATED_POSITIONS_M - TABLE_1_TRUE_POSITIONS_M, axis=1)
 

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from train.reproduce import roh
-from train.reproduce.common import FLAG
+from sonar_gym.train.reproduce import roh
+from sonar_gym.train.reproduce.common import FLAG
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ from rich.console import Console
 from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.scenario import load_scenario
 from sonar_gym.world import World
-from train.reproduce import wu_tsai
+from sonar_gym.train.reproduce import wu_tsai
 
 # Tables I-II as printed (cm, deg), kept here independently of the module under test.
 TABLE_I_X_HAT_CM = (-3.1, -3.55, -2.87, -1.73)

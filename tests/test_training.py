@@ -12,8 +12,8 @@ import pytest
 import torch
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-from agents.base import Agent, make_agent
-from agents.learned import (
+from sonar_gym.agents.base import Agent, make_agent
+from sonar_gym.agents.learned import (
     PolicyAgent,
     algorithm_class,
     detect_algorithm,
@@ -21,10 +21,10 @@ from agents.learned import (
     vecnormalize_path_for,
 )
 from tests.cli_fakes import BOX_ID, DISCRETE_ID, MULTI_DISCRETE_ID
-from train import UsageError
-from train.evaluation import evaluate_agents
-from train.report import moving_average
-from train.training import (
+from sonar_gym.train import UsageError
+from sonar_gym.train.evaluation import evaluate_agents
+from sonar_gym.train.report import moving_average
+from sonar_gym.train.training import (
     CONFIG_DIR,
     TRAINABLE_ALGORITHMS,
     check_algorithm_allowed,

@@ -13,8 +13,8 @@ import pytest
 
 import sonar_gym  # noqa: F401
 from sonar_gym.registration import ENVIRONMENTS
-from train.evaluation import evaluate_agents
-from train.training import train
+from sonar_gym.train.evaluation import evaluate_agents
+from sonar_gym.train.training import train
 
 pytestmark = pytest.mark.slow
 

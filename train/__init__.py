@@ -1,9 +1,9 @@
 """Command line and tooling around the environments: evaluate, train, benchmark, reproduce.
 
-The console script ``sonar-gym`` (:mod:`train.cli`) is a thin layer over
-:mod:`train.evaluation` (agents on envs over seeds, with statistics), :mod:`train.training`
-(stable-baselines3 training with tuned configs), :mod:`train.benchmark` (speed) and
-:mod:`train.report` (tables, JSON/CSV and plots).
+The console script ``sonar-gym`` (:mod:`sonar_gym.train.cli`) is a thin layer over
+:mod:`sonar_gym.train.evaluation` (agents on envs over seeds, with statistics), :mod:`sonar_gym.train.training`
+(stable-baselines3 training with tuned configs), :mod:`sonar_gym.train.benchmark` (speed) and
+:mod:`sonar_gym.train.report` (tables, JSON/CSV and plots).
 """
 
 from __future__ import annotations

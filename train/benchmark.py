@@ -2,7 +2,7 @@
 
 Three measurements, reported as tables and written to ``results/benchmark.json``:
 
-- pan throughput, from ``train.bench_sonar.pan_throughput()`` when that module provides it
+- pan throughput, from ``sonar_gym.train.bench_sonar.pan_throughput()`` when that module provides it
   (a mapping or a list of mappings, one per configuration, e.g. ``{"name": ..., "pans_per_s":
   ..., "pings_per_s": ...}``); otherwise skipped with a note;
 - environment steps per second per env, driven by the env's ``paper`` agent (else the first
@@ -21,9 +21,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from agents import base as agent_registry
-from train import UsageError
-from train.evaluation import check_env_kwargs, make_env
+from sonar_gym.agents import base as agent_registry
+from sonar_gym.train import UsageError
+from sonar_gym.train.evaluation import check_env_kwargs, make_env
 
 PREFERRED_AGENT = "paper"
 
@@ -133,9 +133,9 @@ def env_throughput(
 
 
 def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
-    """Rows from ``train.bench_sonar.pan_throughput()``, or no rows and the reason."""
+    """Rows from ``sonar_gym.train.bench_sonar.pan_throughput()``, or no rows and the reason."""
     try:
-        module = importlib.import_module("train.bench_sonar")
+        module = importlib.import_module("sonar_gym.train.bench_sonar")
     except ImportError as error:
         return [], f"pan throughput skipped: train.bench_sonar cannot be imported ({error})"
     function = getattr(module, "pan_throughput", None)

@@ -1,7 +1,7 @@
 """The ``sonar-gym`` command line: ``evaluate``, ``train``, ``benchmark``, ``reproduce``.
 
-Parsing only; the work happens in :mod:`train.evaluation`, :mod:`train.training`,
-:mod:`train.benchmark` and :mod:`train.report`. A request the user can fix (unknown env or
+Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`, :mod:`sonar_gym.train.training`,
+:mod:`sonar_gym.train.benchmark` and :mod:`sonar_gym.train.report`. A request the user can fix (unknown env or
 agent, bad ``--env-arg``, an algorithm the action space does not allow) prints one line naming
 the allowed values and exits with status 2.
 """
@@ -20,7 +20,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from train import UsageError
+from sonar_gym.train import UsageError
 
 PROGRAM = "sonar-gym"
 DEFAULT_EPISODES = 50
@@ -192,8 +192,8 @@ def _add_env_arg(parser: argparse.ArgumentParser) -> None:
 
 
 def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
-    from train import evaluation, report
-    from train.progress import episode_progress
+    from sonar_gym.train import evaluation, report
+    from sonar_gym.train.progress import episode_progress
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
     env_ids = evaluation.resolve_env_ids(arguments.env or [evaluation.DEFAULT_ENV_ID])
@@ -235,8 +235,8 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
 
 
 def _train(arguments: argparse.Namespace, console: Console) -> None:
-    from train import evaluation
-    from train.training import evaluate_command, train
+    from sonar_gym.train import evaluation
+    from sonar_gym.train.training import evaluate_command, train
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
     result = train(
@@ -276,7 +276,7 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
 
 
 def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
-    from train import benchmark, evaluation, report
+    from sonar_gym.train import benchmark, evaluation, report
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
     env_ids = evaluation.resolve_env_ids(arguments.env)
@@ -304,12 +304,12 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
 
 
 def reproduce_module_name(name: str) -> str:
-    """``"beom-cho"`` -> ``"train.reproduce.beom_cho"``."""
-    return f"train.reproduce.{name.replace('-', '_')}"
+    """``"beom-cho"`` -> ``"sonar_gym.train.reproduce.beom_cho"``."""
+    return f"sonar_gym.train.reproduce.{name.replace('-', '_')}"
 
 
 def available_reproductions() -> list[str]:
-    """Papers (command-line names) whose ``train.reproduce`` module exists."""
+    """Papers (command-line names) whose ``sonar_gym.train.reproduce`` module exists."""
     available = []
     for name in REPRODUCIBLE_PAPERS:
         try:

@@ -38,8 +38,8 @@ import numpy as np
 from scipy import stats
 
 import sonar_gym  # noqa: F401  (registers the SonarGym/ ids)
-from agents import base as agent_registry
-from train import UsageError
+from sonar_gym.agents import base as agent_registry
+from sonar_gym.train import UsageError
 
 ENV_NAMESPACE = "SonarGym"
 DEFAULT_ENV_ID = "SonarGym/BeaconScan-v0"
@@ -240,7 +240,7 @@ def resolve_agent_names(
 ) -> EvaluationPlan:
     """Agent names to run per env: ``requested`` for every env, or all registered ones.
 
-    A requested name is either registered for the env (see :func:`agents.base.agent_names`)
+    A requested name is either registered for the env (see :func:`sonar_gym.agents.base.agent_names`)
     or the path of a saved model (``.zip`` file or run directory).
 
     Raises:
@@ -361,7 +361,7 @@ def make_env(env_id: str, env_kwargs: Mapping[str, Any] | None = None) -> gym.En
 
 
 def make_named_agent(name: str, env: gym.Env) -> agent_registry.Agent:
-    """:func:`agents.base.make_agent`, with a saved model that does not fit ``env`` (or is not a
+    """:func:`sonar_gym.agents.base.make_agent`, with a saved model that does not fit ``env`` (or is not a
     model at all) reported as a :class:`train.UsageError`."""
     env_id = env.spec.id if env.spec is not None else ""
     if name in agent_registry.agent_names(env_id):

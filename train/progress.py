@@ -15,7 +15,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from train.evaluation import EpisodeCallback, EpisodeRecord
+from sonar_gym.train.evaluation import EpisodeCallback, EpisodeRecord
 
 
 @contextmanager

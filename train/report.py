@@ -19,8 +19,8 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from train.benchmark import EnvThroughput
-from train.evaluation import AgentResult, AgentSummary
+from sonar_gym.train.benchmark import EnvThroughput
+from sonar_gym.train.evaluation import AgentResult, AgentSummary
 
 MISSING = "–"
 CSV_FIELDS = (

@@ -48,7 +48,7 @@ from stable_baselines3.common.evaluation import evaluate_policy
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecEnv, VecNormalize
 
-from agents.learned import (
+from sonar_gym.agents.learned import (
     MODEL_FILE,
     RUN_FILE,
     VECNORMALIZE_FILE,
@@ -57,9 +57,9 @@ from agents.learned import (
     find_run_metadata,
     vecnormalize_path_for,
 )
-from train import UsageError
-from train.evaluation import ALL_ENVS, make_env, resolve_env_ids, software_versions
-from train.report import plot_learning_curve
+from sonar_gym.train import UsageError
+from sonar_gym.train.evaluation import ALL_ENVS, make_env, resolve_env_ids, software_versions
+from sonar_gym.train.report import plot_learning_curve
 
 CONFIG_DIR = Path(__file__).with_name("configs")
 TRAINABLE_ALGORITHMS = ("ppo", "sac", "dqn", "a2c")

@@ -6,7 +6,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from agents import make_agent
+from sonar_gym.agents import make_agent
 
 
 def run_episode(env: gym.Env, agent_name: str, seed: int) -> tuple[float, dict[str, Any]]:

@@ -13,18 +13,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import envs.block_expansion as block_expansion_module
+import sonar_gym.envs.block_expansion as block_expansion_module
 import sonar_gym  # noqa: F401
-from agents import make_agent
-from agents.block_expansion import (
+from sonar_gym.agents import make_agent
+from sonar_gym.agents.block_expansion import (
     PAPER_FIRST_TRIPLE_M,
     PAPER_SECOND_TRIPLE_M,
     condition_number,
     dilution_of_precision,
     replay_extraction,
 )
-from envs.block_expansion import DECREASING_GAP_M, FIRING_INTERVAL_S, FRAME_CENTRE_M
-from envs.block_expansion import FRAME_HALF_SPAN_M
+from sonar_gym.envs.block_expansion import DECREASING_GAP_M, FIRING_INTERVAL_S, FRAME_CENTRE_M
+from sonar_gym.envs.block_expansion import FRAME_HALF_SPAN_M
 from sonar_gym.localization.roh import (
     TABLE_I_BEACONS_MM,
     TABLE_II_III_D_MM,

@@ -12,9 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from agents import agent_names, make_agent
-from agents.sweep_localization import CovarianceAgent, PaperAgent, _decode_estimate
-from envs.sweep_localization import (
+from sonar_gym.agents import agent_names, make_agent
+from sonar_gym.agents.sweep_localization import CovarianceAgent, PaperAgent, _decode_estimate
+from sonar_gym.envs.sweep_localization import (
     HEADING_STD_SCALE_RAD,
     POSITION_STD_SCALE_M,
     Route,

@@ -13,8 +13,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from agents import make_agent
-from envs.trilateration import (
+from sonar_gym.agents import make_agent
+from sonar_gym.envs.trilateration import (
     TransmitterFrame,
     predicted_fix_covariance,
     quantised_range_error,

@@ -10,11 +10,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import envs.wall_correction as wall_correction_module
+import sonar_gym.envs.wall_correction as wall_correction_module
 import sonar_gym  # noqa: F401  (registers the ids)
 from tests.envs.episodes import run_episode
-from agents import make_agent
-from envs.wall_correction import (
+from sonar_gym.agents import make_agent
+from sonar_gym.envs.wall_correction import (
     SIDES,
     WallStream,
     map_wall_vectors,
@@ -377,7 +377,7 @@ def test_the_paper_agent_senses_the_nearer_wall_every_3_cm_from_the_centre_line(
 
 
 def test_the_both_walls_agent_runs_both_sonars_and_can_pause_when_confident() -> None:
-    from agents.wall_correction import BothWallsAgent
+    from sonar_gym.agents.wall_correction import BothWallsAgent
 
     env = gym.make(ENV_ID)
     unwrapped = env.unwrapped

@@ -39,11 +39,11 @@ from rich.console import Console
 from rich.table import Table
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from agents.wall_correction import PaperAgent
-from envs.wall_correction import WallCorrectionEnv, WallDetection
+from sonar_gym.agents.wall_correction import PaperAgent
+from sonar_gym.envs.wall_correction import WallCorrectionEnv, WallDetection
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.pose import angle_difference
-from train.reproduce.common import parameters_table, ratio_flag
+from sonar_gym.train.reproduce.common import parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/WallCorrection-v0"
 PAPER_VECTORS_ON_LONG_WALL = 5

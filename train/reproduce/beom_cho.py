@@ -62,7 +62,7 @@ from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.sonar.scan import Scan
 from sonar_gym.world import World
-from train.reproduce.common import FLAG, parameters_table, ratio_flag
+from sonar_gym.train.reproduce.common import FLAG, parameters_table, ratio_flag
 
 SCENARIO_NAME = "beom_cho_lab"
 SENSOR_PRESET = "polaroid-6500"

@@ -30,15 +30,15 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from envs.beacon_scan import beacons_visible
+from sonar_gym.envs.beacon_scan import beacons_visible
 from sonar_gym.localization.beom_cho import BeomChoParameters, localize_scans
 from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.pose import Pose
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.world import World
-from train.progress import task_progress
-from train.reproduce.beom_cho import (
+from sonar_gym.train.progress import task_progress
+from sonar_gym.train.reproduce.beom_cho import (
     PAN_INCREMENT_RAD,
     PAN_START_RAD,
     PAN_STOP_RAD,

@@ -12,7 +12,7 @@ import numpy as np
 from rich.markup import escape
 from rich.table import Table
 
-from agents.base import Agent
+from sonar_gym.agents.base import Agent
 
 FLAG = "differs by more than 2x"
 

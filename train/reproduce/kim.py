@@ -37,9 +37,9 @@ from rich.console import Console
 from rich.table import Table
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from agents.sweep_localization import PaperAgent
+from sonar_gym.agents.sweep_localization import PaperAgent
 from sonar_gym.localization.kim import TABLE_1_ESTIMATED_POSITIONS_M, TABLE_1_TRUE_POSITIONS_M
-from train.reproduce.common import final_frame_png, parameters_table, ratio_flag
+from sonar_gym.train.reproduce.common import final_frame_png, parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/SweepLocalization-v0"
 PAPER_SWEEPS = 3
@@ -350,7 +350,7 @@ def plot_table1(result: Table1Result, out_dir: Path) -> Path:
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from envs.sweep_localization import occupancy_grid_of
+    from sonar_gym.envs.sweep_localization import occupancy_grid_of
     from sonar_gym.scenario import load_scenario
 
     grid = occupancy_grid_of(load_scenario("kim_arena"))

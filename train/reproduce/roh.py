@@ -8,7 +8,7 @@ the localized and the true path) or sigma' (mean distance from the localized poi
 true path).
 
 Here the same setup runs in the ``roh_beacons`` scenario with the environment's sensor
-(:func:`envs.block_expansion.make_ranger`: the one-way ranger of
+(:func:`sonar_gym.envs.block_expansion.make_ranger`: the one-way ranger of
 :mod:`sonar_gym.sonar.ranging` with 1 mm of jitter, a 1 MHz counter, 8 ms between firings)
 and the paper's method (:class:`sonar_gym.localization.roh.BlockExpansion`, trilateration by
 the centroid reading of Sec. III.A). Every table row is run ``n_runs`` times on the same
@@ -33,7 +33,7 @@ from rich.console import Console
 from rich.table import Table
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from envs.block_expansion import (
+from sonar_gym.envs.block_expansion import (
     ENV_ID,
     FIRING_INTERVAL_S,
     LOCALIZATION_PERIOD_S,
@@ -66,7 +66,7 @@ from sonar_gym.localization.roh import (
 from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.world import World
-from train.reproduce.common import FLAG, final_frame_png, parameters_table
+from sonar_gym.train.reproduce.common import FLAG, final_frame_png, parameters_table
 
 SEED = 2009
 
@@ -510,7 +510,7 @@ def render_env(out_dir: Path, seed: int = 0) -> Path:
     """The environment's picture after an episode with the paper agent (three areas)."""
     import gymnasium as gym
 
-    from agents.block_expansion import PaperAgent
+    from sonar_gym.agents.block_expansion import PaperAgent
 
     env = gym.make(ENV_ID, n_areas=3, render_mode="rgb_array")
     agent = PaperAgent(env)

@@ -49,7 +49,7 @@ from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.world import World
-from train.reproduce.common import final_frame_png, parameters_table, ratio_flag
+from sonar_gym.train.reproduce.common import final_frame_png, parameters_table, ratio_flag
 
 ENV_ID = "SonarGym/Trilateration-v0"
 SCENARIO = "wu_tsai_room"
@@ -587,7 +587,7 @@ def render_scene(out_dir: Path, seed: int = 0) -> Path:
     """The env's room after a route with the paper agent: route, fixes, true and estimated pose."""
     import gymnasium as gym
 
-    from agents.trilateration import PaperAgent
+    from sonar_gym.agents.trilateration import PaperAgent
 
     env = gym.make(ENV_ID, render_mode="rgb_array")
     agent = PaperAgent(env)

@@ -1,0 +1,118 @@
+"""Scripted agents for ``SonarGym/BeaconScan-v0``.
+
+``paper``: Beom & Cho's procedure: one full 360 deg pan at 1 deg (Table I), a speed-of-sound
+calibration against the reflector when the environment allows it (section II.A), then localize.
+
+``sector``: pans only around where the beacons should be, as predicted from the odometry prior
+(the beacon bearings are in the observation), at 1 deg; then calibrates and localizes. The
+sector is wide enough for a beacon's RCD (about 24 deg) plus the prior's bearing uncertainty.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sonar_gym.agents.base import register_agent
+
+
+class _ScriptedBeaconAgent:
+    """Plays a plan of commands built from the first observation of an episode."""
+
+    name = "scripted"
+
+    def __init__(self, env: gym.Env) -> None:
+        self._env = env.unwrapped
+        self._plan: deque[Any] = deque()
+        self._started = False
+
+    def reset(self, seed: int | None = None) -> None:
+        self._plan.clear()
+        self._started = False
+
+    def act(self, observation: np.ndarray) -> Any:
+        if not self._started:
+            self._plan.extend(self._make_plan(observation))
+            self._started = True
+        if not self._plan:
+            return self._env.encode_action("localize")
+        return self._plan.popleft()
+
+    def _calibration_allowed(self, observation: np.ndarray) -> bool:
+        return bool(observation[self._env.observation_layout["calibration_allowed"]][0] > 0.5)
+
+    def _finish(self, observation: np.ndarray) -> list[Any]:
+        steps = []
+        if self._calibration_allowed(observation):
+            steps.append(self._env.encode_action("calibrate"))
+        steps.append(self._env.encode_action("localize"))
+        return steps
+
+    def _make_plan(self, observation: np.ndarray) -> list[Any]:
+        return self._finish(observation)
+
+
+class PaperAgent(_ScriptedBeaconAgent):
+    """Beom & Cho: full pan at 1 deg, calibrate (if allowed), localize."""
+
+    name = "paper"
+
+    def _make_plan(self, observation: np.ndarray) -> list[Any]:
+        pan = self._env.encode_action("pan", centre_deg=0, width_deg=360, increment_deg=1)
+        return [pan, *self._finish(observation)]
+
+
+class SectorAgent(_ScriptedBeaconAgent):
+    """Pans a sector around each beacon's bearing predicted from the odometry prior.
+
+    Args:
+        margin_deg: bearing uncertainty to cover on each side of an RCD, degrees.
+    """
+
+    name = "sector"
+    rcd_half_width_deg = 13.0
+
+    def __init__(self, env: gym.Env, margin_deg: float = 15.0) -> None:
+        super().__init__(env)
+        self.margin_deg = margin_deg
+
+    def _make_plan(self, observation: np.ndarray) -> list[Any]:
+        layout = self._env.observation_layout
+        config = self._env.config
+        needed = 2.0 * (self.rcd_half_width_deg + self.margin_deg)
+        width = min((w for w in config.sector_widths_deg if w >= needed), default=360)
+        increment = min(config.increments_deg)
+        centre_step = 360 / config.n_sector_centres
+        bearings = []
+        for role in ("small_beacon", "large_beacon"):
+            cos_b, sin_b, _ = observation[layout[role]]
+            bearings.append(math.degrees(math.atan2(sin_b, cos_b)))
+        plan: list[Any] = []
+        covered: list[tuple[float, float]] = []
+        for bearing in bearings:
+            if any(_angle_within(bearing, c, w / 2.0 - needed / 2.0) for c, w in covered):
+                continue
+            centre = round(bearing / centre_step) * centre_step
+            # the centre snaps to the grid: widen when the snap eats into the margin
+            sector = width
+            while sector < 360 and abs(_signed_angle(bearing - centre)) + needed / 2.0 > sector / 2.0:
+                sector = min((w for w in config.sector_widths_deg if w > sector), default=360)
+            plan.append(self._env.encode_action("pan", centre, sector, increment))
+            covered.append((centre, sector))
+        return [*plan, *self._finish(observation)]
+
+
+def _signed_angle(angle_deg: float) -> float:
+    return (angle_deg + 180.0) % 360.0 - 180.0
+
+
+def _angle_within(angle_deg: float, centre_deg: float, half_width_deg: float) -> bool:
+    return abs(_signed_angle(angle_deg - centre_deg)) <= half_width_deg
+
+
+register_agent("paper", PaperAgent, "SonarGym/BeaconScan-v0")
+register_agent("sector", SectorAgent, "SonarGym/BeaconScan-v0")

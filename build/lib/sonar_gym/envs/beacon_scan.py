@@ -1,0 +1,577 @@
+"""``SonarGym/BeaconScan-v0``: localize with one rotating sonar and two cylindrical beacons.
+
+The task of Beom & Cho (Robotica 1995): the agent decides which sectors to pan and at what
+angular increment, whether to calibrate the speed of sound against the reflector, and when to
+stop and localize with the paper's method (RCDs, eqs (3)-(7); two-circle pose, eqs (8)-(15)).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_bool, check_choice, check_number
+from sonar_gym.localization.beom_cho import (
+    ASSIGNMENTS,
+    EXTRACTIONS,
+    METHODS,
+    BeaconLocalization,
+    BeomChoParameters,
+    localize_scans,
+)
+from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.pose import Pose, wrap_angle
+from sonar_gym.random_room import random_scenario
+from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.sonar.accumulate import ScanMemory
+from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.rotating import RotatingSonar
+from sonar_gym.sonar.scan import Scan
+from sonar_gym.world import World
+
+PAN, CALIBRATE, LOCALIZE = 0, 1, 2
+ACTION_KINDS = ("pan", "calibrate", "localize")
+ASSUMED_TEMPERATURE_C = 20.0
+POSITION_UNIT_M = 0.03  # Beom & Cho's experimental position bound, section V.C
+HEADING_UNIT_RAD = math.radians(2.0)  # and their heading bound
+
+
+@dataclass(frozen=True)
+class BeaconScanConfig:
+    """The ``gym.make`` arguments of ``SonarGym/BeaconScan-v0`` (see the env docstring)."""
+
+    scenario: str = "beom_cho_lab"
+    temperature_c: float | None = None
+    temperature_range_c: tuple[float, float] = (0.0, 40.0)
+    allow_calibration: bool = True
+    sensing_cost_per_s: float = 0.05
+    failure_penalty: float = 20.0
+    prior_position_std_m: float = 0.1
+    prior_heading_std_deg: float = 5.0
+    increments_deg: tuple[int, ...] = (1, 2, 5)
+    sector_widths_deg: tuple[int, ...] = (30, 60, 90, 180, 360)
+    n_sector_centres: int = 36
+    n_bins: int = 72
+    max_steps: int = 12
+    start_pose: str = "beacons_visible"
+    localization_method: str = "paper"
+    pair_assignment: str = "extent"
+    rcd_extraction: str = "paper"
+    prior_gate_m: float | None = None
+    action_type: str = "multi_discrete"
+    time_budget_s: float = 60.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scenario, (str, Path)):
+            raise ValueError(
+                f"argument 'scenario' must be a built-in name, a file path or 'random'; got {self.scenario!r}"
+            )
+        if self.temperature_c is not None:
+            check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
+        low, high = _pair("temperature_range_c", self.temperature_range_c)
+        check_number("temperature_range_c[0]", low, low=-20.0, high=50.0)
+        check_number("temperature_range_c[1]", high, low=low, high=50.0)
+        check_bool("allow_calibration", self.allow_calibration)
+        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
+        check_number("failure_penalty", self.failure_penalty, low=0.0, high=1e4)
+        check_number("prior_position_std_m", self.prior_position_std_m, low=0.0, high=2.0)
+        check_number("prior_heading_std_deg", self.prior_heading_std_deg, low=0.0, high=90.0)
+        _check_degree_set("increments_deg", self.increments_deg, allowed=(1, 2, 3, 5, 6, 10))
+        _check_degree_set("sector_widths_deg", self.sector_widths_deg, allowed=None)
+        for width in self.sector_widths_deg:
+            if width > 360 or any(width % inc for inc in self.increments_deg):
+                raise ValueError(
+                    "argument 'sector_widths_deg' must hold widths <= 360 deg that every "
+                    f"increment in {self.increments_deg} divides; got {self.sector_widths_deg}"
+                )
+        check_number("n_sector_centres", self.n_sector_centres, low=1, high=360, integer=True)
+        if 360 % self.n_sector_centres or any(
+            (360 // self.n_sector_centres) % inc for inc in self.increments_deg
+        ):
+            raise ValueError(
+                "argument 'n_sector_centres' must divide 360 into whole-degree steps that every "
+                f"increment divides; got {self.n_sector_centres}"
+            )
+        check_number("n_bins", self.n_bins, low=4, high=360, integer=True)
+        if 360 % self.n_bins:
+            raise ValueError(f"argument 'n_bins' must divide 360; got {self.n_bins}")
+        check_number("max_steps", self.max_steps, low=1, high=1000, integer=True)
+        check_choice("start_pose", self.start_pose, ("beacons_visible", "any"))
+        check_choice("localization_method", self.localization_method, METHODS)
+        check_choice("pair_assignment", self.pair_assignment, ASSIGNMENTS)
+        check_choice("rcd_extraction", self.rcd_extraction, EXTRACTIONS)
+        if self.prior_gate_m is not None:
+            check_number("prior_gate_m", self.prior_gate_m, low=0.0, low_inclusive=False, high=10.0)
+        check_choice("action_type", self.action_type, ("multi_discrete", "discrete"))
+        check_number("time_budget_s", self.time_budget_s, low=0.0, low_inclusive=False, high=1e5)
+
+
+def _pair(name: str, value: object) -> tuple[float, float]:
+    if not isinstance(value, (tuple, list)) or len(value) != 2:
+        raise ValueError(f"argument {name!r} must be a pair (low, high); got {value!r}")
+    return float(value[0]), float(value[1])
+
+
+def _check_degree_set(name: str, values: object, allowed: tuple[int, ...] | None) -> None:
+    if (
+        not isinstance(values, (tuple, list))
+        or not values
+        or any(isinstance(v, bool) or not isinstance(v, int) or v <= 0 for v in values)
+        or len(set(values)) != len(values)
+        or (allowed is not None and any(v not in allowed for v in values))
+    ):
+        choices = f" from {allowed}" if allowed else ""
+        raise ValueError(f"argument {name!r} must be distinct positive whole degrees{choices}; got {values!r}")
+
+
+def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
+    """Whether both beacons are in the sonar's range and in line of sight from ``pose``.
+
+    In range: the beacon's surface lies between 5 cm beyond the sensor's minimum range and
+    0.2 m short of its maximum. In sight: no shape blocks the segment from the pan axis to the
+    point of the beacon nearest it. ``pose`` is the robot pose in {W}; metres throughout.
+    """
+    sensor = pose.transform_point(world.scenario.robot.sensor_offset)
+    transducer = sonar.transducer
+    for role in ("small_beacon", "large_beacon"):
+        beacon = world.scenario.beacon(role)
+        centre = np.asarray(beacon.center)
+        distance = float(np.linalg.norm(centre - sensor)) - beacon.radius
+        if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
+            return False
+        echo_point = centre + (sensor - centre) * beacon.radius / (distance + beacon.radius)
+        if not world.line_of_sight(sensor, echo_point):
+            return False
+    return True
+
+
+@dataclass(frozen=True)
+class PanCommand:
+    """A decoded action. Angles in degrees in the robot frame {R}."""
+
+    kind: str
+    centre_deg: int = 0
+    width_deg: int = 0
+    increment_deg: int = 0
+
+
+@dataclass
+class _Episode:
+    world: World
+    true_pose: Pose
+    prior: Pose
+    sonar: RotatingSonar
+    memory: ScanMemory
+    calibrated: bool = False
+    sensing_time_s: float = 0.0
+    steps: int = 0
+    estimate: Pose | None = None
+    result: BeaconLocalization | None = None
+    scan_points: list[np.ndarray] = field(default_factory=list)
+
+
+class BeaconScanEnv(SonarEnv):
+    """
+    ## Description
+
+    A robot stands at an unknown pose in a room holding two passive cylindrical beacons of
+    different diameters (Beom & Cho, *Mobile robot localization using a single rotating sonar
+    and two passive cylindrical beacons*, Robotica 13, 1995). Its rotating sonar (Polaroid
+    6500 by default) pans sectors; echoes from the beacons form regions of constant depth
+    (RCDs). When the agent chooses to localize, the paper's method runs on every ping gathered
+    so far: RCD extraction (eqs 3-5), angular-extent, symmetry (eq 6) and beacon-distance
+    (eq 7) filters, the two-circle solution (eqs 8-14) and the heading (eq 15). The air
+    temperature is drawn per episode and the sensor assumes 20 deg C until it calibrates its
+    speed of sound against the reflector on the robot's front (section II.A); pings are kept
+    as times of flight, so a calibration corrects pans made before it too.
+
+    ## Action Space
+
+    ``action_type="multi_discrete"`` (default): ``MultiDiscrete([3, n_sector_centres,
+    len(sector_widths_deg), len(increments_deg)])``:
+
+    | index | meaning | values |
+    |---|---|---|
+    | 0 | kind | 0 pan, 1 calibrate, 2 localize (ends the episode) |
+    | 1 | sector centre, robot frame | ``k * 360 / n_sector_centres`` deg, k = 0.. |
+    | 2 | sector width | ``sector_widths_deg`` (default 30, 60, 90, 180, 360 deg) |
+    | 3 | angular increment | ``increments_deg`` (default 1, 2, 5 deg) |
+
+    Indices 1-3 are ignored unless the kind is pan. ``action_type="discrete"`` flattens the
+    same choices into ``Discrete(2 + centres * widths * increments)``: 0 calibrate,
+    1 localize, then every pan. ``env.unwrapped.encode_action(...)`` builds either form.
+
+    ## Observation Space
+
+    ``Box(-1, 1, (2 * n_bins + 15,), float32)``; the robot frame {R} is the odometry prior's.
+
+    | slice | meaning | range |
+    |---|---|---|
+    | ``[0, n_bins)`` | nearest range per angular bin / max range (1 = no echo or not scanned) | [0, 1] |
+    | ``[n_bins, 2 n_bins)`` | 1 where the bin has been scanned | {0, 1} |
+    | ``+0, +1`` | prior position x, y, scaled to the scenario bounds | [-1, 1] |
+    | ``+2, +3`` | cos, sin of the prior heading | [-1, 1] |
+    | ``+4 .. +6`` | small beacon seen from the prior: cos, sin of bearing in {R}, range / max range | [-1, 1] |
+    | ``+7 .. +9`` | the same for the large beacon | [-1, 1] |
+    | ``+10`` | sensing time so far / ``time_budget_s`` (clipped) | [0, 1] |
+    | ``+11`` | 1 once the speed of sound is calibrated | {0, 1} |
+    | ``+12`` | steps taken / ``max_steps`` | [0, 1] |
+    | ``+13`` | calibration allowed | {0, 1} |
+    | ``+14`` | fraction of the full circle scanned | [0, 1] |
+
+    ``env.unwrapped.observation_layout`` maps these names to slices.
+
+    ## Rewards
+
+    Every step costs ``-sensing_cost_per_s * duration`` (pan motion plus listening, or the
+    calibration pings). At localize: ``-min(E_xy / 0.03 m + E_theta / 2 deg, failure_penalty)``
+    (Beom & Cho eq 16, in units of their experimental bounds); ``-failure_penalty`` when no pose
+    comes out (no RCD pair, D < 0) or when ``max_steps`` pass without localizing.
+
+    ## Starting State
+
+    A scenario (``scenario``: built-in name, file path, or ``"random"`` for a new seeded random
+    room per episode); a robot pose drawn uniformly over free space (with
+    ``start_pose="beacons_visible"``, only poses from which both beacons are within the
+    sensor's range and in line of sight); an odometry prior = truth + Gaussian noise
+    (``prior_position_std_m``, ``prior_heading_std_deg``); a temperature ``temperature_c`` or
+    uniform in ``temperature_range_c``.
+
+    ## Episode End
+
+    Terminates when the agent localizes; truncates after ``max_steps`` steps (counted as a
+    failure, with the penalty).
+
+    ## Info
+
+    ``position_error_m``, ``heading_error_rad`` (of the estimate after localizing, of the prior
+    before), ``sensing_time_s``, ``status`` (``"sensing"``, ``"ok"``, or the localizer's reason
+    such as ``"no_pair"``, or ``"truncated"``), ``temperature_c``, ``calibrated``, ``true_pose``
+    and ``estimated_pose`` (``[x, y, theta]``).
+
+    ## Arguments
+
+    | argument | default | meaning |
+    |---|---|---|
+    | scenario | ``"beom_cho_lab"`` | built-in name, path to .toml/.json, or ``"random"`` |
+    | temperature_c | None | air temperature in deg C; None draws from ``temperature_range_c`` |
+    | temperature_range_c | (0, 40) | deg C |
+    | allow_calibration | True | whether the calibrate action works (else it only costs time) |
+    | sensing_cost_per_s | 0.05 | reward per second of sensing |
+    | failure_penalty | 20 | reward lost on failure; also caps a bad estimate's loss |
+    | prior_position_std_m / prior_heading_std_deg | 0.1 / 5 | odometry prior noise |
+    | increments_deg | (1, 2, 5) | pan increments offered |
+    | sector_widths_deg | (30, 60, 90, 180, 360) | sector widths offered |
+    | n_sector_centres | 36 | sector centres, evenly spaced |
+    | n_bins | 72 | angular bins of the observation |
+    | max_steps | 12 | decisions before truncation |
+    | start_pose | ``"beacons_visible"`` | or ``"any"`` |
+    | localization_method | ``"paper"`` | or ``"least_squares"`` (refinement beside the paper's) |
+    | pair_assignment | ``"extent"`` | the paper's large/small rule, or ``"best_fit"`` (both tried) |
+    | rcd_extraction | ``"paper"`` | or ``"occlusion_aware"``: when no pair is found, retry with beacons rebuilt from RCDs a nearer echo cut (not in the paper) |
+    | prior_gate_m | None | not in the paper: keep the best beacon pair whose pose lies this close (m) to the odometry prior |
+    | action_type | ``"multi_discrete"`` | or ``"discrete"`` (for DQN) |
+    | time_budget_s | 60 | sensing time that fills the time feature |
+
+    ## Version History
+
+    * v0: first release.
+
+    ## Example
+
+    >>> import gymnasium as gym, sonar_gym
+    >>> env = gym.make("SonarGym/BeaconScan-v0", temperature_c=20.0)
+    >>> obs, info = env.reset(seed=3)
+    >>> obs.shape, obs.dtype
+    ((159,), dtype('float32'))
+    >>> full_pan = env.unwrapped.encode_action("pan", centre_deg=0, width_deg=360, increment_deg=1)
+    >>> obs, reward, terminated, truncated, info = env.step(full_pan)
+    >>> obs, reward, terminated, truncated, info = env.step(env.unwrapped.encode_action("localize"))
+    >>> terminated, info["status"], info["position_error_m"] < 0.03
+    (True, 'ok', True)
+    """
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        super().__init__(render_mode)
+        self.config = build_config(BeaconScanConfig, kwargs, "SonarGym/BeaconScan-v0")
+        config = self.config
+        self._fixed_scenario: Scenario | None = (
+            None if config.scenario == "random" else load_scenario(config.scenario)
+        )
+        if self._fixed_scenario is not None and not self._fixed_scenario.has_beacons():
+            raise ValueError(
+                f"argument 'scenario': {self._fixed_scenario.name!r} needs exactly one "
+                "'small_beacon' and one 'large_beacon' cylinder"
+            )
+        self._centres_deg = [k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)]
+        n_pans = config.n_sector_centres * len(config.sector_widths_deg) * len(config.increments_deg)
+        if config.action_type == "multi_discrete":
+            self.action_space = gym.spaces.MultiDiscrete(
+                [3, config.n_sector_centres, len(config.sector_widths_deg), len(config.increments_deg)]
+            )
+        else:
+            self.action_space = gym.spaces.Discrete(2 + n_pans)
+        n = config.n_bins
+        self.observation_layout = {
+            "bin_ranges": slice(0, n),
+            "bin_scanned": slice(n, 2 * n),
+            "prior_xy": slice(2 * n, 2 * n + 2),
+            "prior_heading": slice(2 * n + 2, 2 * n + 4),
+            "small_beacon": slice(2 * n + 4, 2 * n + 7),
+            "large_beacon": slice(2 * n + 7, 2 * n + 10),
+            "sensing_time": slice(2 * n + 10, 2 * n + 11),
+            "calibrated": slice(2 * n + 11, 2 * n + 12),
+            "steps": slice(2 * n + 12, 2 * n + 13),
+            "calibration_allowed": slice(2 * n + 13, 2 * n + 14),
+            "coverage": slice(2 * n + 14, 2 * n + 15),
+        }
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(2 * n + 15,), dtype=np.float32)
+        self._episode: _Episode | None = None
+
+    # --- actions -----------------------------------------------------------------------
+    def encode_action(
+        self, kind: str, centre_deg: float = 0, width_deg: int = 360, increment_deg: int = 1
+    ) -> np.ndarray | int:
+        """The action for a command; a pan's centre snaps to the nearest offered centre."""
+        check_choice("kind", kind, ACTION_KINDS)
+        config = self.config
+        if kind != "pan":
+            code = ACTION_KINDS.index(kind)
+            if config.action_type == "discrete":
+                return code - 1
+            return np.array([code, 0, 0, 0], dtype=np.int64)
+        check_choice("width_deg", width_deg, config.sector_widths_deg)
+        check_choice("increment_deg", increment_deg, config.increments_deg)
+        step = 360 / config.n_sector_centres
+        centre_index = int(round((centre_deg % 360) / step)) % config.n_sector_centres
+        width_index = config.sector_widths_deg.index(width_deg)
+        increment_index = config.increments_deg.index(increment_deg)
+        if config.action_type == "multi_discrete":
+            return np.array([PAN, centre_index, width_index, increment_index], dtype=np.int64)
+        n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
+        return 2 + (centre_index * n_width + width_index) * n_inc + increment_index
+
+    def decode_action(self, action: Any) -> PanCommand:
+        """The command an action stands for."""
+        config = self.config
+        if config.action_type == "discrete":
+            code = int(action)
+            if code < 2:
+                return PanCommand(ACTION_KINDS[code + 1])
+            n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
+            rest, increment_index = divmod(code - 2, n_inc)
+            centre_index, width_index = divmod(rest, n_width)
+        else:
+            kind, centre_index, width_index, increment_index = (int(v) for v in action)
+            if kind != PAN:
+                return PanCommand(ACTION_KINDS[kind])
+        return PanCommand(
+            "pan",
+            self._centres_deg[centre_index],
+            config.sector_widths_deg[width_index],
+            config.increments_deg[increment_index],
+        )
+
+    # --- episode -----------------------------------------------------------------------
+    def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
+        config = self.config
+        rng = self.np_random
+        scenario = self._fixed_scenario or random_scenario(rng)
+        if config.temperature_c is not None:
+            temperature_c = float(config.temperature_c)
+        else:
+            temperature_c = float(rng.uniform(*config.temperature_range_c))
+        world = World(scenario, temperature_c=temperature_c)
+        sonar = RotatingSonar.preset(scenario.sensor.preset).with_assumed_speed(
+            speed_of_sound_mps(ASSUMED_TEMPERATURE_C)
+        )
+        true_pose = self._sample_start_pose(world, sonar, rng)
+        world.set_robot_pose(true_pose)
+        prior = Pose(
+            true_pose.x + rng.normal(0.0, config.prior_position_std_m),
+            true_pose.y + rng.normal(0.0, config.prior_position_std_m),
+            true_pose.theta + rng.normal(0.0, math.radians(config.prior_heading_std_deg)),
+        )
+        self._episode = _Episode(world, true_pose, prior, sonar, ScanMemory(math.radians(1.0)))
+        return self._info("sensing")
+
+    def _sample_start_pose(self, world: World, sonar: RotatingSonar, rng: np.random.Generator) -> Pose:
+        clearance = 0.05
+        for _ in range(2000):
+            pose = world.sample_free_pose(rng, clearance=clearance)
+            if self.config.start_pose == "any" or beacons_visible(world, sonar, pose):
+                return pose
+        raise RuntimeError(
+            f"scenario {world.scenario.name!r}: found no free pose from which both beacons are "
+            "visible; use start_pose='any' or check the scenario"
+        )
+
+    def _apply_action(self, action: Any) -> StepOutcome:
+        episode = self._require_episode()
+        command = self.decode_action(action)
+        episode.steps += 1
+        duration_s = 0.0
+        if command.kind == "pan":
+            duration_s = self._pan(episode, command)
+        elif command.kind == "calibrate":
+            duration_s = self._calibrate(episode)
+        reward = -self.config.sensing_cost_per_s * duration_s
+        if command.kind == "localize":
+            status = self._localize(episode)
+            reward -= self._localization_loss(episode, status)
+            return StepOutcome(reward, terminated=True, info=self._info(status))
+        if episode.steps >= self.config.max_steps:
+            reward -= self.config.failure_penalty
+            return StepOutcome(reward, truncated=True, info=self._info("truncated"))
+        return StepOutcome(reward, info=self._info("sensing"))
+
+    def _pan(self, episode: _Episode, command: PanCommand) -> float:
+        centre = math.radians(command.centre_deg)
+        half_width = math.radians(command.width_deg) / 2.0
+        with self._timed("sensing"):
+            scan = episode.sonar.pan(
+                episode.world,
+                episode.true_pose,
+                centre - half_width,
+                centre + half_width,
+                math.radians(command.increment_deg),
+                self.np_random,
+            )
+        episode.memory.add(scan, episode.sonar.assumed_speed_of_sound_mps)
+        episode.sensing_time_s += scan.duration_s
+        episode.scan_points.append(self._scan_points_world(episode, scan))
+        return scan.duration_s
+
+    def _calibrate(self, episode: _Episode) -> float:
+        with self._timed("sensing"):
+            calibration = episode.sonar.calibrate(episode.world, episode.true_pose, self.np_random)
+        if self.config.allow_calibration:
+            episode.sonar = episode.sonar.with_assumed_speed(calibration.estimated_speed_mps)
+            episode.calibrated = True
+        episode.sensing_time_s += calibration.duration_s
+        return calibration.duration_s
+
+    def _localize(self, episode: _Episode) -> str:
+        scans = episode.memory.as_scans(episode.sonar.assumed_speed_of_sound_mps)
+        with self._timed("localization"):
+            result = localize_scans(
+                scans,
+                episode.world.scenario,
+                params=BeomChoParameters(
+                    assignment=self.config.pair_assignment, extraction=self.config.rcd_extraction
+                ),
+                method=self.config.localization_method,
+                prior=None if self.config.prior_gate_m is None else episode.prior,
+                prior_gate_m=self.config.prior_gate_m or 0.5,
+            )
+        episode.result = result
+        if result.ok and result.pose is not None:
+            episode.estimate = result.pose
+        return result.status
+
+    def _localization_loss(self, episode: _Episode, status: str) -> float:
+        if status != "ok" or episode.estimate is None:
+            return self.config.failure_penalty
+        score = (
+            position_error_m(episode.estimate, episode.true_pose) / POSITION_UNIT_M
+            + heading_error_rad(episode.estimate, episode.true_pose) / HEADING_UNIT_RAD
+        )
+        return min(score, self.config.failure_penalty)
+
+    # --- observation and info ---------------------------------------------------------
+    def _observe(self) -> np.ndarray:
+        episode = self._require_episode()
+        config = self.config
+        max_range = episode.sonar.transducer.max_range_m
+        layout = self.observation_layout
+        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+
+        memory = episode.memory
+        ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
+        bin_of_slot = (np.arange(memory.n_slots) * config.n_bins) // memory.n_slots
+        normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
+        bin_ranges = np.ones(config.n_bins)
+        np.minimum.at(bin_ranges, bin_of_slot, normalised)
+        bin_scanned = np.zeros(config.n_bins)
+        np.maximum.at(bin_scanned, bin_of_slot, memory.scanned.astype(np.float64))
+        observation[layout["bin_ranges"]] = bin_ranges
+        observation[layout["bin_scanned"]] = bin_scanned
+
+        (x_min, y_min), (x_max, y_max) = episode.world.scenario.bounds
+        prior = episode.prior
+        observation[layout["prior_xy"]] = np.clip(
+            [
+                2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0,
+                2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0,
+            ],
+            -1.0,
+            1.0,
+        )
+        observation[layout["prior_heading"]] = [math.cos(prior.theta), math.sin(prior.theta)]
+        for role in ("small_beacon", "large_beacon"):
+            beacon = episode.world.scenario.beacon(role)
+            dx, dy = beacon.center[0] - prior.x, beacon.center[1] - prior.y
+            bearing = wrap_angle(math.atan2(dy, dx) - prior.theta)
+            observation[layout[role]] = [
+                math.cos(bearing),
+                math.sin(bearing),
+                min(math.hypot(dx, dy) / max_range, 1.0),
+            ]
+        observation[layout["sensing_time"]] = min(episode.sensing_time_s / config.time_budget_s, 1.0)
+        observation[layout["calibrated"]] = float(episode.calibrated)
+        observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
+        observation[layout["calibration_allowed"]] = float(config.allow_calibration)
+        observation[layout["coverage"]] = memory.coverage
+        return observation
+
+    def _info(self, status: str) -> dict[str, Any]:
+        episode = self._require_episode()
+        estimate = episode.estimate if episode.estimate is not None else episode.prior
+        return {
+            "position_error_m": position_error_m(estimate, episode.true_pose),
+            "heading_error_rad": heading_error_rad(estimate, episode.true_pose),
+            "sensing_time_s": episode.sensing_time_s,
+            "status": status,
+            "temperature_c": episode.world.temperature_c,
+            "calibrated": episode.calibrated,
+            "true_pose": episode.true_pose.as_array(),
+            "estimated_pose": estimate.as_array(),
+        }
+
+    # --- rendering ----------------------------------------------------------------------
+    def _render_frame(self) -> np.ndarray:
+        from sonar_gym.render import render_topdown
+
+        episode = self._require_episode()
+        points = np.concatenate(episode.scan_points) if episode.scan_points else None
+        return render_topdown(
+            episode.world.scenario,
+            true_pose=episode.true_pose,
+            estimated_pose=episode.estimate,
+            scan_points=points,
+            title=f"BeaconScan  t={episode.sensing_time_s:.1f} s",
+        )
+
+    @staticmethod
+    def _scan_points_world(episode: _Episode, scan: Scan) -> np.ndarray:
+        hit = scan.detected
+        sensor = episode.true_pose.transform_point(episode.world.scenario.robot.sensor_offset)
+        directions = scan.angles[hit] + episode.true_pose.theta
+        return np.stack(
+            [
+                sensor[0] + scan.ranges[hit] * np.cos(directions),
+                sensor[1] + scan.ranges[hit] * np.sin(directions),
+            ],
+            axis=1,
+        )
+
+    def _require_episode(self) -> _Episode:
+        if self._episode is None:
+            raise RuntimeError("BeaconScanEnv: call reset() first")
+        return self._episode

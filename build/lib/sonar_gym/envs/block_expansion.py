@@ -1,0 +1,883 @@
+"""``SonarGym/BlockExpansion-v0``: choose the calibration distances of Roh et al.'s block expansion.
+
+Roh et al., *Development of new block expansion algorithm for indoor mobile robot
+localization*: a robot drives a curved path across two or three triangular areas of ultrasonic
+beacons (Table I). It trilaterates with the three beacons of its area (Sec. III.A); before each
+area boundary it saves three of its own positions at the user's distances d1, d2, d3 from the
+boundary (Sec. III.C), auto-calibrates the next area's beacon from the ranges measured there
+(Sec. III.B) and switches to it past the boundary (Sec. II, Fig. 3). The three saved positions
+lie on a short stretch of a gently curved path, so the calibration is badly conditioned; which
+d's keep it in check is the free choice the paper leaves to its user (Sec. IV.E). Here an agent
+makes that choice. The method itself runs unchanged:
+:class:`sonar_gym.localization.roh.BlockExpansion`, fed by the one-way ranging sensor
+:class:`sonar_gym.sonar.ranging.BeaconRanger` through the runner's ``measure`` seam.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.localization.result import OK
+from sonar_gym.localization.roh import (
+    PAPER_THREE_AREAS,
+    PAPER_TWO_AREAS,
+    TRILATERATION_METHODS,
+    BlockExpansion,
+    BlockExpansionConfig,
+    BlockExpansionResult,
+    parabolic_path,
+    path_errors,
+)
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.scenario import Emitter, Scenario, load_scenario
+from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.world import World
+
+ENV_ID = "SonarGym/BlockExpansion-v0"
+SCENARIO_NAME = "roh_beacons"
+"""The Table I beacons A-E as a scenario (``sonar_gym/scenarios/roh_beacons.toml``)."""
+
+TEMPERATURE_C = 20.0
+"""Air temperature, deg C; the ranger converts with the speed of sound at this temperature too."""
+
+LOCALIZATION_PERIOD_S = 0.04
+"""Sec. III.C: "The localization occurs once every 40ms in our system"."""
+ROBOT_SPEED_MPS = 0.1
+"""Not in the paper (chosen): the robot's speed along the path, metres per second."""
+PATH_STEP_M = ROBOT_SPEED_MPS * LOCALIZATION_PERIOD_S
+"""Arc length between two fixes, metres (4 mm)."""
+FIRING_INTERVAL_S = 0.008
+"""Not in the paper (chosen): time between two beacons' firings, seconds; a round of all five
+beacons takes the paper's 40 ms localization period."""
+
+PAPER_PATH_X_END_M = {2: 1.3, 3: 0.55}
+"""x where the paper-like parabola (:func:`parabolic_path` defaults) ends: inside Area 2 of the
+two-area run (Sec. IV.B), inside Area 3 of the three-area run (Sec. IV.D)."""
+
+DECREASING_GAP_M = 0.01
+"""With ``ordering="decreasing"`` consecutive d's differ by at least this much, metres, so each
+one is crossed after the previous one was saved (two and a half path steps)."""
+
+MAX_BEACON_SLOTS = 5
+LAYOUT_JITTER_XY_M = 0.25
+"""``layout="random"``: each Table I beacon moves uniformly within +-0.25 m in x and y ..."""
+LAYOUT_JITTER_Z_M = 0.15
+"""... and within +-0.15 m in height."""
+RANDOM_CURVATURE_PER_M = (-1.3, -0.5)
+"""``path="random"``: range of the parabola's coefficient ``a``, 1/m (the paper-like path: -0.9)."""
+MAX_LAYOUT_TRIES = 200
+MIN_BEACON_CLEARANCE_M = 0.3
+"""Every beacon stands at least this far above the receiver, metres."""
+BOUNDARY_END_MARGIN_M = 0.1
+"""A path must cross each boundary at least this far from the boundary's end beacons, metres."""
+
+# Normalisation frame of positions in the observation: value = (coordinate - centre) / half.
+FRAME_CENTRE_M = np.array([2.0, 1.0, 1.25])
+FRAME_HALF_SPAN_M = np.array([2.5, 2.0, 1.25])
+CURVATURE_SCALE_PER_M = 2.0
+CONDITION_LOG_SCALE = 4.0
+TRIANGLE_AREA_SCALE_M2 = 0.1
+NOISE_SCALE_M = 0.01
+TIMER_SCALE_S = 1e-4
+
+SURVEYED, CALIBRATED, PRIOR_ONLY, UNUSED = 1.0, 0.5, 0.0, -1.0
+"""Beacon slot status values in the observation."""
+
+STATUS_RUNNING = "running"
+STATUS_LOCALIZATION_FAILED = "localization_failed"
+
+
+@dataclass(frozen=True)
+class BlockExpansionEnvConfig:
+    """The ``gym.make`` arguments of ``SonarGym/BlockExpansion-v0`` (see the env docstring)."""
+
+    n_areas: int = 2
+    layout: str = "table_i"
+    path: str = "paper"
+    decisions: str = "per_boundary"
+    ordering: str = "free"
+    distance_range_m: tuple[float, float] = (0.02, 0.8)
+    range_noise_std_m: float = 0.001
+    timer_period_s: float = 1e-6
+    max_range_m: float = 5.0
+    beacon_prior_std_m: float = 0.2
+    sigma_scale_m: float = 0.03
+    failure_penalty: float = 10.0
+    sensing_cost_per_s: float = 0.0
+    trilateration_method: str = "paper"
+
+    def __post_init__(self) -> None:
+        check_number("n_areas", self.n_areas, low=2, high=3, integer=True)
+        check_choice("layout", self.layout, ("table_i", "random"))
+        check_choice("path", self.path, ("paper", "random"))
+        check_choice("decisions", self.decisions, ("per_boundary", "all_at_once"))
+        check_choice("ordering", self.ordering, ("free", "decreasing"))
+        value = self.distance_range_m
+        if not isinstance(value, (tuple, list)) or len(value) != 2:
+            raise ValueError(
+                f"argument 'distance_range_m' must be a pair (low, high) of metres; got {value!r}"
+            )
+        low, high = value
+        check_number("distance_range_m[0]", low, low=0.0, high=2.0)
+        check_number("distance_range_m[1]", high, low=float(low) + 4 * DECREASING_GAP_M, high=3.0)
+        object.__setattr__(self, "distance_range_m", (float(low), float(high)))
+        check_number("range_noise_std_m", self.range_noise_std_m, low=0.0, high=NOISE_SCALE_M)
+        check_number("timer_period_s", self.timer_period_s, low=0.0, high=TIMER_SCALE_S)
+        check_number("max_range_m", self.max_range_m, low=0.5, high=50.0)
+        check_number("beacon_prior_std_m", self.beacon_prior_std_m, low=0.0, high=1.0)
+        check_number("sigma_scale_m", self.sigma_scale_m, low=0.0, low_inclusive=False, high=10.0)
+        check_number("failure_penalty", self.failure_penalty, low=0.0, high=1e4)
+        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
+        check_choice("trilateration_method", self.trilateration_method, TRILATERATION_METHODS)
+
+    @property
+    def n_boundaries(self) -> int:
+        """Area boundaries crossed, each with one (d1, d2, d3)."""
+        return self.n_areas - 1
+
+
+@dataclass(frozen=True)
+class PathParameters:
+    """The parabola ``y = vertex_y + curvature (x - vertex_x)^2`` from ``x_start`` to ``x_end``.
+
+    Metres and 1/m in {W}; sampled by :func:`parabolic_path` every :data:`PATH_STEP_M`.
+    """
+
+    x_start_m: float
+    x_end_m: float
+    vertex_m: tuple[float, float]
+    curvature_per_m: float
+
+    def sample(self) -> FloatArray:
+        """``(n, 2)`` positions of the receiver along the path, metres."""
+        return parabolic_path(
+            self.x_start_m, self.x_end_m, self.vertex_m, self.curvature_per_m, PATH_STEP_M
+        )
+
+    def y_at(self, x_m: float) -> float:
+        """y of the parabola at ``x_m``, metres."""
+        return self.vertex_m[1] + self.curvature_per_m * (x_m - self.vertex_m[0]) ** 2
+
+
+PAPER_PATH = PathParameters(2.75, 0.55, (1.6, 1.45), -0.9)
+"""The :func:`parabolic_path` defaults (ending at :data:`PAPER_PATH_X_END_M` per area count)."""
+
+
+class _RangingSeam:
+    """``measure(xy, beacon_xyz)`` for the runner: one :class:`BeaconRanger` round per position.
+
+    The runner asks for the beacons of a position one after another; the first request at a new
+    position fires every beacon once (one ranging round) and later requests read that round.
+    The rounds' durations are kept, so the sensing time of any stretch of the path is known.
+    """
+
+    def __init__(
+        self,
+        ranger: BeaconRanger,
+        world: World,
+        rng: np.random.Generator,
+        beacons_m: dict[str, tuple[float, float, float]],
+    ) -> None:
+        self.ranger = ranger
+        self.world = world
+        self.rng = rng
+        self.names = tuple(beacons_m)
+        self.column_of = {tuple(xyz): column for column, xyz in enumerate(beacons_m.values())}
+        self.durations_s: list[float] = []
+        self._position: tuple[float, float] | None = None
+        self._row: FloatArray = np.empty(0)
+
+    def __call__(self, xy: FloatArray, beacon_xyz: FloatArray) -> float:
+        position = (float(xy[0]), float(xy[1]))
+        if position != self._position:
+            round_ = self.ranger.measure(self.world, Pose(*position, 0.0), self.rng, self.names)
+            self._row = round_.distances[0]
+            self._position = position
+            self.durations_s.append(round_.duration_s)
+        return float(self._row[self.column_of[tuple(float(v) for v in beacon_xyz)]])
+
+
+def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> BeaconRanger:
+    """The task's one-way ranging sensor: the config's noise, timer and range, one firing every
+    :data:`FIRING_INTERVAL_S`, converting with the speed of sound at :data:`TEMPERATURE_C`."""
+    return BeaconRanger(
+        height_m=sensor_height_m,
+        timer_period_s=config.timer_period_s,
+        range_noise_std_m=config.range_noise_std_m,
+        max_range_m=config.max_range_m,
+        assumed_speed_of_sound_mps=speed_of_sound_mps(TEMPERATURE_C),
+        firing_interval_s=FIRING_INTERVAL_S,
+    )
+
+
+def measure_path_ranges(
+    ranger: BeaconRanger,
+    world: World,
+    path: npt.ArrayLike,
+    runner_config: BlockExpansionConfig,
+    rng: np.random.Generator,
+) -> tuple[FloatArray, FloatArray]:
+    """Range every beacon along a path with the sensor, through the runner's ``measure`` seam.
+
+    Args:
+        ranger: the one-way ranging sensor.
+        world: the world whose emitters are the beacons of ``runner_config``.
+        path: ``(n, 2)`` true receiver positions, metres.
+        runner_config: the block expansion setup (its beacons fix the column order); its own
+            ``range_noise_std_m`` must be 0, the noise comes from the sensor.
+        rng: the sensor's jitter.
+
+    Returns:
+        ``(ranges, durations)``: ``(n, beacons)`` measured ranges in metres (NaN for a dropout)
+        and ``(n,)`` the duration of each position's ranging round, seconds.
+    """
+    if runner_config.range_noise_std_m != 0.0:
+        raise ValueError("runner_config.range_noise_std_m must be 0: the sensor adds the noise")
+    seam = _RangingSeam(ranger, world, rng, dict(runner_config.beacons_m))
+    ranges = BlockExpansion(runner_config).measure_ranges(path, measure=seam)
+    return ranges, np.array(seam.durations_s)
+
+
+@dataclass
+class _Episode:
+    """Everything one episode holds; pickles with the env."""
+
+    world: World
+    scenario: Scenario
+    beacons_m: dict[str, tuple[float, float, float]]
+    prior_m: dict[str, FloatArray]
+    path_parameters: PathParameters
+    path: FloatArray
+    ranges: FloatArray
+    round_durations_s: FloatArray
+    chosen: list[tuple[float, float, float]] = field(default_factory=list)
+    result: BlockExpansionResult | None = None
+    evaluated_until: int = 0
+    sensing_time_s: float = 0.0
+    done: bool = False
+    status: str = STATUS_RUNNING
+
+
+class BlockExpansionEnv(SonarEnv):
+    """
+    ## Description
+
+    Roh et al.'s robot drives a parabola across two (Sec. IV.B) or three (Sec. IV.D) triangular
+    areas of ultrasonic beacons: A, B, C form Area 1, B, C, D Area 2 and B, D, E Area 3
+    (Table I; see :mod:`sonar_gym.localization.roh_block_expansion` for the reading of Fig. 3).
+    Only A, B and C are surveyed. Every 40 ms a :class:`~sonar_gym.sonar.ranging.BeaconRanger`
+    round ranges all beacons (one-way time of flight: Gaussian jitter, a timer counter,
+    dropouts out of range), and the robot trilaterates with its area's beacons (Sec. III.A).
+    Approaching a boundary it saves its estimated positions where its distance to the
+    boundary crosses d1, d2, d3 (Sec. III.C), auto-calibrates the next area's beacon from the
+    ranges measured there (Sec. III.B) and switches to it past the boundary. The agent chooses
+    the d's. The whole path is then scored with the paper's sigma' (Sec. IV.B).
+
+    ## Action Space
+
+    ``Box(-1, 1, (3,), float32)``: (d1, d2, d3) for the next boundary
+    (``decisions="per_boundary"``, default), or ``Box(-1, 1, (3 * (n_areas - 1),), float32)``:
+    (d1, ..., d6) for every boundary at once (``decisions="all_at_once"``). With
+    ``(low, high) = distance_range_m`` (default 0.02-0.8 m, which holds every d of
+    Tables II-V) and ``u = (a + 1) / 2``:
+
+    * ``ordering="free"`` (default): ``d_i = low + u_i (high - low)`` independently. The order
+      is not forced, because the paper does not keep d1 > d2 > d3 either (Table IV's d4..d6
+      grow: 300/400/700 mm). The extraction gives every order a meaning (``D`` is the unsigned
+      distance to the boundary): a d smaller than the previous one is met approaching the
+      boundary, a larger one after crossing it. A rise then a fall (d1 < d2 > d3) is never met
+      on a path that crosses the boundary once and ends the boundary as ``"not_reached"``.
+    * ``ordering="decreasing"``: the d's are mapped to strictly decreasing values, all met
+      approaching the boundary (Tables II-III):
+      ``d1 = low + 2 g + u1 (high - low - 2 g)``, ``d2 = low + g + u2 (d1 - low - 2 g)``,
+      ``d3 = low + u3 (d2 - low - g)``, with the gap ``g = 0.01 m``.
+
+    ``env.unwrapped.encode_distances(d_m)`` and ``decode_action(action)`` convert.
+
+    ## Observation Space
+
+    ``Box(-1, 1, (36,), float32)``. Positions ``(x, y, z)`` are scaled as
+    ``(p - (2.0, 1.0, 1.25) m) / (2.5, 2.0, 1.25) m`` and clipped.
+
+    | slice | meaning | range |
+    |---|---|---|
+    | ``[0, 20)`` | 5 beacon slots (Area 1's three, then the new beacons in order): x, y, z, status | [-1, 1] |
+    | ``[20, 27)`` | path: x_start, y_start, x_end, y_end, vertex x, vertex y (scaled), curvature a / 2 per m | [-1, 1] |
+    | ``[27, 29)`` | one-hot: the boundary the action is for (the first when all at once; zeros at the end) | {0, 1} |
+    | ``29`` | 1 for three areas, 0 for two | {0, 1} |
+    | ``30`` | fraction of the path already driven when this boundary's extraction starts | [0, 1] |
+    | ``[31, 34)`` | previous calibration: outcome (1 ok, -1 failed, 0 none), log10(condition) / 4, triangle area / 0.1 m^2 | [-1, 1] |
+    | ``[34, 36)`` | ranging: noise std / 0.01 m, timer period / 1e-4 s | [0, 1] |
+
+    A slot's status is 1 for a surveyed beacon (exact), 0.5 for one the robot has calibrated
+    (its calibrated position), 0 for one not yet calibrated (a rough prior: the true position
+    plus Gaussian noise of ``beacon_prior_std_m`` per coordinate, drawn per episode) and -1
+    for an unused slot (zeros). ``env.unwrapped.observation_layout`` maps names to slices.
+
+    ## Rewards
+
+    At the end of the episode, in units of ``sigma_scale_m`` (default 0.03 m, the order of the
+    paper's sigma'), with ``P = failure_penalty`` (default 10) and ``f`` the fraction of fixes
+    that failed: ``-[(1 - f) min(sigma' / sigma_scale_m, P) + f P]`` (a failed fix counts as the
+    capped loss), minus ``P * (boundaries not calibrated and passed) / (boundaries)``.
+    sigma' is the mean distance from the successful fixes of the whole path to the true path
+    (Sec. IV.B). Every step also costs ``sensing_cost_per_s`` per second of ranging (default 0:
+    the robot ranges every 40 ms whatever the d's, so time does not depend on the choice).
+    Intermediate steps (the first of two per-boundary decisions) give only that cost.
+
+    ## Starting State
+
+    The Table I beacons (``layout="table_i"``) or each of them moved uniformly within
+    +-0.25 m horizontally and +-0.15 m vertically (``layout="random"``); the paper-like
+    parabola (``path="paper"``: :func:`~sonar_gym.localization.roh.parabolic_path`, ending at
+    x = 1.3 m for two areas, 0.55 m for three) or a random one (``path="random"``: coefficient
+    uniform in [-1.3, -0.5] 1/m, start, vertex and end jittered). Random layouts and paths are
+    redrawn until the path starts in Area 1, crosses each boundary once, in order, at least
+    0.1 m from its end beacons, and ends in the last area. The ranging of the whole drive is
+    simulated at reset (it does not depend on the actions).
+
+    ## Episode End
+
+    ``decisions="per_boundary"``: after the last boundary's decision (one step for two areas,
+    two for three), or after the first step if the first calibration failed.
+    ``decisions="all_at_once"``: after one step. No truncation.
+
+    ## Info
+
+    ``position_error_m``: sigma' of the fixes so far, metres (the fixes before the second
+    boundary's extraction after an intermediate step, the whole path at the end, 0.0 at
+    reset); ``sigma_m``, ``sigma_prime_m`` (Sec. IV.B, metres; when no fix succeeded both
+    equal ``failure_penalty * sigma_scale_m``); ``calibration_errors_m`` (new beacon name ->
+    distance between calibrated and true position, metres, calibrated beacons only);
+    ``calibration_statuses``; ``calibration_conditions`` (condition numbers of the three saved
+    positions, finite ones only); ``distances_m`` (the d triples chosen so far, metres);
+    ``failed_fix_fraction``; ``sensing_time_s`` (ranging time of the path so far, seconds);
+    ``status``: ``"running"``, ``"ok"``, the first failed boundary's status
+    (``"not_reached"``, ``"no_intersection"``, ``"collinear_positions"``,
+    ``"missing_distance"``) or ``"localization_failed"``. No heading error: trilateration
+    gives no heading.
+
+    ## Arguments
+
+    | argument | default | meaning |
+    |---|---|---|
+    | n_areas | 2 | 2 (Sec. IV.B) or 3 (Sec. IV.D) |
+    | layout | ``"table_i"`` | or ``"random"`` (jittered Table I) |
+    | path | ``"paper"`` | or ``"random"`` (random curvature and end points) |
+    | decisions | ``"per_boundary"`` | or ``"all_at_once"`` |
+    | ordering | ``"free"`` | or ``"decreasing"`` (see Action Space) |
+    | distance_range_m | (0.02, 0.8) | range of the d's, metres |
+    | range_noise_std_m | 0.001 | ranging jitter as a distance, metres |
+    | timer_period_s | 1e-6 | time-of-flight counter period, seconds (0 = exact) |
+    | max_range_m | 5.0 | beacons farther away drop out, metres |
+    | beacon_prior_std_m | 0.2 | noise of the rough new-beacon positions in the observation |
+    | sigma_scale_m | 0.03 | sigma' that costs one unit of reward, metres |
+    | failure_penalty | 10 | loss of a failed calibration; also caps the path loss |
+    | sensing_cost_per_s | 0 | reward per second of ranging |
+    | trilateration_method | ``"paper"`` | or ``"least_squares"`` (beside the paper's) |
+
+    ## Version History
+
+    * v0: first release.
+
+    ## Example
+
+    >>> import gymnasium as gym, sonar_gym
+    >>> env = gym.make("SonarGym/BlockExpansion-v0")
+    >>> obs, info = env.reset(seed=0)
+    >>> obs.shape, env.action_space.shape
+    ((36,), (3,))
+    >>> action = env.unwrapped.encode_distances([0.45, 0.25, 0.05])
+    >>> obs, reward, terminated, truncated, info = env.step(action)
+    >>> terminated, info["status"], info["sigma_prime_m"] < 0.1
+    (True, 'ok', True)
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        super().__init__(render_mode)
+        self.config = build_config(BlockExpansionEnvConfig, kwargs, ENV_ID)
+        config = self.config
+        self._base_scenario = load_scenario(SCENARIO_NAME)
+        self._areas = PAPER_TWO_AREAS if config.n_areas == 2 else PAPER_THREE_AREAS
+        self._slot_names = (*self._areas[0], *_new_beacons(self._areas))
+        self._new_beacons = self._slot_names[3:]
+        self.sensor_height_m = self._base_scenario.robot.sensor_height
+        self.ranger = make_ranger(config, self.sensor_height_m)
+        per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
+        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(per_step,), dtype=np.float32)
+        self.observation_layout = {
+            "beacons": slice(0, 4 * MAX_BEACON_SLOTS),
+            "path": slice(20, 27),
+            "boundary": slice(27, 29),
+            "three_areas": slice(29, 30),
+            "progress": slice(30, 31),
+            "previous_calibration": slice(31, 34),
+            "sensor": slice(34, 36),
+        }
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
+        self._episode: _Episode | None = None
+
+    @property
+    def areas(self) -> tuple[tuple[str, str, str], ...]:
+        """The chain of triangular areas, as beacon names (Sec. II, Fig. 3)."""
+        return self._areas
+
+    @property
+    def slot_names(self) -> tuple[str, ...]:
+        """Beacon names in the order of the observation's beacon slots."""
+        return self._slot_names
+
+    # --- what an episode holds (for analysis and plots; agents read only observations) ------
+    @property
+    def path_m(self) -> FloatArray:
+        """``(n, 2)`` the true receiver positions of the episode's path, metres (a copy)."""
+        return self._require_episode().path.copy()
+
+    @property
+    def measured_ranges_m(self) -> FloatArray:
+        """``(n, beacons)`` the ranges the sensor measured along the path, metres, NaN for a
+        dropout; columns in the order of the beacon slots (a copy)."""
+        return self._require_episode().ranges.copy()
+
+    @property
+    def beacons_m(self) -> dict[str, tuple[float, float, float]]:
+        """The episode's true beacon positions ``name -> (x, y, z)``, metres."""
+        return dict(self._require_episode().beacons_m)
+
+    @property
+    def result(self) -> BlockExpansionResult | None:
+        """The block expansion run behind the last step (None before the first step)."""
+        return self._require_episode().result
+
+    # --- actions ---------------------------------------------------------------------------
+    def decode_action(self, action: npt.ArrayLike) -> tuple[tuple[float, float, float], ...]:
+        """The (d1, d2, d3) triples, metres, an action stands for (one per boundary it covers)."""
+        values = np.asarray(action, dtype=np.float64).reshape(-1)
+        if values.shape != self.action_space.shape:
+            raise ValueError(
+                f"action must have shape {self.action_space.shape}; got {values.shape}"
+            )
+        fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
+        return tuple(
+            self._fractions_to_distances(fractions[i : i + 3]) for i in range(0, len(fractions), 3)
+        )
+
+    def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
+        """The action for d's in metres (3 per boundary the action covers).
+
+        A d outside what the action can express is moved to the nearest value it can: into
+        ``distance_range_m``, and with ``ordering="decreasing"`` below the previous d by the
+        gap :data:`DECREASING_GAP_M`.
+        """
+        values = np.asarray(distances_m, dtype=np.float64).reshape(-1)
+        if values.shape != self.action_space.shape or not np.all(np.isfinite(values)):
+            raise ValueError(
+                f"distances_m must hold {self.action_space.shape[0]} finite metres "
+                f"(d1, d2, d3 per boundary); got {distances_m!r}"
+            )
+        fractions = np.concatenate(
+            [self._distances_to_fractions(values[i : i + 3]) for i in range(0, len(values), 3)]
+        )
+        return (2.0 * fractions - 1.0).astype(np.float32)
+
+    def _fractions_to_distances(self, u: FloatArray) -> tuple[float, float, float]:
+        low, high = self.config.distance_range_m
+        if self.config.ordering == "free":
+            d = low + u * (high - low)
+            return float(d[0]), float(d[1]), float(d[2])
+        gap = DECREASING_GAP_M
+        d1 = low + 2 * gap + u[0] * (high - low - 2 * gap)
+        d2 = low + gap + u[1] * (d1 - low - 2 * gap)
+        d3 = low + u[2] * (d2 - low - gap)
+        return float(d1), float(d2), float(d3)
+
+    def _distances_to_fractions(self, d: FloatArray) -> FloatArray:
+        low, high = self.config.distance_range_m
+        if self.config.ordering == "free":
+            return np.clip((d - low) / (high - low), 0.0, 1.0)
+        gap = DECREASING_GAP_M
+        u1 = _unit_fraction(d[0] - low - 2 * gap, high - low - 2 * gap)
+        d1 = low + 2 * gap + u1 * (high - low - 2 * gap)
+        u2 = _unit_fraction(d[1] - low - gap, d1 - low - 2 * gap)
+        d2 = low + gap + u2 * (d1 - low - 2 * gap)
+        u3 = _unit_fraction(d[2] - low, d2 - low - gap)
+        return np.array([u1, u2, u3])
+
+    # --- episode ---------------------------------------------------------------------------
+    def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
+        config = self.config
+        rng = self.np_random
+        beacons_m, path_parameters = self._draw_layout_and_path(rng)
+        prior_m = {
+            name: np.array(beacons_m[name])
+            + (rng.normal(0.0, config.beacon_prior_std_m, 3) if name in self._new_beacons else 0.0)
+            for name in self._slot_names
+        }
+        emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
+        scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
+        world = World(scenario, temperature_c=TEMPERATURE_C)
+        path = path_parameters.sample()
+        with self._timed("sensing"):
+            ranges, durations_s = measure_path_ranges(
+                self.ranger, world, path, self._runner_config(beacons_m, ()), rng
+            )
+        self._episode = _Episode(
+            world=world,
+            scenario=scenario,
+            beacons_m=beacons_m,
+            prior_m=prior_m,
+            path_parameters=path_parameters,
+            path=path,
+            ranges=ranges,
+            round_durations_s=durations_s,
+        )
+        return self._info(position_error_m=0.0)
+
+    def _draw_layout_and_path(
+        self, rng: np.random.Generator
+    ) -> tuple[dict[str, tuple[float, float, float]], PathParameters]:
+        """Beacons and path of an episode; random ones are redrawn until they are valid."""
+        config = self.config
+        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
+        paper_path = dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas])
+        if config.layout == "table_i" and config.path == "paper":
+            return table_i, paper_path
+        for _ in range(MAX_LAYOUT_TRIES):
+            beacons = table_i if config.layout == "table_i" else _jittered(table_i, rng)
+            path = paper_path if config.path == "paper" else _random_path(config.n_areas, rng)
+            if self._is_valid(beacons, path):
+                return beacons, path
+        return table_i, paper_path
+
+    def _is_valid(
+        self, beacons: dict[str, tuple[float, float, float]], path_parameters: PathParameters
+    ) -> bool:
+        """Whether the path starts in Area 1, crosses each boundary once, in order, away from
+        its ends, and ends in the last area."""
+        xyz = {name: np.asarray(position) for name, position in beacons.items()}
+        if min(p[2] for p in xyz.values()) < self.sensor_height_m + MIN_BEACON_CLEARANCE_M:
+            return False
+        path = path_parameters.sample()
+        (x_min, y_min), (x_max, y_max) = self._base_scenario.bounds
+        if not (
+            np.all((path[:, 0] > x_min) & (path[:, 0] < x_max))
+            and np.all((path[:, 1] > y_min) & (path[:, 1] < y_max))
+        ):
+            return False
+        triangles = [np.array([xyz[n][:2] for n in area]) for area in self._areas]
+        if any(_triangle_area(t) < 0.3 for t in triangles):
+            return False
+        if not (_inside(path[0], triangles[0]) and _inside(path[-1], triangles[-1])):
+            return False
+        last_crossing = -1
+        for area, following in zip(self._areas[:-1], self._areas[1:], strict=True):
+            a, b = (xyz[n][:2] for n in area if n in following)
+            opposite = next(xyz[n][:2] for n in area if n not in following)
+            new = next(xyz[n][:2] for n in following if n not in area)
+            if _side(opposite, a, b) * _side(new, a, b) >= 0.0:
+                return False
+            sides = _side(path, a, b)
+            changes = np.flatnonzero(sides[1:] != sides[:-1])
+            if len(changes) != 1 or changes[0] <= last_crossing:
+                return False
+            crossing = path[changes[0] + 1]
+            length = float(np.linalg.norm(b - a))
+            along = float((crossing - a) @ (b - a)) / length
+            if not BOUNDARY_END_MARGIN_M < along < length - BOUNDARY_END_MARGIN_M:
+                return False
+            last_crossing = int(changes[0])
+        return True
+
+    def _runner_config(
+        self,
+        beacons_m: dict[str, tuple[float, float, float]],
+        triples: tuple[tuple[float, float, float], ...],
+    ) -> BlockExpansionConfig:
+        """The runner's setup; missing triples (decisions still to come) are placeholders."""
+        filled = list(triples) + [(0.45, 0.25, 0.05)] * (self.config.n_boundaries - len(triples))
+        return BlockExpansionConfig(
+            beacons_m=beacons_m,
+            areas=self._areas,
+            calibration_distances_m=tuple(filled),
+            sensor_height_m=self.sensor_height_m,
+            range_noise_std_m=0.0,
+            trilateration_method=self.config.trilateration_method,
+        )
+
+    def _apply_action(self, action: Any) -> StepOutcome:
+        episode = self._require_episode()
+        config = self.config
+        episode.chosen.extend(self.decode_action(action))
+        with self._timed("localization"):
+            result = BlockExpansion(
+                self._runner_config(episode.beacons_m, tuple(episode.chosen))
+            ).run(episode.path, distance_table=episode.ranges)
+        episode.result = result
+        decided = len(episode.chosen)
+        calibration = result.calibrations[decided - 1]
+        previous_until = episode.evaluated_until
+        final = decided >= config.n_boundaries or calibration.status != OK
+        if final:
+            episode.evaluated_until = len(episode.path)
+        else:
+            assert calibration.switch_index is not None
+            episode.evaluated_until = calibration.switch_index
+        rounds = episode.round_durations_s[previous_until : episode.evaluated_until]
+        step_time_s = float(np.sum(rounds))
+        episode.sensing_time_s += step_time_s
+        reward = -config.sensing_cost_per_s * step_time_s
+        if not final:
+            errors = self._errors(result, episode.evaluated_until)
+            return StepOutcome(reward, info=self._info(position_error_m=errors[1], errors=errors))
+        episode.done = True
+        episode.status = _final_status(result)
+        errors = self._errors(result, len(episode.path))
+        reward -= self._loss(result, errors[1])
+        return StepOutcome(
+            reward, terminated=True, info=self._info(position_error_m=errors[1], errors=errors)
+        )
+
+    def _errors(self, result: BlockExpansionResult, until: int) -> tuple[float, float]:
+        """``(sigma, sigma')`` of the successful fixes before path index ``until``, metres."""
+        episode = self._require_episode()
+        before = result.estimated_indices < until
+        if not np.any(before):
+            capped = self.config.failure_penalty * self.config.sigma_scale_m
+            return capped, capped
+        return path_errors(result.estimated_xy[before], episode.path)
+
+    def _loss(self, result: BlockExpansionResult, sigma_prime_m: float) -> float:
+        """The episode's loss (see Rewards), without the sensing cost."""
+        config = self.config
+        episode = self._require_episode()
+        failed_fixes = 1.0 - len(result.estimated_indices) / len(episode.path)
+        path_loss = min(sigma_prime_m / config.sigma_scale_m, config.failure_penalty)
+        failed_boundaries = sum(c.status != OK for c in result.calibrations)
+        return (
+            (1.0 - failed_fixes) * path_loss
+            + failed_fixes * config.failure_penalty
+            + config.failure_penalty * failed_boundaries / config.n_boundaries
+        )
+
+    # --- observation and info ----------------------------------------------------------------
+    def _observe(self) -> np.ndarray:
+        episode = self._require_episode()
+        config = self.config
+        layout = self.observation_layout
+        observation = np.zeros(self.observation_space.shape, dtype=np.float64)
+        calibrated = self._calibrated_positions(episode)
+        slots = np.zeros((MAX_BEACON_SLOTS, 4))
+        slots[:, 3] = UNUSED
+        for index, name in enumerate(self._slot_names):
+            if index < 3:
+                position, status = np.asarray(episode.beacons_m[name]), SURVEYED
+            elif name in calibrated:
+                position, status = calibrated[name], CALIBRATED
+            else:
+                position, status = episode.prior_m[name], PRIOR_ONLY
+            slots[index, :3] = _scaled_position(position)
+            slots[index, 3] = status
+        observation[layout["beacons"]] = slots.reshape(-1)
+        parameters = episode.path_parameters
+        start = (parameters.x_start_m, parameters.y_at(parameters.x_start_m), 0.0)
+        end = (parameters.x_end_m, parameters.y_at(parameters.x_end_m), 0.0)
+        observation[layout["path"]] = [
+            *_scaled_position(start)[:2],
+            *_scaled_position(end)[:2],
+            *_scaled_position((*parameters.vertex_m, 0.0))[:2],
+            np.clip(parameters.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0),
+        ]
+        decided = len(episode.chosen)
+        if not episode.done:
+            observation[layout["boundary"].start + decided] = 1.0
+        observation[layout["three_areas"]] = float(config.n_areas == 3)
+        if not episode.done:
+            last_index = max(len(episode.path) - 1, 1)
+            observation[layout["progress"]] = episode.evaluated_until / last_index
+        if episode.result is not None and decided > 0:
+            last = episode.result.calibrations[decided - 1]
+            outcome = 1.0 if last.status == OK else -1.0
+            condition = last.calibration.condition if last.calibration is not None else math.inf
+            area = last.calibration.triangle_area_m2 if last.calibration is not None else 0.0
+            observation[layout["previous_calibration"]] = [
+                outcome,
+                min(math.log10(max(condition, 1.0)) / CONDITION_LOG_SCALE, 1.0),
+                min(area / TRIANGLE_AREA_SCALE_M2, 1.0),
+            ]
+        observation[layout["sensor"]] = [
+            config.range_noise_std_m / NOISE_SCALE_M,
+            config.timer_period_s / TIMER_SCALE_S,
+        ]
+        return observation.astype(np.float32)
+
+    def _calibrated_positions(self, episode: _Episode) -> dict[str, FloatArray]:
+        """New beacons calibrated in the boundaries decided so far."""
+        if episode.result is None:
+            return {}
+        positions: dict[str, FloatArray] = {}
+        for calibration in episode.result.calibrations[: len(episode.chosen)]:
+            if calibration.calibration is not None and calibration.calibration.position is not None:
+                positions[calibration.new_beacon] = np.asarray(calibration.calibration.position)
+        return positions
+
+    def _info(
+        self, position_error_m: float, errors: tuple[float, float] | None = None
+    ) -> dict[str, Any]:
+        episode = self._require_episode()
+        sigma_m, sigma_prime_m = errors if errors is not None else (0.0, 0.0)
+        info: dict[str, Any] = {
+            "position_error_m": float(position_error_m),
+            "sigma_m": float(sigma_m),
+            "sigma_prime_m": float(sigma_prime_m),
+            "calibration_errors_m": {},
+            "calibration_statuses": {},
+            "calibration_conditions": {},
+            "distances_m": [list(triple) for triple in episode.chosen],
+            "failed_fix_fraction": 0.0,
+            "sensing_time_s": float(episode.sensing_time_s),
+            "status": episode.status,
+        }
+        result = episode.result
+        if result is None:
+            return info
+        decided = result.calibrations[: len(episode.chosen)]
+        info["calibration_errors_m"] = {
+            c.new_beacon: float(c.error_m) for c in decided if c.error_m is not None
+        }
+        info["calibration_statuses"] = {c.new_beacon: c.status for c in decided}
+        info["calibration_conditions"] = {
+            c.new_beacon: float(c.calibration.condition)
+            for c in decided
+            if c.calibration is not None and math.isfinite(c.calibration.condition)
+        }
+        fixes = np.count_nonzero(result.estimated_indices < episode.evaluated_until)
+        info["failed_fix_fraction"] = float(1.0 - fixes / max(episode.evaluated_until, 1))
+        return info
+
+    # --- rendering ----------------------------------------------------------------------------
+    def _render_frame(self) -> np.ndarray:
+        from sonar_gym.render import render_topdown
+
+        episode = self._require_episode()
+        result = episode.result
+        shown = max(episode.evaluated_until, 1)
+        index = shown - 1
+        path = episode.path
+        direction = path[min(index + 1, len(path) - 1)] - path[max(index - 1, 0)]
+        heading = math.atan2(direction[1], direction[0])
+        true_pose = Pose(float(episode.path[index, 0]), float(episode.path[index, 1]), heading)
+        estimated_pose = None
+        fixes = None
+        if result is not None:
+            kept = result.estimated_indices < shown
+            fixes = result.estimated_xy[kept]
+            if len(fixes):
+                estimated_pose = Pose(float(fixes[-1, 0]), float(fixes[-1, 1]), heading)
+        extra = [
+            f"d (mm): {[[round(d * 1000) for d in t] for t in episode.chosen]}",
+            f"status: {episode.status}",
+        ]
+        if result is not None:
+            calibrated = self._calibrated_positions(episode)
+            for name, position in calibrated.items():
+                error = float(np.linalg.norm(position - np.asarray(episode.beacons_m[name])))
+                extra.append(f"{name} calibrated, error {error * 1000:.0f} mm")
+        return render_topdown(
+            episode.scenario,
+            true_pose=true_pose,
+            estimated_pose=estimated_pose,
+            scan_points=fixes,
+            title=f"BlockExpansion  {self.config.n_areas} areas",
+            extra=extra,
+        )
+
+    def _require_episode(self) -> _Episode:
+        if self._episode is None:
+            raise RuntimeError("BlockExpansionEnv: call reset() first")
+        return self._episode
+
+
+# --- helpers -----------------------------------------------------------------------------------
+
+
+def _unit_fraction(numerator: float, denominator: float) -> float:
+    """``numerator / denominator`` clipped to [0, 1]; 0 for an empty interval."""
+    if denominator <= 0.0:
+        return 0.0
+    return float(np.clip(numerator / denominator, 0.0, 1.0))
+
+
+def _scaled_position(position: npt.ArrayLike) -> FloatArray:
+    """A position in {W} in the observation's [-1, 1] frame."""
+    scaled = (np.asarray(position, dtype=np.float64) - FRAME_CENTRE_M) / FRAME_HALF_SPAN_M
+    return np.clip(scaled, -1.0, 1.0)
+
+
+def _side(points: npt.ArrayLike, a: FloatArray, b: FloatArray) -> FloatArray:
+    """Sign of the cross product: which side of the line a-b each point lies on."""
+    p = np.asarray(points, dtype=np.float64)
+    direction = b - a
+    offset = p - a
+    return np.sign(direction[0] * offset[..., 1] - direction[1] * offset[..., 0])
+
+
+def _triangle_area(corners: FloatArray) -> float:
+    a, b, c = corners
+    return 0.5 * abs(float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])))
+
+
+def _inside(point: FloatArray, corners: FloatArray) -> bool:
+    """Whether a point lies strictly inside a triangle."""
+    signs = [_side(point, corners[i], corners[(i + 1) % 3]) for i in range(3)]
+    return bool(all(s > 0 for s in signs) or all(s < 0 for s in signs))
+
+
+def _jittered(
+    beacons: dict[str, tuple[float, float, float]], rng: np.random.Generator
+) -> dict[str, tuple[float, float, float]]:
+    """Each beacon moved uniformly within the layout jitter."""
+    moved = {}
+    for name, (x, y, z) in beacons.items():
+        dx, dy = rng.uniform(-LAYOUT_JITTER_XY_M, LAYOUT_JITTER_XY_M, 2)
+        dz = rng.uniform(-LAYOUT_JITTER_Z_M, LAYOUT_JITTER_Z_M)
+        moved[name] = (float(x + dx), float(y + dy), float(z + dz))
+    return moved
+
+
+def _random_path(n_areas: int, rng: np.random.Generator) -> PathParameters:
+    """A parabola of random curvature from near the paper path's start to near its end."""
+    x_start = float(rng.uniform(2.65, 2.85))
+    x_end = float(PAPER_PATH_X_END_M[n_areas] + rng.uniform(-0.1, 0.1))
+    vertex_x = float(rng.uniform(1.45, 1.75))
+    curvature = float(rng.uniform(*RANDOM_CURVATURE_PER_M))
+    y_start = float(rng.uniform(0.15, 0.45))
+    vertex_y = y_start - curvature * (x_start - vertex_x) ** 2
+    return PathParameters(x_start, x_end, (vertex_x, vertex_y), curvature)
+
+
+def _new_beacons(areas: tuple[tuple[str, str, str], ...]) -> tuple[str, ...]:
+    """The beacon each later area adds to the one before it."""
+    return tuple(
+        next(name for name in following if name not in area)
+        for area, following in zip(areas[:-1], areas[1:], strict=True)
+    )
+
+
+def _final_status(result: BlockExpansionResult) -> str:
+    """``"ok"``, the first failed boundary's status, or ``"localization_failed"``."""
+    for calibration in result.calibrations:
+        if calibration.status != OK:
+            return calibration.status
+    return OK if result.ok else STATUS_LOCALIZATION_FAILED

@@ -1,0 +1,840 @@
+"""``SonarGym/SweepLocalization-v0``: how many servo sweeps, and where, along a route.
+
+The task of Kim, Lee & Jeong (*Self localization of mobile robot using sonar sensing and map
+building*): a small robot drives a route in the 2 m arena with drifting dead reckoning; at each
+decision point the agent chooses how many sweeps of the servo-mounted SRF04 to take (0 to
+``max_sweeps``) and toward which sector. The sweeps, taken between short moves along the route
+and combined through dead reckoning, feed the voting localization on the known occupancy grid
+(sec. 3.3), whose fix corrects the EKF (secs. 3.1-3.2).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.localization.kim import (
+    TABLE_1_TRUE_POSITIONS_M,
+    OccupancyGrid,
+    Sweep,
+    VoteLocalization,
+    ekf_update,
+    predict,
+    proportional_encoder_noise,
+    vote_localize,
+)
+from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.pose import Pose, angle_difference, wrap_angle
+from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
+from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.sonar.swept import SweptSonar
+from sonar_gym.world import World
+
+POSITION_UNIT_M = 0.1
+"""Position error worth one unit of loss: the "typical" error of Kim et al. sec. 4.1 (10 cm)."""
+HEADING_UNIT_RAD = math.radians(5.0)
+"""Heading error worth one unit of loss (5 deg: one heading step of the vote at 1 m range is
+about the cell size, 5 cm, i.e. ~3 deg, and 5 deg is where a fix is clearly needed)."""
+SECTOR_NAMES = ("front", "left", "right", "back")
+SECTOR_CENTRES_RAD = (0.0, math.pi / 2.0, -math.pi / 2.0, math.pi)
+"""Sector centres in the robot frame {R} (0 = forward, counter-clockwise positive)."""
+SLIP_FRACTION_MAX = 0.1
+"""A slipping wheel loses up to this fraction of the command's ground travel."""
+POSITION_STD_SCALE_M = 0.25
+"""Covariance features: ``sqrt(P_xx) / 0.25 m`` (clipped to 1)."""
+HEADING_STD_SCALE_RAD = math.radians(15.0)
+"""Covariance feature: ``sqrt(P_thth) / 15 deg`` (clipped to 1)."""
+DISTANCE_SCALE_M = 2.0
+"""Feature: distance driven since the last accepted fix / 2 m (clipped to 1)."""
+MIN_SEARCH_RADIUS_M = 0.1
+MAX_SEARCH_RADIUS_M = 0.6
+MIN_HEADING_WINDOW_RAD = math.radians(3.0)
+MAX_HEADING_WINDOW_RAD = math.radians(30.0)
+_ROUTE_CLEARANCE_M = 0.03
+_ROUTE_MIN_LEG_M = 0.3
+_RUNNING = "running"
+
+
+@dataclass(frozen=True)
+class SweepLocalizationConfig:
+    """The ``gym.make`` arguments of ``SonarGym/SweepLocalization-v0`` (see the env docstring)."""
+
+    scenario: str = "kim_arena"
+    route: str = "table1"
+    route_length_m: float = 3.2
+    decision_points: str = "spacing"
+    decision_spacing_m: float = 0.4
+    sweep_spacing_m: float = 0.1
+    max_sweeps: int = 4
+    sweep_width_deg: int = 90
+    sweep_step_deg: float = 5.0
+    anchor: str = "obstacle_point"
+    heading_step_deg: float = 1.0
+    sensing_cost_per_s: float = 0.1
+    max_error_loss: float = 20.0
+    encoder_noise_std_m_per_sqrt_m: float = 0.005
+    wheel_scale_error: float = 0.01
+    slip_probability_per_m: float = 0.02
+    initial_position_std_m: float = 0.02
+    initial_heading_std_deg: float = 2.0
+    fix_position_std_m: float = 0.03
+    fix_heading_std_deg: float = 4.0
+    innovation_gate: float | None = None
+    temperature_c: float = 20.0
+    n_range_bins: int = 9
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scenario, (str, Path)):
+            raise ValueError(  # noqa: TRY004  (bad arguments raise ValueError here)
+                f"argument 'scenario' must be a built-in name or a file path; got {self.scenario!r}"
+            )
+        check_choice("route", self.route, ("table1", "random"))
+        check_number("route_length_m", self.route_length_m, low=0.5, high=50.0)
+        check_choice("decision_points", self.decision_points, ("spacing", "waypoints"))
+        check_number("decision_spacing_m", self.decision_spacing_m, low=0.05, high=5.0)
+        check_number("sweep_spacing_m", self.sweep_spacing_m, low=0.0, high=1.0)
+        check_number("max_sweeps", self.max_sweeps, low=4, high=12, integer=True)
+        check_choice("sweep_width_deg", self.sweep_width_deg, (90, 180))
+        check_number("sweep_step_deg", self.sweep_step_deg, low=0.5, high=15.0)
+        check_choice("anchor", self.anchor, ("obstacle_point", "cell_center"))
+        check_number("heading_step_deg", self.heading_step_deg, low=0.25, high=5.0)
+        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
+        check_number("max_error_loss", self.max_error_loss, low=0.0, low_inclusive=False, high=1e4)
+        check_number(
+            "encoder_noise_std_m_per_sqrt_m", self.encoder_noise_std_m_per_sqrt_m, low=0.0, high=0.1
+        )
+        check_number("wheel_scale_error", self.wheel_scale_error, low=0.0, high=0.1)
+        check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
+        check_number("initial_position_std_m", self.initial_position_std_m, low=0.0, high=0.5)
+        check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=30.0)
+        check_number("fix_position_std_m", self.fix_position_std_m, low=0.001, high=1.0)
+        check_number("fix_heading_std_deg", self.fix_heading_std_deg, low=0.05, high=45.0)
+        if self.innovation_gate is not None:
+            check_number(
+                "innovation_gate", self.innovation_gate, low=0.0, low_inclusive=False, high=1e6
+            )
+        check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
+        check_number("n_range_bins", self.n_range_bins, low=1, high=64, integer=True)
+
+    @property
+    def ekf_variance_per_m(self) -> float:
+        """``V(k)`` of the EKF, m^2 per metre rolled by a wheel (sec. 3.1; the paper gives none).
+
+        The encoder's random variance plus the variance of a wheel scale error uniform in
+        ``+-wheel_scale_error`` (``e^2 / 3``, taken over one metre of travel). Wheel slips are
+        left out of the filter's model: they are the rare "other errors" ``w(k)`` of sec. 3.1
+        that the encoders cannot see, and only a fix corrects them.
+        """
+        return self.encoder_noise_std_m_per_sqrt_m**2 + self.wheel_scale_error**2 / 3.0
+
+
+@dataclass(frozen=True)
+class Route:
+    """A polyline in {W} the robot follows (metres).
+
+    Attributes:
+        vertices: ``(K, 2)`` corner points, the first one the start.
+        cumulative_m: ``(K,)`` route length at each vertex (0 at the start).
+    """
+
+    vertices: np.ndarray
+    cumulative_m: np.ndarray
+
+    @classmethod
+    def through(cls, points: np.ndarray) -> Route:
+        vertices = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        lengths = np.linalg.norm(np.diff(vertices, axis=0), axis=1)
+        return cls(vertices, np.concatenate([[0.0], np.cumsum(lengths)]))
+
+    @property
+    def length_m(self) -> float:
+        return float(self.cumulative_m[-1])
+
+    def point_at(self, s_m: float) -> np.ndarray:
+        """The point at route length ``s_m`` (clipped to the route)."""
+        s = min(max(s_m, 0.0), self.length_m)
+        index = int(np.searchsorted(self.cumulative_m, s, side="right")) - 1
+        index = min(max(index, 0), len(self.vertices) - 2)
+        span = self.cumulative_m[index + 1] - self.cumulative_m[index]
+        fraction = 0.0 if span <= 0.0 else (s - self.cumulative_m[index]) / span
+        return self.vertices[index] + fraction * (self.vertices[index + 1] - self.vertices[index])
+
+    def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
+        """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
+        inner = [
+            v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if start_m < s < stop_m
+        ]
+        return [*inner, self.point_at(stop_m)]
+
+    def heading_at_start(self) -> float:
+        delta = self.vertices[1] - self.vertices[0]
+        return math.atan2(delta[1], delta[0])
+
+    def truncated(self, length_m: float) -> Route:
+        """The first ``length_m`` metres of the route."""
+        keep = [v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if s < length_m]
+        return Route.through(np.array([*keep, self.point_at(length_m)]))
+
+
+@dataclass
+class _Episode:
+    world: World
+    robot: DifferentialDriveRobot
+    route: Route
+    decision_stations_m: np.ndarray
+    estimate: Pose
+    covariance: np.ndarray
+    progress_m: float = 0.0
+    decisions: int = 0
+    sensing_time_s: float = 0.0
+    distance_since_fix_m: float = 0.0
+    last_ranges: np.ndarray | None = None
+    last_sector: int = 0
+    last_fix_ok: bool = False
+    true_track: list[np.ndarray] = field(default_factory=list)
+    estimate_track: list[np.ndarray] = field(default_factory=list)
+    scan_points: np.ndarray | None = None
+
+
+class SweepLocalizationEnv(SonarEnv):
+    """
+    ## Description
+
+    A small differential-drive robot (12 x 18 cm, wheel base 0.15 m) follows a route through
+    the 2 m arena of Kim, Lee & Jeong (scenario ``kim_arena``). Its dead reckoning drifts:
+    encoder noise, a wheel scale error drawn per episode and occasional wheel slip. It knows
+    the arena's map as an occupancy grid of 5 cm cells (sec. 2.2, 4.1), rasterised from the
+    mapped geometry (``OccupancyGrid.from_segments``). At each decision point along the route
+    the agent chooses how many servo sweeps of the SRF04 to take and toward which sector.
+    The first sweep is taken where the robot stands; the robot then moves ``sweep_spacing_m``
+    along the route before each further sweep (never past the next decision point; sweeps
+    with no route left are taken in place). The sweeps are combined through dead reckoning
+    (``Sweep.odometry``) and the voting localization of sec. 3.3 runs on them, restricted to
+    a circle around the EKF estimate (``search_radius = 3 sqrt(lambda_max(P_xy)) + cell``,
+    clipped to [0.1, 0.6] m) and to headings within ``3 sqrt(P_thth) + 1 step`` (clipped to
+    [3, 30] deg) of it. Its fix of the last sweep's pose corrects the EKF (sec. 3.2, with the
+    gain's missing inverse restored). The EKF predicts with the encoder increments of every
+    move (sec. 3.1, ``V(k)`` = ``config.ekf_variance_per_m`` per metre rolled). Then the robot
+    drives on to the next decision point.
+
+    Measurement covariance ``G = diag(s^2, s^2, h^2)`` with ``s = fix_position_std_m``
+    (3 cm) and ``h = fix_heading_std_deg`` (4 deg), the measured spread of the fixes: over
+    random routes in ``kim_arena`` with 1-4 forward sweeps, the vote's error is 2.5-3.3 cm RMS
+    per axis (a fix is quantised to the 5 cm cell, ``5 / sqrt(12) = 1.4`` cm, and the SRF04's
+    40 deg beam smears each wall into an arc) and 3.4-4.4 deg RMS in heading (a wall seen
+    at normal incidence reads the same over the whole beam, so only the ends of the arcs,
+    corners and edges fix the heading). With ``innovation_gate`` a fix whose squared
+    Mahalanobis innovation ``nu^T (P + G)^-1 nu`` exceeds it is rejected.
+
+    ## Action Space
+
+    ``MultiDiscrete([max_sweeps + 1, 4])``:
+
+    | index | meaning | values |
+    |---|---|---|
+    | 0 | number of sweeps | 0 .. ``max_sweeps`` (0: no sensing, just drive on) |
+    | 1 | sector centre in {R} | 0 front (0 deg), 1 left (+90), 2 right (-90), 3 back (180) |
+
+    Each sweep covers ``sweep_width_deg`` (90: the paper's +-45 deg; 180: the 180 deg
+    variant of sec. 2.2) about the sector centre, one ping every ``sweep_step_deg``.
+    ``env.unwrapped.encode_action(n_sweeps, sector)`` builds an action from a sector name.
+
+    ## Observation Space
+
+    ``Box(-1, 1, (15 + n_range_bins,), float32)``:
+
+    | slice | meaning | range |
+    |---|---|---|
+    | ``estimate_xy`` (2) | EKF position scaled to the scenario bounds | [-1, 1] |
+    | ``estimate_heading`` (2) | cos, sin of the EKF heading | [-1, 1] |
+    | ``estimate_std`` (3) | sqrt of ``P_xx``, ``P_yy`` / 0.25 m; of ``P_thth`` / 15 deg | [0, 1] |
+    | ``distance_since_fix`` (1) | metres driven since the last accepted fix / 2 m | [0, 1] |
+    | ``route_progress`` (1) | route length covered / route length | [0, 1] |
+    | ``last_sweep_ranges`` (n) | last sweep, nearest range per bin (right to left) / 3 m | [0, 1] |
+    | ``last_sweep_sector`` (2) | cos, sin of the last sweep's sector centre in {R} | [-1, 1] |
+    | ``last_fix_ok`` (1) | 1 if the last decision's sweeps gave an accepted fix | {0, 1} |
+    | ``route_heading`` (2) | cos, sin of the bearing of the next decision point in {R} | [-1, 1] |
+    | ``steps_remaining`` (1) | decisions left / decisions of the episode | [0, 1] |
+
+    Features are clipped to their range; ``n = n_range_bins``; a bin without an echo (or
+    before the first sweep) reads 1; {R} is the frame of the EKF estimate.
+
+    ``env.unwrapped.observation_layout`` maps these names to slices.
+
+    ## Rewards
+
+    At every decision, after the robot reaches the next decision point:
+    ``-min(E_xy / 0.1 m + E_theta / 5 deg, max_error_loss) - sensing_cost_per_s * T_sweeps``,
+    with ``E_xy``, ``E_theta`` the error of the EKF estimate (Beom & Cho eq. (16) metrics),
+    10 cm the typical error Kim et al. report (sec. 4.1), and ``T_sweeps`` the servo and
+    listening time of this decision's sweeps (1.25 s per 90 deg sweep at 5 deg).
+
+    ## Starting State
+
+    ``route="table1"``: the polyline through the seven positions of Kim et al. Table 1
+    (3.27 m); ``"random"``: free waypoints joined by collision-free legs (at least 0.3 m) up
+    to ``route_length_m``. The robot starts at the route's start facing along it; the EKF
+    starts at the truth plus Gaussian noise (``initial_position_std_m``,
+    ``initial_heading_std_deg``) with that covariance ("the precise initial position of the
+    mobile robot is known", sec. 3.1). Wheel scale errors are drawn uniformly in
+    ``+-wheel_scale_error`` per wheel per episode.
+
+    ## Episode End
+
+    Terminates when the robot has covered the route (``decision_points="spacing"``: one
+    decision every ``decision_spacing_m``; ``"waypoints"``: one at each route vertex, the last
+    one at the route's end). No truncation.
+
+    ## Info
+
+    ``position_error_m``, ``heading_error_rad`` (EKF estimate against the truth),
+    ``sensing_time_s`` (cumulative), ``status`` (``"running"``, ``"ok"`` at the end),
+    ``n_sweeps``, ``sector``, ``step_sensing_time_s``, ``fix_status`` (``"none"`` without
+    sweeps, the voting status, or ``"gated"``), ``fix_position_error_m`` and
+    ``fix_heading_error_rad`` (the vote's pose of the first sweep against the truth there,
+    only after a fix), ``fix_true_pose`` / ``fix_estimated_pose`` (``[x, y, theta]``, same
+    condition), ``fix_measured_pose`` (the last sweep's pose from the vote and dead reckoning:
+    the measurement fed to the EKF), ``true_pose``, ``estimated_pose``, ``covariance_diagonal``.
+
+    ## Arguments
+
+    | argument | default | meaning |
+    |---|---|---|
+    | scenario | ``"kim_arena"`` | built-in scenario name or path (the sonar is always the SRF04) |
+    | route | ``"table1"`` | or ``"random"`` |
+    | route_length_m | 3.2 | length of a random route, m |
+    | decision_points | ``"spacing"`` | or ``"waypoints"`` (one decision per route vertex) |
+    | decision_spacing_m | 0.4 | route length between decision points, m |
+    | sweep_spacing_m | 0.1 | short move between the sweeps of one decision, m |
+    | max_sweeps | 4 | largest number of sweeps per decision (4..12) |
+    | sweep_width_deg | 90 | 90 (the paper's +-45 deg) or 180 |
+    | sweep_step_deg | 5 | angle between pings, deg (the paper gives none) |
+    | anchor | ``"obstacle_point"`` | voting anchor; ``"cell_center"`` is the paper's reading |
+    | heading_step_deg | 1 | heading candidates of the vote, deg |
+    | sensing_cost_per_s | 0.1 | reward per second of sweeping |
+    | max_error_loss | 20 | cap of the error term per decision |
+    | encoder_noise_std_m_per_sqrt_m | 0.005 | encoder noise, m after 1 m |
+    | wheel_scale_error | 0.01 | per-wheel scale error bound (uniform, per episode) |
+    | slip_probability_per_m | 0.02 | wheel-slip probability per metre (loss up to 10 %) |
+    | initial_position_std_m / initial_heading_std_deg | 0.02 / 2 | initial EKF error |
+    | fix_position_std_m / fix_heading_std_deg | 0.03 / 4 | measurement covariance ``G`` |
+    | innovation_gate | None | squared Mahalanobis distance above which a fix is rejected |
+    | temperature_c | 20 | air temperature (the sensor assumes 20 deg C) |
+    | n_range_bins | 9 | bins of the last-sweep summary |
+
+    ## Version History
+
+    * v0: first release.
+
+    ## Example
+
+    >>> import gymnasium as gym, sonar_gym
+    >>> env = gym.make("SonarGym/SweepLocalization-v0")
+    >>> obs, info = env.reset(seed=0)
+    >>> obs.shape, env.action_space
+    ((24,), MultiDiscrete([5 4]))
+    >>> obs, reward, terminated, truncated, info = env.step(env.unwrapped.encode_action(3, "front"))
+    >>> info["n_sweeps"], info["fix_status"], info["position_error_m"] < 0.1
+    (3, 'ok', True)
+    """
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        super().__init__(render_mode)
+        self.config = build_config(SweepLocalizationConfig, kwargs, "SonarGym/SweepLocalization-v0")
+        config = self.config
+        try:
+            self._scenario: Scenario = load_scenario(config.scenario)
+        except (OSError, ValueError) as error:
+            raise ValueError(f"argument 'scenario': {error}") from error
+        self.grid = occupancy_grid_of(self._scenario)
+        self.sonar = SweptSonar.kim(
+            wide=config.sweep_width_deg == 180, step_rad=math.radians(config.sweep_step_deg)
+        )
+        self.action_space = gym.spaces.MultiDiscrete([config.max_sweeps + 1, len(SECTOR_NAMES)])
+        names_and_sizes = [
+            ("estimate_xy", 2),
+            ("estimate_heading", 2),
+            ("estimate_std", 3),
+            ("distance_since_fix", 1),
+            ("route_progress", 1),
+            ("last_sweep_ranges", config.n_range_bins),
+            ("last_sweep_sector", 2),
+            ("last_fix_ok", 1),
+            ("route_heading", 2),
+            ("steps_remaining", 1),
+        ]
+        self.observation_layout: dict[str, slice] = {}
+        start = 0
+        for name, size in names_and_sizes:
+            self.observation_layout[name] = slice(start, start + size)
+            start += size
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(start,), dtype=np.float32)
+        self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
+        if config.route == "table1":
+            world = World(self._scenario, temperature_c=config.temperature_c)
+            blocked = [
+                (float(x), float(y))
+                for x, y in TABLE_1_TRUE_POSITIONS_M
+                if not world.is_free((x, y))
+            ]
+            if blocked:
+                raise ValueError(
+                    f"argument 'route': 'table1' needs the Table 1 positions free in scenario "
+                    f"{self._scenario.name!r}; blocked: {blocked}; use route='random'"
+                )
+        self._episode: _Episode | None = None
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario (the agents may read the map; never the episode's hidden state)."""
+        return self._scenario
+
+    # --- actions -----------------------------------------------------------------------
+    def encode_action(self, n_sweeps: int, sector: str | int = "front") -> np.ndarray:
+        """The action for ``n_sweeps`` sweeps toward ``sector`` (a name or an index)."""
+        check_number("n_sweeps", n_sweeps, low=0, high=self.config.max_sweeps, integer=True)
+        if isinstance(sector, str):
+            check_choice("sector", sector, SECTOR_NAMES)
+            sector = SECTOR_NAMES.index(sector)
+        check_number("sector", sector, low=0, high=len(SECTOR_NAMES) - 1, integer=True)
+        return np.array([n_sweeps, sector], dtype=np.int64)
+
+    # --- episode -----------------------------------------------------------------------
+    def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
+        config = self.config
+        rng = self.np_random
+        world = World(self._scenario, temperature_c=config.temperature_c)
+        route = self._table1_route if config.route == "table1" else self._random_route(world, rng)
+        start = Pose(
+            float(route.vertices[0, 0]), float(route.vertices[0, 1]), route.heading_at_start()
+        )
+        world.set_robot_pose(start)
+        scale_left, scale_right = rng.uniform(
+            -config.wheel_scale_error, config.wheel_scale_error, 2
+        )
+        noise = OdometryNoise(
+            encoder_std_m_per_sqrt_m=config.encoder_noise_std_m_per_sqrt_m,
+            scale_error_left=float(scale_left),
+            scale_error_right=float(scale_right),
+            slip_probability_per_m=config.slip_probability_per_m,
+            slip_fraction_max=SLIP_FRACTION_MAX,
+        )
+        position_std = config.initial_position_std_m
+        heading_std = math.radians(config.initial_heading_std_deg)
+        offsets = rng.normal(0.0, 1.0, 3) * np.array([position_std, position_std, heading_std])
+        estimate = Pose(start.x + offsets[0], start.y + offsets[1], start.theta + offsets[2])
+        covariance = np.diag([position_std**2, position_std**2, heading_std**2])
+        if config.decision_points == "spacing":
+            count = max(1, math.ceil(route.length_m / config.decision_spacing_m - 1e-9))
+            stations = config.decision_spacing_m * np.arange(count, dtype=np.float64)
+        else:
+            stations = route.cumulative_m.copy()
+        self._episode = _Episode(
+            world=world,
+            robot=DifferentialDriveRobot(noise, odometry_pose=estimate),
+            route=route,
+            decision_stations_m=stations,
+            estimate=estimate,
+            covariance=covariance,
+        )
+        self._episode.true_track.append(start.position)
+        self._episode.estimate_track.append(estimate.position)
+        return self._info(_RUNNING)
+
+    def _random_route(self, world: World, rng: np.random.Generator) -> Route:
+        """Free waypoints joined by collision-free legs, up to ``route_length_m``."""
+        target = self.config.route_length_m
+        for _ in range(50):
+            points = [world.sample_free_pose(rng, clearance=_ROUTE_CLEARANCE_M).position]
+            length = 0.0
+            for _ in range(200):
+                if length >= target:
+                    return Route.through(np.array(points)).truncated(target)
+                candidate = world.sample_free_pose(rng, clearance=_ROUTE_CLEARANCE_M).position
+                leg = float(np.linalg.norm(candidate - points[-1]))
+                if leg >= _ROUTE_MIN_LEG_M and _leg_is_free(world, points[-1], candidate):
+                    points.append(candidate)
+                    length += leg
+        raise RuntimeError(
+            f"scenario {world.scenario.name!r}: could not draw a free route of "
+            f"{target} m; use route='table1' or a roomier scenario"
+        )
+
+    def _apply_action(self, action: Any) -> StepOutcome:
+        episode = self._require_episode()
+        config = self.config
+        n_sweeps, sector = int(action[0]), int(action[1])
+        stations = episode.decision_stations_m
+        next_station = (
+            float(stations[episode.decisions + 1])
+            if episode.decisions + 1 < len(stations)
+            else episode.route.length_m
+        )
+        episode.decisions += 1
+        step_sensing_s = 0.0
+        fix_info: dict[str, Any] = {"fix_status": "none"}
+        scan_points: list[np.ndarray] = []
+        if n_sweeps > 0:
+            step_sensing_s, fix_info = self._sense_and_fix(
+                episode, n_sweeps, sector, next_station, scan_points
+            )
+            episode.scan_points = np.concatenate(scan_points) if scan_points else None
+        self._drive_to(episode, next_station)
+        episode.sensing_time_s += step_sensing_s
+        true_pose = episode.world.robot_pose
+        error_loss = (
+            position_error_m(episode.estimate, true_pose) / POSITION_UNIT_M
+            + heading_error_rad(episode.estimate, true_pose) / HEADING_UNIT_RAD
+        )
+        reward = (
+            -min(error_loss, config.max_error_loss) - config.sensing_cost_per_s * step_sensing_s
+        )
+        done = episode.decisions >= len(stations)
+        info = self._info("ok" if done else _RUNNING)
+        info.update(fix_info)
+        info.update(
+            n_sweeps=n_sweeps, sector=SECTOR_NAMES[sector], step_sensing_time_s=step_sensing_s
+        )
+        return StepOutcome(reward, terminated=done, info=info)
+
+    def _sense_and_fix(
+        self,
+        episode: _Episode,
+        n_sweeps: int,
+        sector: int,
+        next_station_m: float,
+        scan_points: list[np.ndarray],
+    ) -> tuple[float, dict[str, Any]]:
+        """Take the sweeps between short moves, localize, correct the EKF."""
+        config = self.config
+        first_estimate, first_covariance = episode.estimate, episode.covariance.copy()
+        first_truth = episode.world.robot_pose
+        sweeps: list[Sweep] = []
+        duration_s = 0.0
+        offset = episode.world.scenario.robot.sensor_offset
+        for index in range(n_sweeps):
+            if index > 0 and episode.progress_m < next_station_m:
+                self._drive_to(
+                    episode, min(episode.progress_m + config.sweep_spacing_m, next_station_m)
+                )
+            true_pose = episode.world.robot_pose
+            with self._timed("sensing"):
+                scan = self.sonar.sweep(
+                    episode.world, true_pose, self.np_random, SECTOR_CENTRES_RAD[sector]
+                )
+            duration_s += scan.duration_s
+            odometry = _relative_pose(first_estimate, episode.estimate)
+            sweeps.append(Sweep(scan.angles, scan.ranges, offset, odometry))
+            scan_points.append(_scan_points_world(true_pose, offset, scan.angles, scan.ranges))
+            episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
+        episode.last_sector = sector
+        result = self._localize(first_estimate, first_covariance, sweeps)
+        info: dict[str, Any] = {"fix_status": result.status}
+        episode.last_fix_ok = False
+        if result.ok and result.pose is not None and result.last_sweep_pose is not None:
+            info.update(
+                fix_position_error_m=position_error_m(result.pose, first_truth),
+                fix_heading_error_rad=heading_error_rad(result.pose, first_truth),
+                fix_true_pose=first_truth.as_array(),
+                fix_estimated_pose=result.pose.as_array(),
+                fix_measured_pose=result.last_sweep_pose.as_array(),
+            )
+            if self._accept(episode, result.last_sweep_pose):
+                episode.estimate, episode.covariance = ekf_update(
+                    episode.estimate,
+                    episode.covariance,
+                    result.last_sweep_pose,
+                    self._measurement_covariance(),
+                )
+                episode.distance_since_fix_m = 0.0
+                episode.last_fix_ok = True
+            else:
+                info["fix_status"] = "gated"
+        return duration_s, info
+
+    def _localize(
+        self, center: Pose, covariance: np.ndarray, sweeps: list[Sweep]
+    ) -> VoteLocalization:
+        config = self.config
+        position_spread = math.sqrt(max(float(np.linalg.eigvalsh(covariance[:2, :2])[-1]), 0.0))
+        radius = float(
+            np.clip(
+                3.0 * position_spread + self.grid.cell_size_m,
+                MIN_SEARCH_RADIUS_M,
+                MAX_SEARCH_RADIUS_M,
+            )
+        )
+        step = math.radians(config.heading_step_deg)
+        window = float(
+            np.clip(
+                3.0 * math.sqrt(max(covariance[2, 2], 0.0)) + step,
+                MIN_HEADING_WINDOW_RAD,
+                MAX_HEADING_WINDOW_RAD,
+            )
+        )
+        with self._timed("localization"):
+            return vote_localize(
+                self.grid,
+                sweeps,
+                search_center=center,
+                search_radius=radius,
+                heading_step_rad=step,
+                heading_window_rad=window,
+                max_range_m=self.sonar.transducer.max_range_m,
+                anchor=config.anchor,  # type: ignore[arg-type]
+                return_vote_map=False,
+            )
+
+    def _measurement_covariance(self) -> np.ndarray:
+        position_var = self.config.fix_position_std_m**2
+        return np.diag(
+            [position_var, position_var, math.radians(self.config.fix_heading_std_deg) ** 2]
+        )
+
+    def _accept(self, episode: _Episode, fix: Pose) -> bool:
+        gate = self.config.innovation_gate
+        if gate is None:
+            return True
+        innovation = np.array(
+            [
+                fix.x - episode.estimate.x,
+                fix.y - episode.estimate.y,
+                angle_difference(fix.theta, episode.estimate.theta),
+            ]
+        )
+        spread = episode.covariance + self._measurement_covariance()
+        return float(innovation @ np.linalg.solve(spread, innovation)) <= gate
+
+    def _drive_to(self, episode: _Episode, station_m: float) -> None:
+        """Drive along the route to ``station_m``, steering from the EKF estimate."""
+        if station_m <= episode.progress_m:
+            return
+        wheel_base = episode.robot.wheel_base_for(episode.world)
+        variance_per_m = self.config.ekf_variance_per_m
+        for target in episode.route.targets_between(episode.progress_m, station_m):
+            motion = episode.robot.move_to(
+                episode.world, target, self.np_random, from_pose=episode.estimate
+            )
+            for part in motion.parts or (motion,):
+                episode.estimate, episode.covariance = _predicted(
+                    episode.estimate, episode.covariance, part, wheel_base, variance_per_m
+                )
+                episode.distance_since_fix_m += 0.5 * (
+                    abs(part.encoder_left_m) + abs(part.encoder_right_m)
+                )
+        episode.progress_m = station_m
+        episode.true_track.append(episode.world.robot_pose.position)
+        episode.estimate_track.append(episode.estimate.position)
+
+    # --- observation and info ---------------------------------------------------------
+    def _observe(self) -> np.ndarray:
+        episode = self._require_episode()
+        config = self.config
+        layout = self.observation_layout
+        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+        estimate = episode.estimate
+        (x_min, y_min), (x_max, y_max) = self._scenario.bounds
+        observation[layout["estimate_xy"]] = np.clip(
+            [
+                2.0 * (estimate.x - x_min) / (x_max - x_min) - 1.0,
+                2.0 * (estimate.y - y_min) / (y_max - y_min) - 1.0,
+            ],
+            -1.0,
+            1.0,
+        )
+        observation[layout["estimate_heading"]] = [
+            math.cos(estimate.theta),
+            math.sin(estimate.theta),
+        ]
+        std = np.sqrt(np.clip(np.diag(episode.covariance), 0.0, None))
+        observation[layout["estimate_std"]] = np.clip(
+            std / [POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD], 0.0, 1.0
+        )
+        observation[layout["distance_since_fix"]] = min(
+            episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0
+        )
+        observation[layout["route_progress"]] = min(
+            episode.progress_m / max(episode.route.length_m, 1e-9), 1.0
+        )
+        observation[layout["last_sweep_ranges"]] = _binned_ranges(
+            episode.last_ranges, config.n_range_bins
+        )
+        centre = SECTOR_CENTRES_RAD[episode.last_sector]
+        observation[layout["last_sweep_sector"]] = [math.cos(centre), math.sin(centre)]
+        observation[layout["last_fix_ok"]] = float(episode.last_fix_ok)
+        ahead = self._next_station_point(episode) - estimate.position
+        bearing = (
+            wrap_angle(math.atan2(ahead[1], ahead[0]) - estimate.theta) if np.any(ahead) else 0.0
+        )
+        observation[layout["route_heading"]] = [math.cos(bearing), math.sin(bearing)]
+        remaining = len(episode.decision_stations_m) - episode.decisions
+        observation[layout["steps_remaining"]] = remaining / len(episode.decision_stations_m)
+        return np.clip(observation, -1.0, 1.0)
+
+    def _next_station_point(self, episode: _Episode) -> np.ndarray:
+        stations = episode.decision_stations_m
+        following = episode.decisions + 1
+        station = (
+            float(stations[following]) if following < len(stations) else episode.route.length_m
+        )
+        return episode.route.point_at(station)
+
+    def _info(self, status: str) -> dict[str, Any]:
+        episode = self._require_episode()
+        truth = episode.world.robot_pose
+        return {
+            "position_error_m": position_error_m(episode.estimate, truth),
+            "heading_error_rad": heading_error_rad(episode.estimate, truth),
+            "sensing_time_s": episode.sensing_time_s,
+            "status": status,
+            "true_pose": truth.as_array(),
+            "estimated_pose": episode.estimate.as_array(),
+            "covariance_diagonal": np.diag(episode.covariance).copy(),
+            "distance_since_fix_m": episode.distance_since_fix_m,
+        }
+
+    # --- rendering ----------------------------------------------------------------------
+    def _render_frame(self) -> np.ndarray:
+        from sonar_gym.render import render_topdown, world_to_pixel
+
+        episode = self._require_episode()
+        truth = episode.world.robot_pose
+        stations = episode.decision_stations_m
+        image = render_topdown(
+            self._scenario,
+            true_pose=truth,
+            estimated_pose=episode.estimate,
+            scan_points=episode.scan_points,
+            title=f"SweepLocalization  decision {episode.decisions}/{len(stations)}",
+            extra={
+                "E_xy [m]": position_error_m(episode.estimate, truth),
+                "sensing [s]": episode.sensing_time_s,
+            },
+        ).copy()
+
+        def to_pixel(xy: np.ndarray) -> tuple[int, int]:
+            return world_to_pixel(self._scenario, xy)
+
+        _draw_polyline(image, episode.route.vertices, to_pixel, (120, 120, 255))
+        _draw_polyline(image, np.array(episode.true_track), to_pixel, (40, 160, 40))
+        _draw_polyline(image, np.array(episode.estimate_track), to_pixel, (216, 27, 156))
+        return image
+
+    def _require_episode(self) -> _Episode:
+        if self._episode is None:
+            raise RuntimeError("SweepLocalizationEnv: call reset() first")
+        return self._episode
+
+
+def occupancy_grid_of(scenario: Scenario, cell_size_m: float = 0.05) -> OccupancyGrid:
+    """The known map (sec. 2.2): mapped room walls, walls, box sides and cylinders on a grid.
+
+    The grid covers ``scenario.bounds`` with ``cell_size_m`` cells (5 cm, sec. 4.1).
+    """
+    segments: list[tuple[tuple[float, float], tuple[float, float]]] = []
+    if scenario.room is not None:
+        corners = scenario.room.corners
+        segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+    segments += [(wall.a, wall.b) for wall in scenario.walls if wall.mapped]
+    for box in scenario.boxes:
+        if box.mapped:
+            corners = box.corners
+            segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+    circles = [(c.center[0], c.center[1], c.radius) for c in scenario.cylinders if c.mapped]
+    (x_min, y_min), (x_max, y_max) = scenario.bounds
+    return OccupancyGrid.from_segments(
+        np.array(segments, dtype=np.float64).reshape(-1, 2, 2),
+        np.array(circles, dtype=np.float64).reshape(-1, 3),
+        (x_min, y_min, x_max, y_max),
+        cell_size_m,
+    )
+
+
+def _predicted(
+    estimate: Pose,
+    covariance: np.ndarray,
+    part: MotionResult,
+    wheel_base_m: float,
+    variance_per_m: float,
+) -> tuple[Pose, np.ndarray]:
+    """EKF prediction (sec. 3.1 eqs. (5)-(6)) over one elementary motion's encoder increments."""
+    left, right = part.encoder_left_m, part.encoder_right_m
+    return predict(
+        estimate,
+        covariance,
+        left,
+        right,
+        wheel_base_m,
+        encoder_noise=proportional_encoder_noise(left, right, variance_per_m),
+    )
+
+
+def _relative_pose(reference: Pose, pose: Pose) -> Pose:
+    """``pose`` expressed in the frame of ``reference`` (both in {W})."""
+    dx, dy = pose.x - reference.x, pose.y - reference.y
+    c, s = math.cos(reference.theta), math.sin(reference.theta)
+    return Pose(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
+
+
+def _scan_points_world(
+    pose: Pose, sensor_offset: tuple[float, float], angles: np.ndarray, ranges: np.ndarray
+) -> np.ndarray:
+    hit = np.isfinite(ranges)
+    sensor = pose.transform_point(sensor_offset)
+    directions = angles[hit] + pose.theta
+    return np.stack(
+        [
+            sensor[0] + ranges[hit] * np.cos(directions),
+            sensor[1] + ranges[hit] * np.sin(directions),
+        ],
+        axis=1,
+    )
+
+
+def _binned_ranges(normalised_ranges: np.ndarray | None, n_bins: int) -> np.ndarray:
+    """Nearest normalised range per bin of consecutive pings; 1 for no echo or no sweep."""
+    bins = np.ones(n_bins)
+    if normalised_ranges is None or normalised_ranges.size == 0:
+        return bins
+    values = np.where(np.isfinite(normalised_ranges), np.clip(normalised_ranges, 0.0, 1.0), 1.0)
+    bin_of_ping = (np.arange(values.size) * n_bins) // values.size
+    np.minimum.at(bins, bin_of_ping, values)
+    return bins
+
+
+def _leg_is_free(world: World, start: np.ndarray, stop: np.ndarray) -> bool:
+    """Whether the robot disc (plus a margin) can drive straight from ``start`` to ``stop``."""
+    length = float(np.linalg.norm(stop - start))
+    count = max(2, math.ceil(length / 0.02) + 1)
+    radius = world.robot_radius + _ROUTE_CLEARANCE_M
+    return all(
+        world.is_free(start + f * (stop - start), radius) for f in np.linspace(0.0, 1.0, count)
+    )
+
+
+def _draw_polyline(
+    image: np.ndarray, points: np.ndarray, to_pixel: Any, colour: tuple[int, int, int]
+) -> None:
+    """Paint a 2-pixel polyline through world ``points`` onto ``image`` in place."""
+    if len(points) < 2:
+        return
+    height, width = image.shape[:2]
+    for start, stop in itertools.pairwise(points):
+        (r0, c0), (r1, c1) = to_pixel(start), to_pixel(stop)
+        count = max(abs(r1 - r0), abs(c1 - c0), 1) + 1
+        rows = np.rint(np.linspace(r0, r1, count)).astype(int)
+        cols = np.rint(np.linspace(c0, c1, count)).astype(int)
+        for dr in (0, 1):
+            for dc in (0, 1):
+                keep = (
+                    (rows + dr >= 0) & (rows + dr < height) & (cols + dc >= 0) & (cols + dc < width)
+                )
+                image[rows[keep] + dr, cols[keep] + dc] = colour

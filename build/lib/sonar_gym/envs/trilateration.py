@@ -1,0 +1,980 @@
+"""``SonarGym/Trilateration-v0``: how many repeated ultrasonic fixes to take along a route.
+
+The task of Wu & Tsai (J. Intelligent and Robotic Systems, 2001): three ceiling transmitters
+and two receivers on the robot give position, height and heading in closed form (eqs (2)-(9),
+Theorem 2); ``n`` repeated fixes are averaged (eqs (12)-(16), with the circular mean of
+headings). The robot crosses the room by dead reckoning; at each decision point the agent
+chooses ``n`` (0 keeps dead reckoning), trading pose error against measurement time.
+
+Beside the environment, the module holds the small models it needs to describe a fix's
+uncertainty to the agent and to the optional covariance-weighted correction:
+:func:`quantised_range_error`, :func:`predicted_fix_covariance` and
+:class:`TransmitterFrame`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from scipy.special import ndtr
+
+from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.localization.kim_ekf import ekf_update, predict
+from sonar_gym.localization.wu_tsai import (
+    PAPER_COUNTER_RATE_HZ,
+    PAPER_REPEATED_FIXES,
+    PAPER_TEMPERATURE_C,
+    Fix,
+    average_fixes,
+    localize,
+)
+from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
+from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.ranging import WU_TSAI_RECEIVERS_XY, BeaconRanger
+from sonar_gym.world import World
+
+ENV_ID = "SonarGym/Trilateration-v0"
+DEFAULT_FIX_COUNTS: tuple[int, ...] = (0, 1, 2, 3, 5, 10, 20)
+STATUS_RUNNING = "running"
+STATUS_OK = "ok"
+NO_FIX = "no_fix"
+TIME_SINCE_FIX_SCALE_S = 10.0
+"""Time that maps to 0.5 in the ``time_since_fix`` feature, seconds."""
+_WAYPOINT_TRIES = 200
+_TRANSMITTER_FRAME_TOLERANCE = 1e-6
+
+
+# --------------------------------------------------------------------------------------------
+# Configuration
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TrilaterationConfig:
+    """The ``gym.make`` arguments of ``SonarGym/Trilateration-v0`` (see the env docstring)."""
+
+    scenario: str | Path = "wu_tsai_room"
+    fix_counts: tuple[int, ...] = DEFAULT_FIX_COUNTS
+    route_length_m: float = 8.0
+    n_decision_points: int = 16
+    correction: str = "replace"
+    measurement_cost_per_s: float = 0.2
+    position_scale_m: float = 0.05
+    heading_scale_deg: float = 3.0
+    max_error_score: float = 50.0
+    temperature_c: float = PAPER_TEMPERATURE_C
+    counter_rate_hz: float = PAPER_COUNTER_RATE_HZ
+    range_noise_std_m: float = 0.002
+    firing_interval_s: float = 0.05
+    encoder_std_m_per_sqrt_m: float = 0.005
+    wheel_scale_error_std: float = 0.002
+    slip_probability_per_m: float = 0.01
+    slip_fraction_max: float = 0.3
+    initial_position_std_m: float = 0.0
+    initial_heading_std_deg: float = 0.0
+    wall_clearance_m: float = 0.3
+    robot_speed_mps: float = 0.3
+    turn_rate_rad_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scenario, (str, Path)):
+            raise ValueError(
+                "argument 'scenario' must be a built-in scenario name or a file path; "
+                f"got {self.scenario!r}"
+            )
+        counts = self.fix_counts
+        if (
+            not isinstance(counts, (tuple, list))
+            or not counts
+            or any(
+                isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= 200 for n in counts
+            )
+            or len(set(counts)) != len(counts)
+        ):
+            raise ValueError(
+                "argument 'fix_counts' must be a non-empty sequence of distinct integers in "
+                f"[0, 200] (numbers of repeated fixes); got {counts!r}"
+            )
+        object.__setattr__(self, "fix_counts", tuple(int(n) for n in counts))
+        check_number(
+            "route_length_m", self.route_length_m, low=0.0, low_inclusive=False, high=100.0
+        )
+        check_number("n_decision_points", self.n_decision_points, low=1, high=200, integer=True)
+        check_choice("correction", self.correction, ("replace", "fuse"))
+        check_number("measurement_cost_per_s", self.measurement_cost_per_s, low=0.0, high=100.0)
+        check_number(
+            "position_scale_m", self.position_scale_m, low=0.0, low_inclusive=False, high=10.0
+        )
+        check_number(
+            "heading_scale_deg", self.heading_scale_deg, low=0.0, low_inclusive=False, high=180.0
+        )
+        check_number(
+            "max_error_score", self.max_error_score, low=0.0, low_inclusive=False, high=1e6
+        )
+        check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
+        check_number("counter_rate_hz", self.counter_rate_hz, low=1e3, high=1e9)
+        check_number("range_noise_std_m", self.range_noise_std_m, low=0.0, high=0.5)
+        check_number(
+            "firing_interval_s", self.firing_interval_s, low=0.0, low_inclusive=False, high=10.0
+        )
+        check_number("encoder_std_m_per_sqrt_m", self.encoder_std_m_per_sqrt_m, low=0.0, high=0.5)
+        check_number("wheel_scale_error_std", self.wheel_scale_error_std, low=0.0, high=0.1)
+        check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
+        check_number("slip_fraction_max", self.slip_fraction_max, low=0.0, high=1.0)
+        check_number("initial_position_std_m", self.initial_position_std_m, low=0.0, high=1.0)
+        check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=90.0)
+        check_number("wall_clearance_m", self.wall_clearance_m, low=0.0, high=5.0)
+        check_number(
+            "robot_speed_mps", self.robot_speed_mps, low=0.0, low_inclusive=False, high=10.0
+        )
+        check_number(
+            "turn_rate_rad_s", self.turn_rate_rad_s, low=0.0, low_inclusive=False, high=100.0
+        )
+
+    @property
+    def heading_scale_rad(self) -> float:
+        """``heading_scale_deg`` in radians."""
+        return math.radians(self.heading_scale_deg)
+
+    @property
+    def leg_length_m(self) -> float:
+        """Straight-line length of each leg of the route, metres."""
+        return self.route_length_m / self.n_decision_points
+
+
+# --------------------------------------------------------------------------------------------
+# Uncertainty models
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class RangeErrorModel:
+    """Error of one counter-quantised, jittered one-way range (metres^2).
+
+    Attributes:
+        total_variance_m2: variance of the range error over jitter and over the position of the
+            true distance within a counter step.
+        persistent_variance_m2: the part that repeats when the same distance is measured again
+            (the conditional mean of the truncation error given the distance); averaging ``n``
+            repeated fixes cannot remove it.
+    """
+
+    total_variance_m2: float
+    persistent_variance_m2: float
+
+    def variance_of_mean(self, n: int) -> float:
+        """Variance of the mean of ``n`` repeated ranges of one distance, m^2 (``n >= 1``)."""
+        independent = self.total_variance_m2 - self.persistent_variance_m2
+        return self.persistent_variance_m2 + independent / n
+
+    def averaging_factor(self, n: int) -> float:
+        """``variance_of_mean(n) / variance_of_mean(1)``: how much ``n`` fixes shrink a variance."""
+        if self.total_variance_m2 <= 0.0:
+            return 1.0 / n
+        return self.variance_of_mean(n) / self.total_variance_m2
+
+
+def quantised_range_error(
+    noise_std_m: float, quantum_m: float, n_phases: int = 512
+) -> RangeErrorModel:
+    """Moments of ``q floor(d / q + nu / q) - d`` with ``nu ~ N(0, noise_std_m^2)``.
+
+    The distance's phase ``f = frac(d / q)`` is taken uniform on [0, 1). Given ``f`` the error
+    has the mean ``b(f) = q (E[floor(f + nu / q)] - f)``, which a repeated measurement of the same
+    distance repeats; its variance over ``f`` is the persistent part. With no jitter the whole
+    truncation error (variance ``q^2 / 12``) is persistent; with jitter much larger than ``q``
+    it is all independent, variance ``noise^2 + q^2 / 12``. The constant mean ``-q / 2`` of
+    truncation is left out: a common shift of every distance barely moves ``x`` and ``y``
+    (eqs (7)-(8) take differences of squared distances).
+
+    Args:
+        noise_std_m: standard deviation of the timing jitter as a distance, metres (>= 0).
+        quantum_m: range step of one counter period, metres (>= 0; 0 = no counter).
+        n_phases: phases ``f`` of the numerical average.
+    """
+    if not (math.isfinite(noise_std_m) and noise_std_m >= 0.0):
+        raise ValueError(f"argument 'noise_std_m' must be >= 0 metres; got {noise_std_m!r}")
+    if not (math.isfinite(quantum_m) and quantum_m >= 0.0):
+        raise ValueError(f"argument 'quantum_m' must be >= 0 metres; got {quantum_m!r}")
+    if quantum_m == 0.0:
+        return RangeErrorModel(noise_std_m**2, 0.0)
+    phases = (np.arange(n_phases) + 0.5) / n_phases
+    if noise_std_m == 0.0:
+        steps = np.zeros((n_phases, 1))
+        weights = np.ones((n_phases, 1))
+        offsets = np.zeros(1)
+    else:
+        spread = noise_std_m / quantum_m
+        reach = math.ceil(8.0 * spread) + 1
+        offsets = np.arange(-reach, reach + 1, dtype=np.float64)
+        # P(floor(f + z) = k) = Phi((k + 1 - f) / s) - Phi((k - f) / s), z ~ N(0, s^2)
+        upper = ndtr((offsets[None, :] + 1.0 - phases[:, None]) / spread)
+        lower = ndtr((offsets[None, :] - phases[:, None]) / spread)
+        weights = upper - lower
+        steps = np.broadcast_to(offsets, weights.shape)
+    error_steps = steps - phases[:, None]  # error in quanta for each (phase, floor value)
+    conditional_mean = np.sum(weights * error_steps, axis=1)
+    conditional_square = np.sum(weights * error_steps**2, axis=1)
+    total = float(np.mean(conditional_square) - np.mean(conditional_mean) ** 2)
+    persistent = float(np.var(conditional_mean))
+    q2 = quantum_m * quantum_m
+    return RangeErrorModel(total * q2, min(persistent, total) * q2)
+
+
+@dataclass(frozen=True)
+class TransmitterFrame:
+    """The paper's reference frame {T} placed in the world {W}.
+
+    The first three emitters of the scenario are the paper's transmitters at ``[0, 0, 0]``,
+    ``[a, 0, 0]`` and ``[0, a, 0]`` (Theorem 2). {T} has its origin at the first, its x-axis
+    towards the second, its y-axis towards the third and z up (Fig. 4), so a point at height
+    ``h`` above the floor has ``z = h - ceiling`` in {T}.
+
+    Attributes:
+        origin_xyz: the first transmitter in {W}, metres.
+        rotation_rad: angle of the {T} x-axis from the {W} x-axis, radians.
+        spacing_m: ``a``, metres.
+        names: the three emitters' names, in the order of Theorem 2.
+    """
+
+    origin_xyz: tuple[float, float, float]
+    rotation_rad: float
+    spacing_m: float
+    names: tuple[str, str, str]
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> TransmitterFrame:
+        """Read and check the transmitters; ``ValueError`` naming ``scenario`` if unusable."""
+        if len(scenario.emitters) < 3:
+            raise ValueError(
+                f"argument 'scenario': {scenario.name!r} needs three emitters (the transmitters at "
+                f"[0,0,0], [a,0,0], [0,a,0] of Wu & Tsai); it has {len(scenario.emitters)}"
+            )
+        first, second, third = (
+            np.asarray(e.position, dtype=np.float64) for e in scenario.emitters[:3]
+        )
+        along_x, along_y = second - first, third - first
+        spacing = float(np.linalg.norm(along_x))
+        tolerance = _TRANSMITTER_FRAME_TOLERANCE * max(1.0, spacing)
+        if (
+            spacing <= 0.0
+            or abs(float(np.linalg.norm(along_y)) - spacing) > tolerance
+            or abs(float(np.dot(along_x, along_y))) > tolerance * spacing
+            or abs(along_x[2]) > tolerance
+            or abs(along_y[2]) > tolerance
+            or float(along_x[0] * along_y[1] - along_x[1] * along_y[0]) <= 0.0
+        ):
+            raise ValueError(
+                f"argument 'scenario': the first three emitters of {scenario.name!r} must sit at "
+                "[0,0,0], [a,0,0], [0,a,0] of a frame with z up (same height, equal spacing, "
+                "a right angle, counter-clockwise seen from above)"
+            )
+        if scenario.robot.sensor_height >= first[2]:
+            raise ValueError(
+                f"argument 'scenario': the receivers (robot.sensor_height = "
+                f"{scenario.robot.sensor_height} m) must be below the transmitters ({first[2]} m)"
+            )
+        return cls(
+            origin_xyz=(float(first[0]), float(first[1]), float(first[2])),
+            rotation_rad=math.atan2(float(along_x[1]), float(along_x[0])),
+            spacing_m=spacing,
+            names=tuple(e.name for e in scenario.emitters[:3]),  # type: ignore[arg-type]
+        )
+
+    def to_world(self, pose_in_t: Pose) -> Pose:
+        """A planar pose in {T} expressed in {W}."""
+        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
+        return Pose(
+            self.origin_xyz[0] + c * pose_in_t.x - s * pose_in_t.y,
+            self.origin_xyz[1] + s * pose_in_t.x + c * pose_in_t.y,
+            pose_in_t.theta + self.rotation_rad,
+        )
+
+    def to_transmitter(self, pose_in_w: Pose) -> Pose:
+        """A planar pose in {W} expressed in {T}."""
+        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
+        dx, dy = pose_in_w.x - self.origin_xyz[0], pose_in_w.y - self.origin_xyz[1]
+        return Pose(c * dx + s * dy, -s * dx + c * dy, pose_in_w.theta - self.rotation_rad)
+
+    def height_in_t(self, height_above_floor_m: float) -> float:
+        """``z`` in {T} of a point ``height_above_floor_m`` above the floor (negative below)."""
+        return height_above_floor_m - self.origin_xyz[2]
+
+    def centroid_xy(self) -> FloatArray:
+        """The centroid of the three transmitters in {W}, metres."""
+        reference = self.to_world(Pose(self.spacing_m / 3.0, self.spacing_m / 3.0, 0.0))
+        return reference.position
+
+
+def predicted_fix_covariance(
+    pose_in_t: Pose,
+    z_m: float,
+    spacing_m: float,
+    range_variance_m2: float,
+    receivers_xy: tuple[tuple[float, float], ...] = WU_TSAI_RECEIVERS_XY,
+) -> FloatArray:
+    """First-order covariance (3x3 over ``[x, y, theta]``, {T}) of one fix by Theorem 2.
+
+    Each receiver ``j`` is placed by eqs (7)-(8): ``x = (d0^2 - d1^2 + a^2) / 2a`` and
+    ``y = (d0^2 - d2^2 + a^2) / 2a``, so with independent range errors of variance ``s^2``
+    its ``(x, y)`` has covariance ``s^2 J J^T`` with ``J = [[d0, -d1, 0], [d0, 0, -d2]] / a``:
+    the error grows with the distances, i.e. away from below the transmitters. The robot's
+    position is the receivers' midpoint and its heading the direction of their baseline
+    (Theorem 2), whose error is the receivers' error across the baseline over its length.
+
+    Args:
+        pose_in_t: the (estimated) robot pose in {T}.
+        z_m: height of the receivers in {T} (negative: below the transmitters), metres.
+        spacing_m: ``a``, metres.
+        range_variance_m2: variance of one range error, m^2.
+        receivers_xy: receiver positions in the robot frame, metres (two, apart).
+    """
+    transmitters = np.array([[0.0, 0.0], [spacing_m, 0.0], [0.0, spacing_m]])
+    receivers = np.array([pose_in_t.transform_point(xy) for xy in receivers_xy])
+    n_receivers = len(receivers)
+    receiver_covariance = np.zeros((2 * n_receivers, 2 * n_receivers))
+    for j, point in enumerate(receivers):
+        d0, d1, d2 = np.sqrt(np.sum((transmitters - point) ** 2, axis=1) + z_m * z_m)
+        ranges_to_xy = np.array([[d0, -d1, 0.0], [d0, 0.0, -d2]]) / spacing_m
+        receiver_covariance[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = (
+            range_variance_m2 * ranges_to_xy @ ranges_to_xy.T
+        )
+    # pose = (midpoint of the receivers, direction of the baseline from the last to the first)
+    baseline = receivers[0] - receivers[-1]
+    length_sq = float(baseline @ baseline)
+    across = np.array([-baseline[1], baseline[0]]) / length_sq
+    jacobian = np.zeros((3, 2 * n_receivers))
+    for j in range(n_receivers):
+        jacobian[0, 2 * j] = jacobian[1, 2 * j + 1] = 1.0 / n_receivers
+    jacobian[2, 0:2] += across
+    jacobian[2, 2 * n_receivers - 2 :] -= across
+    return jacobian @ receiver_covariance @ jacobian.T
+
+
+def rotate_covariance(covariance: FloatArray, angle_rad: float) -> FloatArray:
+    """A 3x3 ``[x, y, theta]`` covariance seen from a frame rotated by ``angle_rad``."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    return rotation @ covariance @ rotation.T
+
+
+def position_std_m(covariance: FloatArray) -> float:
+    """``sqrt(var x + var y)``: the RMS position error a covariance predicts, metres."""
+    return math.sqrt(max(float(covariance[0, 0] + covariance[1, 1]), 0.0))
+
+
+def heading_std_rad(covariance: FloatArray) -> float:
+    """The heading standard deviation a covariance predicts, radians."""
+    return math.sqrt(max(float(covariance[2, 2]), 0.0))
+
+
+# --------------------------------------------------------------------------------------------
+# The environment
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Episode:
+    world: World
+    robot: DifferentialDriveRobot
+    waypoints: FloatArray
+    true_pose: Pose
+    estimate: Pose
+    covariance: FloatArray
+    decisions: int = 0
+    sensing_time_s: float = 0.0
+    elapsed_time_s: float = 0.0
+    time_since_fix_s: float = 0.0
+    distance_since_fix_m: float = 0.0
+    collided: bool = False
+    last_fix: Fix | None = None
+    true_trail: list[tuple[float, float]] = field(default_factory=list)
+    fix_trail: list[tuple[float, float]] = field(default_factory=list)
+
+
+class TrilaterationEnv(SonarEnv):
+    """
+    ## Description
+
+    A differential-drive robot crosses a room under three ceiling transmitters (Wu & Tsai,
+    *Localization of an autonomous mobile robot based on ultrasonic sensory information*,
+    J. Intelligent and Robotic Systems, 2001). Two receivers on the robot, at ``(0, +-0.2) m``
+    in the robot frame, time one-way pulses from each transmitter: the ranger of
+    :mod:`sonar_gym.sonar.ranging` (eq. (11), a 50 kHz counter that truncates the time of
+    flight to 20 us, i.e. 6.9 mm of range, and 2 mm of timing jitter, by default). A fix is
+    the paper's closed form (eqs (2)-(9), Theorem 2): each receiver's ``(x, y, z)``, and the
+    heading from the two receivers. ``n`` repeated fixes are averaged by eqs (12)-(16), the
+    heading by its circular mean (eq. (16) read as the mean direction).
+
+    Each episode draws a random route across the room: ``n_decision_points`` legs of
+    ``route_length_m / n_decision_points`` metres in random directions, kept
+    ``wall_clearance_m`` from the walls. The robot drives each leg by dead reckoning (turn,
+    then straight, planned from its estimated pose) and its odometry drifts: encoder noise,
+    wheel-radius errors drawn per episode, occasional wheel slip
+    (:class:`~sonar_gym.robot.OdometryNoise`). At the end of each leg, a decision point, the
+    agent chooses how many fixes to take. Why the choice matters: dead reckoning drifts
+    between decision points; one fix is noisy (counter quantisation, jitter) and noisier away
+    from below the transmitters (eqs (7)-(8) multiply range errors by about ``d / a``); each
+    fix costs measurement time (three firings, ``firing_interval_s`` apart); averaging helps,
+    but only down to the quantisation error that repeats at a fixed pose. With the defaults
+    (a decision point every 0.5 m) the paper's n = 10 is the best *fixed* n, and choosing n
+    from the state does better (see ``sonar_gym.agents.trilateration``).
+
+    How the averaged fix corrects the pose (``correction``):
+
+    * ``"replace"`` (default, the paper's use: the ultrasonic estimate *is* the robot's pose):
+      the averaged fix replaces position and heading, and the robot continues from it.
+    * ``"fuse"`` (not in the paper): a Kalman update (the EKF of Kim et al. sec. 3.2 with
+      ``H = I``) of the dead-reckoning pose and its covariance with the averaged fix and its
+      predicted covariance (below). Heading still comes from the two receivers.
+
+    The covariances: dead reckoning propagates ``P`` through each motion with the odometry
+    model of Kim et al. sec. 3.1 (:func:`sonar_gym.localization.kim_ekf.predict`), encoder
+    variance ``encoder_std^2 |d|`` plus ``wheel_scale_error_std^2 d^2`` per wheel and command
+    (slip is not modelled: it is what a fix is for). A fix's covariance is
+    :func:`predicted_fix_covariance` at the estimated pose with the range variance of
+    :func:`quantised_range_error`, shrunk for ``n`` fixes by
+    :meth:`RangeErrorModel.averaging_factor`. These drive the observation's uncertainty
+    features and the ``"fuse"`` update; the reward uses the true errors.
+
+    ``render_mode="rgb_array"`` draws the room and transmitters, the planned route (dots),
+    the true positions at the decision points and the averaged fixes (dots), the true pose
+    (green) and the estimate (magenta).
+
+    ## Action Space
+
+    ``Discrete(len(fix_counts))``: action ``k`` takes ``fix_counts[k]`` repeated fixes; the
+    default ``fix_counts = (0, 1, 2, 3, 5, 10, 20)``. ``0`` keeps the dead-reckoning pose. The
+    paper takes ``n = 10``. :meth:`action_for` and :meth:`fix_count` convert.
+
+    ## Observation Space
+
+    ``Box(-1, 1, (15,), float32)``; slices by name in ``observation_layout``. A predicted
+    spread ``s`` is mapped to ``s / (s + scale)`` (0 for none, 0.5 at the scale, below 1), with
+    ``P = position_scale_m`` and ``H = heading_scale_deg``; "half size" is half the room.
+
+    | index | name | meaning | mapping | bounds |
+    |---|---|---|---|---|
+    | 0-1 | estimated_xy | estimated position | (p - room centre) / half size | [-1, 1] |
+    | 2-3 | estimated_heading | cos, sin of the estimated heading | - | [-1, 1] |
+    | 4 | time_since_fix | driving time since the last fix (or start) | t / (t + 10 s) | [0, 1) |
+    | 5 | distance_since_fix | distance driven since then | d / route_length_m, clipped | [0, 1] |
+    | 6 | dead_reckoning_position_std | estimate's predicted RMS position error | s/(s+P) | [0, 1) |
+    | 7 | dead_reckoning_heading_std | estimate's predicted heading std | s/(s+H) | [0, 1) |
+    | 8-9 | transmitter_offset | estimate - transmitters' centroid | / half size, clip | [-1, 1] |
+    | 10 | transmitter_distance | its length | / half diagonal, clipped | [0, 1] |
+    | 11 | fix_position_std | predicted RMS position error of ONE fix here | s/(s+P) | [0, 1) |
+    | 12 | fix_heading_std | predicted heading std of ONE fix here | s/(s+H) | [0, 1) |
+    | 13 | progress | decision points already passed / n_decision_points | - | [0, 1) |
+    | 14 | steps_remaining | decisions left, this one included / n_decision_points | - | (0, 1] |
+
+    ## Rewards
+
+    At each decision point, after the chosen fixes have corrected the estimate:
+
+    ``r = -min(E_xy / position_scale_m + E_theta / heading_scale, max_error_score)
+    - measurement_cost_per_s * n * 3 * firing_interval_s``
+
+    with ``E_xy`` (metres) and ``E_theta`` (radians) the errors of the estimate against the
+    true pose (Beom & Cho eq. (16), :mod:`sonar_gym.metrics`). Defaults: 0.05 m and 3 deg
+    (the paper's position estimates are within a few cm, its headings within 1-3 deg, Tables
+    I-II), so 5 cm of position error, 3 deg of heading error and 5 s of measuring (33 fixes)
+    each cost 1; ``measurement_cost_per_s = 0.2``. The cap on the error part
+    (``max_error_score``, 50) keeps a lost robot's reward bounded.
+
+    ## Starting State
+
+    The robot stands at the start of a random route, facing its first leg. Its estimate is
+    the true pose plus Gaussian errors of ``initial_position_std_m`` per axis and
+    ``initial_heading_std_deg`` (default 0: a known start). It then drives the first leg; the
+    first observation is taken at the first decision point.
+
+    ## Episode End
+
+    Terminates after the decision at the last of the ``n_decision_points`` decision points
+    (status ``"ok"``). There is no truncation; nothing ends an episode early.
+
+    ## Info
+
+    Every ``reset`` and ``step`` returns ``position_error_m`` and ``heading_error_rad`` (of the
+    current estimate), ``sensing_time_s`` (cumulative measurement time, seconds), ``status``
+    (``"running"``, ``"ok"`` after the last decision), and ``n_fixes`` (requested at this
+    step), ``n_fixes_ok`` (fixes that gave a pose), ``fix_status`` (``"ok"``, ``"no_fix"`` for
+    n = 0, or the localization's failure status, e.g. ``"inconsistent_distances"``),
+    ``measurement_time_s`` (this step), ``dead_reckoning_position_error_m`` and
+    ``dead_reckoning_heading_error_rad`` (before this step's correction),
+    ``fix_position_error_m``/``fix_heading_error_rad`` (the averaged fix's; only when one was
+    made), ``fix_z_m`` (its height in the paper's frame), ``predicted_position_std_m``,
+    ``predicted_heading_std_rad``, ``decision_point``, ``elapsed_time_s`` (driving and
+    measuring), ``collided``, ``true_pose`` and ``estimated_pose`` (``[x, y, theta]``, {W}).
+
+    ## Arguments
+
+    | argument | default | meaning |
+    |---|---|---|
+    | scenario | ``"wu_tsai_room"`` | name or file; its first three emitters: the transmitters |
+    | fix_counts | (0, 1, 2, 3, 5, 10, 20) | the n offered by the actions |
+    | route_length_m | 8.0 | total straight-line length of the route, m |
+    | n_decision_points | 16 | decision points (legs) per episode |
+    | correction | ``"replace"`` | or ``"fuse"`` (covariance weighting, not in the paper) |
+    | measurement_cost_per_s | 0.2 | reward per second of measuring |
+    | position_scale_m | 0.05 | position error worth 1 |
+    | heading_scale_deg | 3.0 | heading error worth 1 |
+    | max_error_score | 50.0 | cap of the error part of one reward |
+    | temperature_c | 27.0 | air temperature (the paper's), known to the ranger |
+    | counter_rate_hz | 50e3 | TOF counter rate (the paper's 8051) |
+    | range_noise_std_m | 0.002 | timing jitter as a distance, m |
+    | firing_interval_s | 0.05 | time between two transmitters' firings, s (3 per fix) |
+    | encoder_std_m_per_sqrt_m | 0.005 | encoder noise, m after 1 m |
+    | wheel_scale_error_std | 0.002 | std of each wheel's radius error, drawn per episode |
+    | slip_probability_per_m | 0.01 | chance per metre that a wheel slips |
+    | slip_fraction_max | 0.3 | largest fraction of a command a slip loses |
+    | initial_position_std_m | 0.0 | start estimate error per axis, m |
+    | initial_heading_std_deg | 0.0 | start heading error, deg |
+    | wall_clearance_m | 0.3 | route clearance from walls beyond the robot radius, m |
+    | robot_speed_mps | 0.3 | driving speed (time features only), m/s |
+    | turn_rate_rad_s | 1.0 | turning rate (time features only), rad/s |
+
+    ## Version History
+
+    * v0: first release.
+
+    ## Example
+
+    >>> import gymnasium as gym, sonar_gym
+    >>> env = gym.make("SonarGym/Trilateration-v0")
+    >>> obs, info = env.reset(seed=4)
+    >>> obs.shape, obs.dtype, info["status"]
+    ((15,), dtype('float32'), 'running')
+    >>> ten_fixes = env.unwrapped.action_for(10)
+    >>> obs, reward, terminated, truncated, info = env.step(ten_fixes)
+    >>> info["n_fixes"], info["fix_status"], round(info["measurement_time_s"], 2)
+    (10, 'ok', 1.5)
+    >>> info["position_error_m"] < 0.06, terminated
+    (True, False)
+    """
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        super().__init__(render_mode)
+        self.config = build_config(TrilaterationConfig, kwargs, ENV_ID)
+        config = self.config
+        self.scenario = load_scenario(config.scenario)
+        self.transmitter_frame = TransmitterFrame.from_scenario(self.scenario)
+        self._receiver_z_m = self.transmitter_frame.height_in_t(self.scenario.robot.sensor_height)
+        self.ranger = BeaconRanger.wu_tsai(
+            timer_period_s=1.0 / config.counter_rate_hz,
+            range_noise_std_m=config.range_noise_std_m,
+            firing_interval_s=config.firing_interval_s,
+        ).with_assumed_speed(speed_of_sound_mps(config.temperature_c))
+        self.range_error = quantised_range_error(
+            config.range_noise_std_m, self.ranger.range_quantum_m
+        )
+        self.fix_duration_s = 3 * config.firing_interval_s
+        (x0, y0), (x1, y1) = self.scenario.bounds
+        self._centre = np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
+        self._half_size = np.array([(x1 - x0) / 2.0, (y1 - y0) / 2.0])
+        self._check_route_fits()
+        self.action_space = gym.spaces.Discrete(len(config.fix_counts))
+        self.observation_layout = {
+            "estimated_xy": slice(0, 2),
+            "estimated_heading": slice(2, 4),
+            "time_since_fix": slice(4, 5),
+            "distance_since_fix": slice(5, 6),
+            "dead_reckoning_position_std": slice(6, 7),
+            "dead_reckoning_heading_std": slice(7, 8),
+            "transmitter_offset": slice(8, 10),
+            "transmitter_distance": slice(10, 11),
+            "fix_position_std": slice(11, 12),
+            "fix_heading_std": slice(12, 13),
+            "progress": slice(13, 14),
+            "steps_remaining": slice(14, 15),
+        }
+        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(15,), dtype=np.float32)
+        self._episode: _Episode | None = None
+
+    # --- actions -----------------------------------------------------------------------
+    def fix_count(self, action: Any) -> int:
+        """The number of repeated fixes an action takes."""
+        return self.config.fix_counts[int(action)]
+
+    def action_for(self, n_fixes: int) -> int:
+        """The action that takes ``n_fixes`` fixes (one of ``fix_counts``)."""
+        check_choice("n_fixes", n_fixes, self.config.fix_counts)
+        return self.config.fix_counts.index(n_fixes)
+
+    @property
+    def paper_action(self) -> int:
+        """The action nearest to the paper's n = 10 (ties: the larger n)."""
+        counts = self.config.fix_counts
+        return min(
+            range(len(counts)), key=lambda k: (abs(counts[k] - PAPER_REPEATED_FIXES), -counts[k])
+        )
+
+    # --- uncertainty models --------------------------------------------------------------
+    def fix_covariance(self, pose: Pose, n_fixes: int = 1) -> FloatArray:
+        """Predicted 3x3 covariance ({W}) of the average of ``n_fixes`` fixes at ``pose`` ({W})."""
+        frame = self.transmitter_frame
+        covariance = predicted_fix_covariance(
+            frame.to_transmitter(pose),
+            self._receiver_z_m,
+            frame.spacing_m,
+            self.range_error.total_variance_m2,
+            self.ranger.receivers_xy,
+        )
+        factor = self.range_error.averaging_factor(max(int(n_fixes), 1))
+        return rotate_covariance(covariance, frame.rotation_rad) * factor
+
+    # --- episode -----------------------------------------------------------------------
+    def _check_route_fits(self) -> None:
+        world = World(self.scenario, temperature_c=self.config.temperature_c)
+        margin = world.robot_radius + self.config.wall_clearance_m
+        if self.scenario.room is not None:
+            (x0, y0), (x1, y1) = self.scenario.room.min, self.scenario.room.max
+        else:
+            (x0, y0), (x1, y1) = self.scenario.bounds
+        if min(x1 - x0, y1 - y0) - 2.0 * margin < self.config.leg_length_m:
+            raise ValueError(
+                f"argument 'route_length_m': legs of {self.config.leg_length_m:g} m "
+                f"(route_length_m / n_decision_points) do not fit in {self.scenario.name!r} with "
+                f"wall_clearance_m = {self.config.wall_clearance_m:g} m"
+            )
+
+    def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
+        config = self.config
+        rng = self.np_random
+        world = World(self.scenario, temperature_c=config.temperature_c)
+        scale_left, scale_right = np.clip(
+            rng.normal(0.0, config.wheel_scale_error_std, 2), -0.05, 0.05
+        )
+        noise = OdometryNoise(
+            encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,
+            scale_error_left=float(scale_left),
+            scale_error_right=float(scale_right),
+            slip_probability_per_m=config.slip_probability_per_m,
+            slip_fraction_max=config.slip_fraction_max,
+        )
+        waypoints = self._sample_route(world, rng)
+        start, first = waypoints[0], waypoints[1]
+        true_start = Pose(
+            float(start[0]), float(start[1]), math.atan2(first[1] - start[1], first[0] - start[0])
+        )
+        world.set_robot_pose(true_start)
+        position_error = rng.normal(0.0, config.initial_position_std_m, 2)
+        heading_error = rng.normal(0.0, math.radians(config.initial_heading_std_deg))
+        estimate = Pose(
+            true_start.x + float(position_error[0]),
+            true_start.y + float(position_error[1]),
+            true_start.theta + float(heading_error),
+        )
+        covariance = np.diag(
+            [
+                config.initial_position_std_m**2,
+                config.initial_position_std_m**2,
+                math.radians(config.initial_heading_std_deg) ** 2,
+            ]
+        )
+        robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
+        self._episode = _Episode(world, robot, waypoints, true_start, estimate, covariance)
+        self._episode.true_trail.append((true_start.x, true_start.y))
+        self._drive_next_leg(self._episode)
+        return self._info(STATUS_RUNNING, n_fixes=0, fix_status=NO_FIX, measurement_time_s=0.0)
+
+    def _sample_route(self, world: World, rng: np.random.Generator) -> FloatArray:
+        """``n_decision_points + 1`` points in {W}: the start and the end of every leg."""
+        config = self.config
+        clearance = config.wall_clearance_m
+        margin = world.robot_radius + clearance
+        start = world.sample_free_pose(rng, clearance=clearance)
+        points = [start.position]
+        leg = config.leg_length_m
+        for _ in range(config.n_decision_points):
+            here = points[-1]
+            for _ in range(_WAYPOINT_TRIES):
+                direction = float(rng.uniform(-math.pi, math.pi))
+                candidate = here + leg * np.array([math.cos(direction), math.sin(direction)])
+                if self._leg_is_free(world, here, candidate, margin):
+                    break
+            else:  # head for the most open direction: towards the middle of the free space
+                towards = self._centre - here
+                towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
+                candidate = here + leg * towards
+            points.append(candidate)
+        return np.array(points)
+
+    @staticmethod
+    def _leg_is_free(world: World, start: FloatArray, end: FloatArray, margin: float) -> bool:
+        samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
+        return all(
+            world.is_free(start + t * (end - start), margin) for t in np.linspace(0.0, 1.0, samples)
+        )
+
+    def _drive_next_leg(self, episode: _Episode) -> None:
+        """Drive to the next waypoint; dead reckoning and its covariance follow."""
+        target = episode.waypoints[episode.decisions + 1]
+        wheel_base = episode.robot.wheel_base_for(episode.world)
+        estimate_before = episode.estimate
+        motion = episode.robot.move_to(
+            episode.world, (float(target[0]), float(target[1])), self.np_random
+        )
+        covariance = episode.covariance
+        pose = estimate_before
+        drive_time = 0.0
+        travelled = 0.0
+        for part in motion.parts or (motion,):
+            covariance = self._propagate(pose, covariance, part, wheel_base)
+            pose = part.odometry_pose
+            forward = 0.5 * abs(part.encoder_left_m + part.encoder_right_m)
+            turn = abs(part.encoder_right_m - part.encoder_left_m) / wheel_base
+            drive_time += forward / self.config.robot_speed_mps + turn / self.config.turn_rate_rad_s
+            travelled += forward
+        episode.true_pose = motion.true_pose
+        episode.estimate = motion.odometry_pose
+        episode.covariance = covariance
+        episode.collided = episode.collided or motion.collided
+        episode.elapsed_time_s += drive_time
+        episode.time_since_fix_s += drive_time
+        episode.distance_since_fix_m += travelled
+        episode.true_trail.append((motion.true_pose.x, motion.true_pose.y))
+
+    def _propagate(
+        self, pose: Pose, covariance: FloatArray, part: MotionResult, wheel_base: float
+    ) -> FloatArray:
+        config = self.config
+        d_left, d_right = part.encoder_left_m, part.encoder_right_m
+        encoder_variance = config.encoder_std_m_per_sqrt_m**2
+        scale_variance = config.wheel_scale_error_std**2
+        wheel_noise = np.diag(
+            [
+                encoder_variance * abs(d_right) + scale_variance * d_right**2,
+                encoder_variance * abs(d_left) + scale_variance * d_left**2,
+            ]
+        )
+        _, propagated = predict(
+            pose,
+            covariance,
+            d_left,
+            d_right,
+            wheel_base,
+            encoder_noise=wheel_noise,
+            integration="midpoint",
+        )
+        return propagated
+
+    def _apply_action(self, action: Any) -> StepOutcome:
+        episode = self._require_episode()
+        config = self.config
+        n_fixes = self.fix_count(action)
+        dead_reckoning = episode.estimate
+        fixes: list[Fix] = []
+        failure = NO_FIX
+        with self._timed("sensing"):
+            measurements = [
+                self.ranger.measure(
+                    episode.world, episode.true_pose, self.np_random, self.transmitter_frame.names
+                )
+                for _ in range(n_fixes)
+            ]
+        with self._timed("localization"):
+            for measurement in measurements:
+                result = localize(
+                    measurement.distances,
+                    self.transmitter_frame.spacing_m,
+                    self.ranger.receivers_xy,
+                    z_sign=-1,
+                )
+                if result.fix is not None:
+                    fixes.append(result.fix)
+                else:
+                    failure = result.status
+            fix_pose: Pose | None = None
+            if fixes:
+                averaged = average_fixes(fixes)  # eqs (12)-(16), circular mean of headings
+                fix_pose = self.transmitter_frame.to_world(averaged.pose)
+                episode.last_fix = averaged
+                self._correct(episode, fix_pose, len(fixes))
+        measurement_time_s = float(sum(m.duration_s for m in measurements))
+        episode.sensing_time_s += measurement_time_s
+        episode.elapsed_time_s += measurement_time_s
+        episode.decisions += 1
+
+        position_error = position_error_m(episode.estimate, episode.true_pose)
+        heading_error = heading_error_rad(episode.estimate, episode.true_pose)
+        error_score = (
+            position_error / config.position_scale_m + heading_error / config.heading_scale_rad
+        )
+        reward = (
+            -min(error_score, config.max_error_score)
+            - config.measurement_cost_per_s * measurement_time_s
+        )
+        done = episode.decisions >= config.n_decision_points
+        info = self._info(
+            STATUS_OK if done else STATUS_RUNNING,
+            n_fixes=n_fixes,
+            fix_status=STATUS_OK if fixes else failure,
+            measurement_time_s=measurement_time_s,
+            n_fixes_ok=len(fixes),
+            dead_reckoning=dead_reckoning,
+            fix_pose=fix_pose,
+        )
+        if not done:
+            self._drive_next_leg(episode)
+        return StepOutcome(reward, terminated=done, info=info)
+
+    def _correct(self, episode: _Episode, fix_pose: Pose, n_ok: int) -> None:
+        """Correct the estimate with an averaged fix of ``n_ok`` fixes (see ``correction``)."""
+        fix_covariance = self.fix_covariance(fix_pose, n_ok)
+        if self.config.correction == "replace":
+            episode.estimate, episode.covariance = fix_pose, fix_covariance
+        else:
+            episode.estimate, episode.covariance = ekf_update(
+                episode.estimate, episode.covariance, fix_pose, fix_covariance, joseph_form=True
+            )
+        episode.robot.reset_odometry(episode.estimate)
+        episode.time_since_fix_s = 0.0
+        episode.distance_since_fix_m = 0.0
+        episode.fix_trail.append((fix_pose.x, fix_pose.y))
+
+    # --- observation and info ---------------------------------------------------------
+    def _observe(self) -> np.ndarray:
+        episode = self._require_episode()
+        config = self.config
+        layout = self.observation_layout
+        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+        estimate = episode.estimate
+        observation[layout["estimated_xy"]] = np.clip(
+            (estimate.position - self._centre) / self._half_size, -1.0, 1.0
+        )
+        observation[layout["estimated_heading"]] = [
+            math.cos(estimate.theta),
+            math.sin(estimate.theta),
+        ]
+        time_since = episode.time_since_fix_s
+        observation[layout["time_since_fix"]] = time_since / (time_since + TIME_SINCE_FIX_SCALE_S)
+        observation[layout["distance_since_fix"]] = min(
+            episode.distance_since_fix_m / config.route_length_m, 1.0
+        )
+        observation[layout["dead_reckoning_position_std"]] = _saturate(
+            position_std_m(episode.covariance), config.position_scale_m
+        )
+        observation[layout["dead_reckoning_heading_std"]] = _saturate(
+            heading_std_rad(episode.covariance), config.heading_scale_rad
+        )
+        offset = estimate.position - self.transmitter_frame.centroid_xy()
+        observation[layout["transmitter_offset"]] = np.clip(offset / self._half_size, -1.0, 1.0)
+        observation[layout["transmitter_distance"]] = min(
+            float(np.linalg.norm(offset)) / float(np.linalg.norm(self._half_size)), 1.0
+        )
+        single_fix = self.fix_covariance(estimate, 1)
+        observation[layout["fix_position_std"]] = _saturate(
+            position_std_m(single_fix), config.position_scale_m
+        )
+        observation[layout["fix_heading_std"]] = _saturate(
+            heading_std_rad(single_fix), config.heading_scale_rad
+        )
+        n = config.n_decision_points
+        observation[layout["progress"]] = episode.decisions / n
+        observation[layout["steps_remaining"]] = (n - episode.decisions) / n
+        return observation
+
+    def _info(
+        self,
+        status: str,
+        *,
+        n_fixes: int,
+        fix_status: str,
+        measurement_time_s: float,
+        n_fixes_ok: int = 0,
+        dead_reckoning: Pose | None = None,
+        fix_pose: Pose | None = None,
+    ) -> dict[str, Any]:
+        episode = self._require_episode()
+        before = dead_reckoning if dead_reckoning is not None else episode.estimate
+        truth = episode.true_pose
+        info: dict[str, Any] = {
+            "position_error_m": position_error_m(episode.estimate, truth),
+            "heading_error_rad": heading_error_rad(episode.estimate, truth),
+            "sensing_time_s": episode.sensing_time_s,
+            "status": status,
+            "n_fixes": n_fixes,
+            "n_fixes_ok": n_fixes_ok,
+            "fix_status": fix_status,
+            "measurement_time_s": measurement_time_s,
+            "dead_reckoning_position_error_m": position_error_m(before, truth),
+            "dead_reckoning_heading_error_rad": heading_error_rad(before, truth),
+            "predicted_position_std_m": position_std_m(episode.covariance),
+            "predicted_heading_std_rad": heading_std_rad(episode.covariance),
+            "decision_point": episode.decisions,
+            "elapsed_time_s": episode.elapsed_time_s,
+            "collided": episode.collided,
+            "true_pose": truth.as_array(),
+            "estimated_pose": episode.estimate.as_array(),
+        }
+        if fix_pose is not None and episode.last_fix is not None:
+            info["fix_position_error_m"] = position_error_m(fix_pose, truth)
+            info["fix_heading_error_rad"] = heading_error_rad(fix_pose, truth)
+            info["fix_z_m"] = episode.last_fix.z
+        return info
+
+    # --- rendering ----------------------------------------------------------------------
+    def _render_frame(self) -> np.ndarray:
+        from sonar_gym.render import render_topdown
+
+        episode = self._require_episode()
+        points = [*_densify(episode.waypoints, 0.05), *episode.true_trail, *episode.fix_trail]
+        return render_topdown(
+            self.scenario,
+            true_pose=episode.true_pose,
+            estimated_pose=episode.estimate,
+            scan_points=np.array(points),
+            title=f"Trilateration  decision {episode.decisions}/{self.config.n_decision_points}",
+            extra={
+                "E_xy [m]": position_error_m(episode.estimate, episode.true_pose),
+                "E_theta [deg]": math.degrees(
+                    heading_error_rad(episode.estimate, episode.true_pose)
+                ),
+                "measuring [s]": episode.sensing_time_s,
+            },
+        )
+
+    def _require_episode(self) -> _Episode:
+        if self._episode is None:
+            raise RuntimeError("TrilaterationEnv: call reset() first")
+        return self._episode
+
+
+def _densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:
+    """Points every ``spacing_m`` metres along the polyline ``points`` (to draw it as dots)."""
+    dense: list[tuple[float, float]] = []
+    for start, end in itertools.pairwise(points):
+        steps = max(1, math.ceil(float(np.linalg.norm(end - start)) / spacing_m))
+        for t in np.arange(steps) / steps:
+            x, y = start + t * (end - start)
+            dense.append((float(x), float(y)))
+    dense.append((float(points[-1][0]), float(points[-1][1])))
+    return dense
+
+
+def _saturate(value: float, scale: float) -> float:
+    """``value / (value + scale)``: 0 at 0, 0.5 at ``scale``, below 1 for any finite value."""
+    return value / (value + scale) if value > 0.0 else 0.0
+
+
+__all__ = [
+    "DEFAULT_FIX_COUNTS",
+    "RangeErrorModel",
+    "TransmitterFrame",
+    "TrilaterationConfig",
+    "TrilaterationEnv",
+    "predicted_fix_covariance",
+    "quantised_range_error",
+]

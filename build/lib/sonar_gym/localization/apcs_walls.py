@@ -1,0 +1,849 @@
+"""APCS wall processing: the map, estimated reflection points, wall detection and matching.
+
+Yamamoto, Maeyama, Ohya & Yuta, *APCS: autonomous position correction system using
+ultrasonic sensing*, sections 4.1-4.3 and the thresholds of section 6:
+
+- 4.1: the map is a list of oriented wall vectors, occupied on the left (:class:`WallVector`).
+- 4.2.1: estimated reflection points (ERP) from two consecutive side-sonar readings, eqs (1)-(6)
+  (:func:`estimated_reflection_points`).
+- 4.2.2: grouping of consecutive ERPs by continuity, group size limits, least-squares line and
+  variance test (:func:`group_erps`, :func:`fit_wall_group`, :func:`detect_walls`).
+- 4.2.3: end points of the detected segment, Fig. 6.
+- 4.3: matching a detected vector to the map by orientation, inclusion of the projection and
+  ``d1^2 + d2^2`` (:func:`match_wall`); no match or more than one match means no correction.
+
+All coordinates are metres in the world frame {W}; angles are radians, counter-clockwise from
+the {W} x-axis, as the paper's angle ``phi`` of eq. (2).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.pose import FloatArray, angle_difference, wrap_angles
+
+IntArray = npt.NDArray[np.int64]
+
+# A wall or a fitted extent shorter than this is treated as having zero length (metres).
+ZERO_LENGTH_M = 1e-9
+
+# Reasons a map wall is rejected by the matching of section 4.3, in the paper's order.
+REJECT_ORIENTATION = "orientation"
+REJECT_INCLUSION = "inclusion"
+REJECT_DISTANCE = "distance"
+
+# Statuses of a match (section 4.3 and Fig. 2).
+MATCHED = "matched"
+NO_MATCH = "no_match"
+AMBIGUOUS = "ambiguous"
+
+# Reasons a group of ERPs yields no wall (section 4.2.2).
+GROUP_OK = "ok"
+GROUP_TOO_FEW_POINTS = "too_few_points"
+GROUP_TOO_MUCH_VARIANCE = "too_much_variance"
+GROUP_ZERO_LENGTH = "zero_length"
+
+_CM2_TO_M2 = 1e-4
+
+
+def _finite_pair(value: npt.ArrayLike, name: str) -> tuple[float, float]:
+    array = np.asarray(value, dtype=np.float64)
+    if array.shape != (2,) or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
+    return float(array[0]), float(array[1])
+
+
+@dataclass(frozen=True)
+class WallVector:
+    """An oriented wall segment of the map (section 4.1, Fig. 3).
+
+    The side to the *left* of the direction ``start -> end`` is occupied (inside the wall or
+    object); the right side is free space, where the robot can be.
+
+    Attributes:
+        start: ``(x, y)`` of the first end point, metres in {W}.
+        end: ``(x, y)`` of the second end point, metres in {W}.
+        name: a label for plots and match reports (e.g. ``"corridor_north"``).
+
+    Raises:
+        ValueError: if an end point is not a finite pair or the two coincide (zero length).
+    """
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        start = _finite_pair(self.start, "WallVector.start")
+        end = _finite_pair(self.end, "WallVector.end")
+        if math.hypot(end[0] - start[0], end[1] - start[1]) <= ZERO_LENGTH_M:
+            raise ValueError(
+                f"WallVector.start and WallVector.end coincide ({start}): a wall must have "
+                f"positive length"
+            )
+        object.__setattr__(self, "start", start)
+        object.__setattr__(self, "end", end)
+        object.__setattr__(self, "name", str(self.name))
+
+    @property
+    def start_point(self) -> FloatArray:
+        """``start`` as an array, metres in {W}."""
+        return np.array(self.start, dtype=np.float64)
+
+    @property
+    def end_point(self) -> FloatArray:
+        """``end`` as an array, metres in {W}."""
+        return np.array(self.end, dtype=np.float64)
+
+    @property
+    def length(self) -> float:
+        """Length of the segment, metres."""
+        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
+
+    @property
+    def direction_angle(self) -> float:
+        """Angle of ``start -> end`` in {W}, radians in (-pi, pi]."""
+        return math.atan2(self.end[1] - self.start[1], self.end[0] - self.start[0])
+
+    @property
+    def unit_direction(self) -> FloatArray:
+        """Unit vector along ``start -> end``."""
+        return (self.end_point - self.start_point) / self.length
+
+    @property
+    def normal(self) -> FloatArray:
+        """Outward unit normal of the wall surface: it points to the free (right-hand) side."""
+        ux, uy = self.unit_direction
+        return np.array([uy, -ux])
+
+    @property
+    def line_coefficients(self) -> tuple[float, float, float]:
+        """``(a, b, c)`` of the line ``a x + b y + c = 0`` used in eqs (9)-(10).
+
+        ``(a, b)`` is the outward unit normal, so ``a x + b y + c`` is the signed distance of
+        ``(x, y)`` from the wall line in metres, positive on the free side.
+        """
+        a, b = self.normal
+        c = -(a * self.start[0] + b * self.start[1])
+        return float(a), float(b), float(c)
+
+    def signed_distance(self, point: npt.ArrayLike) -> float:
+        """Signed distance of ``point`` from the wall line, metres, positive on the free side."""
+        a, b, c = self.line_coefficients
+        x, y = _finite_pair(point, "point")
+        return a * x + b * y + c
+
+    def projection_parameter(self, point: npt.ArrayLike) -> float:
+        """Where ``point`` projects on the wall: 0 at ``start``, 1 at ``end`` (dimensionless)."""
+        offset = np.asarray(_finite_pair(point, "point")) - self.start_point
+        return float(offset @ self.unit_direction) / self.length
+
+
+@dataclass(frozen=True)
+class APCSParameters:
+    """The thresholds of APCS, with the values of section 6 (and section 5) in SI units.
+
+    Attributes:
+        grouping_distance_squared_m2: two consecutive ERPs join one group when their squared
+            distance is at most this. Section 6: 100 cm^2 = 0.01 m^2 (10 cm apart).
+        min_group_size: groups with fewer ERPs are ignored. Section 6: "less than 4 points"
+            are ignored, so 4.
+        max_group_size: a group is closed when it holds this many ERPs (section 4.2.2).
+            Section 6: 8 points.
+        variance_threshold_m2: a group is a flat wall when the variance of its ERPs about the
+            fitted line (mean squared perpendicular residual) is below this. Section 4.2.2
+            names the test but section 6 prints no value; the default (2 cm)^2 = 4e-4 m^2 is
+            this package's choice.
+        orientation_tolerance_rad: largest angle between a detected vector and a map vector
+            that still matches. Section 6: +-0.5 deg.
+        endpoint_distance_squared_m2: a match needs ``d1^2 + d2^2`` below this (Fig. 7).
+            Section 6: 200 cm^2 = 0.02 m^2.
+        sampling_interval_m: travel between two range readings. Section 6: every 3 cm.
+        robot_speed_mps: speed of the robot in the experiment. Section 6: 30 cm/s.
+        sensing_range_m: ``(min, max)`` range of the sensor, metres; readings outside are
+            dropouts. Section 5: about 30 cm to 500 cm (Murata MA40B8S/R).
+    """
+
+    grouping_distance_squared_m2: float = 100.0 * _CM2_TO_M2
+    min_group_size: int = 4
+    max_group_size: int = 8
+    variance_threshold_m2: float = 0.02**2
+    orientation_tolerance_rad: float = math.radians(0.5)
+    endpoint_distance_squared_m2: float = 200.0 * _CM2_TO_M2
+    sampling_interval_m: float = 0.03
+    robot_speed_mps: float = 0.30
+    sensing_range_m: tuple[float, float] = (0.30, 5.00)
+
+    def __post_init__(self) -> None:
+        for name in (
+            "grouping_distance_squared_m2",
+            "variance_threshold_m2",
+            "orientation_tolerance_rad",
+            "endpoint_distance_squared_m2",
+            "sampling_interval_m",
+            "robot_speed_mps",
+        ):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"APCSParameters.{name} must be positive and finite, got {value}")
+            object.__setattr__(self, name, value)
+        if self.orientation_tolerance_rad >= math.pi:
+            raise ValueError(
+                "APCSParameters.orientation_tolerance_rad must be below pi, "
+                f"got {self.orientation_tolerance_rad}"
+            )
+        for name in ("min_group_size", "max_group_size"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 2:
+                raise ValueError(f"APCSParameters.{name} must be an integer >= 2, got {value!r}")
+            object.__setattr__(self, name, int(value))
+        if self.max_group_size < self.min_group_size:
+            raise ValueError(
+                f"APCSParameters.max_group_size ({self.max_group_size}) must be at least "
+                f"min_group_size ({self.min_group_size})"
+            )
+        low, high = (float(v) for v in self.sensing_range_m)
+        if not (math.isfinite(low) and math.isfinite(high) and 0.0 <= low < high):
+            raise ValueError(
+                f"APCSParameters.sensing_range_m must be (min, max) with 0 <= min < max, "
+                f"got {self.sensing_range_m!r}"
+            )
+        object.__setattr__(self, "sensing_range_m", (low, high))
+
+    @property
+    def sampling_period_s(self) -> float:
+        """Time between two readings, seconds (3 cm at 30 cm/s gives 0.1 s)."""
+        return self.sampling_interval_m / self.robot_speed_mps
+
+
+DEFAULT_PARAMETERS = APCSParameters()
+
+
+# ---------------------------------------------------------------------------------------------
+# 4.2.1 Estimated reflection points, eqs (1)-(6)
+# ---------------------------------------------------------------------------------------------
+
+
+def _readonly(array: np.ndarray) -> np.ndarray:
+    array = np.array(array, copy=True)
+    array.setflags(write=False)
+    return array
+
+
+@dataclass(frozen=True, eq=False)
+class EstimatedReflectionPoints:
+    """ERPs in the order they were computed (section 4.2.1).
+
+    Attributes:
+        points: ``(M, 2)`` ERP positions, metres in {W}; always finite.
+        reflection_directions_rad: ``(M,)`` angle ``phi`` of eq. (2), the direction from the
+            sensor to the ERP in {W}, radians in (-pi, pi].
+        reading_indices: ``(M,)`` index of the range reading each ERP belongs to.
+        pair_indices: ``(M,)`` index ``i`` of the reading pair ``(i, i + 1)`` that gave it.
+    """
+
+    points: FloatArray
+    reflection_directions_rad: FloatArray
+    reading_indices: IntArray
+    pair_indices: IntArray
+
+    def __post_init__(self) -> None:
+        points = np.asarray(self.points, dtype=np.float64)
+        if points.size == 0:
+            points = points.reshape(0, 2)
+        if points.ndim != 2 or points.shape[1] != 2 or not np.all(np.isfinite(points)):
+            raise ValueError(
+                f"EstimatedReflectionPoints.points must be a finite (M, 2) array, "
+                f"got shape {points.shape}"
+            )
+        count = points.shape[0]
+        directions = np.asarray(self.reflection_directions_rad, dtype=np.float64).reshape(-1)
+        if directions.shape != (count,) or not np.all(np.isfinite(directions)):
+            raise ValueError(
+                "EstimatedReflectionPoints.reflection_directions_rad must be finite with one "
+                f"entry per point ({count}), got shape {directions.shape}"
+            )
+        for name in ("reading_indices", "pair_indices"):
+            indices = np.asarray(getattr(self, name)).reshape(-1)
+            integral = count == 0 or np.issubdtype(indices.dtype, np.integer)
+            if indices.shape != (count,) or not integral:
+                raise ValueError(
+                    f"EstimatedReflectionPoints.{name} must hold one integer per point ({count})"
+                )
+            object.__setattr__(self, name, _readonly(indices.astype(np.int64)))
+        object.__setattr__(self, "points", _readonly(points))
+        object.__setattr__(self, "reflection_directions_rad", _readonly(wrap_angles(directions)))
+
+    def __len__(self) -> int:
+        return int(self.points.shape[0])
+
+    @classmethod
+    def from_points(
+        cls, points: npt.ArrayLike, reflection_directions_rad: npt.ArrayLike
+    ) -> EstimatedReflectionPoints:
+        """ERPs given directly (e.g. from a plot or another sensor), numbered 0..M-1.
+
+        Args:
+            points: ``(M, 2)`` positions, metres in {W}.
+            reflection_directions_rad: ``(M,)`` sensor-to-wall directions in {W}, radians, or
+                one angle for all.
+        """
+        array = np.asarray(points, dtype=np.float64)
+        count = array.shape[0] if array.ndim == 2 else 0
+        directions = np.broadcast_to(
+            np.asarray(reflection_directions_rad, dtype=np.float64), (count,)
+        )
+        indices = np.arange(count, dtype=np.int64)
+        return cls(array, directions, indices, indices)
+
+
+def _check_readings(
+    sensor_positions: npt.ArrayLike,
+    sensor_directions_rad: npt.ArrayLike,
+    ranges_m: npt.ArrayLike,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    positions = np.asarray(sensor_positions, dtype=np.float64)
+    if positions.size == 0:
+        positions = positions.reshape(0, 2)
+    if positions.ndim != 2 or positions.shape[1] != 2:
+        raise ValueError(f"sensor_positions must have shape (N, 2), got {positions.shape}")
+    if not np.all(np.isfinite(positions)):
+        raise ValueError("sensor_positions must be finite (metres in {W})")
+    count = positions.shape[0]
+    ranges = np.asarray(ranges_m, dtype=np.float64)
+    if ranges.shape != (count,):
+        raise ValueError(
+            f"ranges_m must have shape ({count},), one range per sensor position, "
+            f"got {ranges.shape}"
+        )
+    if np.any(ranges < 0.0):
+        raise ValueError("ranges_m must be non-negative metres (NaN or inf for a dropout)")
+    try:
+        directions = np.broadcast_to(np.asarray(sensor_directions_rad, dtype=np.float64), (count,))
+    except ValueError as error:
+        raise ValueError(
+            f"sensor_directions_rad must be one angle or shape ({count},), "
+            f"got {np.shape(sensor_directions_rad)}"
+        ) from error
+    if not np.all(np.isfinite(directions)):
+        raise ValueError("sensor_directions_rad must be finite (radians in {W})")
+    return positions, directions, ranges
+
+
+def reflection_direction_candidates(
+    first_position: npt.ArrayLike,
+    second_position: npt.ArrayLike,
+    first_range_m: npt.ArrayLike,
+    second_range_m: npt.ArrayLike,
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    """The two solutions ``phi`` of eq. (4), element-wise over pairs of readings.
+
+    Eq. (1) with eqs (2)-(3) gives ``(x2 - x1) cos(phi) + (y2 - y1) sin(phi) = -(r2 - r1)``,
+    solved as eq. (4) with ``alpha`` of eqs (5)-(6). The square root in eq. (4) is printed
+    ``sqrt((y2 - x2)^2 + (x2 - x1)^2)``; eqs (5)-(6) and the derivation need the length of
+    ``P1P2``, ``sqrt((y2 - y1)^2 + (x2 - x1)^2)``, which is the reading used here.
+
+    Args:
+        first_position: ``(..., 2)`` sensor position ``P1``, metres in {W}.
+        second_position: ``(..., 2)`` sensor position ``P2``, metres in {W}.
+        first_range_m: ``(...)`` range ``r1`` measured at ``P1``, metres.
+        second_range_m: ``(...)`` range ``r2`` measured at ``P2``, metres.
+
+    Returns:
+        ``(phi_plus, phi_minus, solvable)``: the ``+`` and ``-`` roots of eq. (4) in radians,
+        wrapped to (-pi, pi], and where a root exists (finite ranges, ``P1 != P2`` and
+        ``|r2 - r1| <= |P1P2|``); the angles are 0 where ``solvable`` is False.
+    """
+    p1 = np.asarray(first_position, dtype=np.float64)
+    p2 = np.asarray(second_position, dtype=np.float64)
+    r1 = np.asarray(first_range_m, dtype=np.float64)
+    r2 = np.asarray(second_range_m, dtype=np.float64)
+    dx = p2[..., 0] - p1[..., 0]
+    dy = p2[..., 1] - p1[..., 1]
+    baseline = np.sqrt(dy**2 + dx**2)  # |P1P2|, the corrected root of eq. (4)
+    moved = baseline > ZERO_LENGTH_M
+    safe_baseline = np.where(moved, baseline, 1.0)
+    sin_alpha = dx / safe_baseline  # eq. (5)
+    cos_alpha = dy / safe_baseline  # eq. (6)
+    alpha = np.arctan2(sin_alpha, cos_alpha)
+    ranged = np.isfinite(r1) & np.isfinite(r2)
+    range_step = np.where(ranged, r2, 0.0) - np.where(ranged, r1, 0.0)
+    cosine = -range_step / safe_baseline
+    solvable = ranged & moved & (np.abs(cosine) <= 1.0)
+    offset = np.arccos(np.where(solvable, cosine, 0.0))
+    phi_plus = np.where(solvable, wrap_angles(np.pi / 2.0 - alpha + offset), 0.0)  # eq. (4), +
+    phi_minus = np.where(solvable, wrap_angles(np.pi / 2.0 - alpha - offset), 0.0)  # eq. (4), -
+    return phi_plus, phi_minus, solvable
+
+
+def estimated_reflection_points(
+    sensor_positions: npt.ArrayLike,
+    sensor_directions_rad: npt.ArrayLike,
+    ranges_m: npt.ArrayLike,
+    *,
+    points_per_pair: Literal["newest", "both"] = "newest",
+    valid_range_m: tuple[float, float] | None = None,
+    max_off_axis_rad: float | None = None,
+) -> EstimatedReflectionPoints:
+    """ERPs from consecutive readings of one side sonar, eqs (1)-(6), vectorised.
+
+    For each pair of consecutive readings ``(i, i + 1)`` taken at sensor positions
+    ``P1 = (x1, y1)``, ``P2 = (x2, y2)`` with ranges ``r1``, ``r2``, the reflection direction
+    ``phi`` solves eq. (1) (see :func:`reflection_direction_candidates`, which uses the
+    corrected eq. (4)). Of the two roots ``+-`` of eq. (4) the one nearer the sensor's beam
+    axis is kept (a left-side sensor on a robot moving forward takes ``+``). The ERPs are then
+    ``R1 = P1 + r1 (cos phi, sin phi)`` and ``R2 = P2 + r2 (cos phi, sin phi)``, eqs (2)-(3).
+
+    A pair gives no ERP when a range is a dropout (NaN or inf, or outside ``valid_range_m``),
+    when the sensor did not move, or when ``|r2 - r1| > |P1P2|`` (no flat wall can explain the
+    two ranges). No output is ever NaN.
+
+    Args:
+        sensor_positions: ``(N, 2)`` sensor positions at the readings, metres in {W}.
+        sensor_directions_rad: ``(N,)`` (or one) beam-axis angle of the sensor in {W}, radians
+            (robot heading + pi/2 for a left-side sensor).
+        ranges_m: ``(N,)`` measured ranges, metres; NaN or inf for a dropout.
+        points_per_pair: ``"newest"`` (default) keeps one ERP per pair, ``R2`` of the newer
+            reading, computed when that reading arrives (section 4.2.2); ``"both"`` keeps
+            ``R1`` and ``R2`` of every pair, in that order.
+        valid_range_m: optional ``(min, max)`` metres; readings outside count as dropouts
+            (e.g. :attr:`APCSParameters.sensing_range_m`).
+        max_off_axis_rad: optional; drop pairs whose ``phi`` is further than this from the
+            beam axis (the sensor's half beam width, +-15-20 deg in section 5). The paper does
+            not apply this test; ``None`` (default) follows the paper.
+
+    Returns:
+        The ERPs with the readings and pairs they came from.
+
+    Raises:
+        ValueError: on wrong shapes, non-finite positions or directions, negative ranges, an
+            unknown ``points_per_pair`` or a malformed ``valid_range_m``/``max_off_axis_rad``.
+    """
+    positions, directions, ranges = _check_readings(
+        sensor_positions, sensor_directions_rad, ranges_m
+    )
+    if points_per_pair not in ("newest", "both"):
+        raise ValueError(f"points_per_pair must be 'newest' or 'both', got {points_per_pair!r}")
+    if valid_range_m is not None:
+        low, high = (float(v) for v in valid_range_m)
+        if not (0.0 <= low < high):
+            raise ValueError(
+                f"valid_range_m must be (min, max) with 0 <= min < max, got {valid_range_m!r}"
+            )
+        ranges = np.where((ranges >= low) & (ranges <= high), ranges, np.nan)
+    if max_off_axis_rad is not None and not (0.0 < float(max_off_axis_rad) <= math.pi):
+        raise ValueError(f"max_off_axis_rad must be in (0, pi], got {max_off_axis_rad!r}")
+
+    count = positions.shape[0]
+    if count < 2:
+        return EstimatedReflectionPoints.from_points(np.zeros((0, 2)), np.zeros(0))
+
+    p1, p2 = positions[:-1], positions[1:]
+    r1, r2 = ranges[:-1], ranges[1:]
+    phi_plus, phi_minus, solvable = reflection_direction_candidates(p1, p2, r1, r2)
+
+    beam_axis = np.arctan2(
+        np.sin(directions[:-1]) + np.sin(directions[1:]),
+        np.cos(directions[:-1]) + np.cos(directions[1:]),
+    )
+    off_axis_plus = np.abs(wrap_angles(phi_plus - beam_axis))
+    off_axis_minus = np.abs(wrap_angles(phi_minus - beam_axis))
+    phi = np.where(off_axis_plus <= off_axis_minus, phi_plus, phi_minus)
+    keep = solvable
+    if max_off_axis_rad is not None:
+        keep = keep & (np.minimum(off_axis_plus, off_axis_minus) <= float(max_off_axis_rad))
+
+    pairs = np.flatnonzero(keep)
+    phi = phi[pairs]
+    unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    second_erps = p2[pairs] + r2[pairs, None] * unit  # R2, eqs (2)-(3)
+    if points_per_pair == "newest":
+        return EstimatedReflectionPoints(second_erps, phi, pairs + 1, pairs)
+    first_erps = p1[pairs] + r1[pairs, None] * unit  # R1 = P1 + P1R1, eq. (2)
+    points = np.stack([first_erps, second_erps], axis=1).reshape(-1, 2)
+    return EstimatedReflectionPoints(
+        points,
+        np.repeat(phi, 2),
+        np.stack([pairs, pairs + 1], axis=1).reshape(-1),
+        np.repeat(pairs, 2),
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# 4.2.2-4.2.3 Grouping, line fit, variance test and end points
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class DetectedWall:
+    """A flat wall found in one group of ERPs (sections 4.2.2-4.2.3).
+
+    Attributes:
+        start: ``T_s`` of Fig. 6, metres in {W}.
+        end: ``T_e`` of Fig. 6, metres in {W}; ``start -> end`` has the free side (where the
+            sensor was) on its right, like the map's vectors.
+        erp_indices: positions, in the ERP sequence, of the ERPs of the group.
+        residual_variance_m2: mean squared perpendicular distance of the ERPs from the fitted
+            line, square metres (the variance of section 4.2.2).
+    """
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    erp_indices: tuple[int, ...]
+    residual_variance_m2: float
+
+    def __post_init__(self) -> None:
+        segment = WallVector(self.start, self.end)
+        object.__setattr__(self, "start", segment.start)
+        object.__setattr__(self, "end", segment.end)
+        object.__setattr__(self, "erp_indices", tuple(int(i) for i in self.erp_indices))
+        object.__setattr__(self, "residual_variance_m2", float(self.residual_variance_m2))
+
+    @property
+    def vector(self) -> WallVector:
+        """The detected segment ``T_s -> T_e`` as a wall vector named ``"detected"``."""
+        return WallVector(self.start, self.end, name="detected")
+
+    @property
+    def point_count(self) -> int:
+        """Number of ERPs in the group."""
+        return len(self.erp_indices)
+
+    @property
+    def length(self) -> float:
+        """Length of ``T_s T_e``, metres."""
+        return self.vector.length
+
+    @property
+    def direction_angle(self) -> float:
+        """Angle of ``T_s -> T_e`` in {W}, radians."""
+        return self.vector.direction_angle
+
+    @property
+    def normal(self) -> FloatArray:
+        """Outward unit normal (towards the free side, where the sensor was)."""
+        return self.vector.normal
+
+
+@dataclass(frozen=True)
+class WallFit:
+    """The verdict on one group of ERPs: a wall, or the reason there is none.
+
+    Attributes:
+        status: ``"ok"``, ``"too_few_points"``, ``"too_much_variance"`` or ``"zero_length"``.
+        erp_indices: the group, as positions in the ERP sequence.
+        residual_variance_m2: variance about the fitted line (0.0 when not fitted), m^2.
+        wall: the detected wall when ``status == "ok"``, else ``None``.
+    """
+
+    status: str
+    erp_indices: tuple[int, ...]
+    residual_variance_m2: float = 0.0
+    wall: DetectedWall | None = None
+
+
+def _as_erps(
+    erps: EstimatedReflectionPoints | npt.ArrayLike,
+) -> tuple[FloatArray, FloatArray | None]:
+    if isinstance(erps, EstimatedReflectionPoints):
+        return erps.points, erps.reflection_directions_rad
+    points = np.asarray(erps, dtype=np.float64)
+    if points.size == 0:
+        points = points.reshape(0, 2)
+    if points.ndim != 2 or points.shape[1] != 2 or not np.all(np.isfinite(points)):
+        raise ValueError(f"erps must be a finite (M, 2) array in metres, got shape {points.shape}")
+    return points, None
+
+
+def group_erps(
+    erps: EstimatedReflectionPoints | npt.ArrayLike,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> list[tuple[int, ...]]:
+    """Split the ERP sequence into groups by continuity (section 4.2.2, Fig. 5).
+
+    An ERP joins the current group when its squared distance to the previous ERP is at most
+    ``params.grouping_distance_squared_m2``; otherwise (a discontinuity) it starts a new group.
+    A group is also closed when it reaches ``params.max_group_size`` ERPs. Groups of every size
+    are returned; :func:`fit_wall_group` drops the small ones.
+
+    Returns:
+        The groups as tuples of positions in the ERP sequence, in order.
+    """
+    points, _ = _as_erps(erps)
+    groups: list[tuple[int, ...]] = []
+    current: list[int] = []
+    for index in range(points.shape[0]):
+        if current:
+            step = points[index] - points[current[-1]]
+            continuous = float(step @ step) <= params.grouping_distance_squared_m2
+            if not continuous or len(current) >= params.max_group_size:
+                groups.append(tuple(current))
+                current = []
+        current.append(index)
+    if current:
+        groups.append(tuple(current))
+    return groups
+
+
+def fit_wall_group(
+    erps: EstimatedReflectionPoints | npt.ArrayLike,
+    group: Sequence[int],
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> WallFit:
+    """Verify one group of ERPs as a flat wall and extract its end points (4.2.2-4.2.3).
+
+    - Size: fewer than ``params.min_group_size`` ERPs gives ``"too_few_points"``.
+    - Line: least squares. The paper does not say which; walls take every orientation, so the
+      orthogonal (total) least-squares line through the centroid is used (an ordinary
+      y-on-x fit fails for walls parallel to the y-axis).
+    - Variance: the mean squared perpendicular residual; at or above
+      ``params.variance_threshold_m2`` gives ``"too_much_variance"``.
+    - End points (Fig. 6): the extreme ERPs ``R_s``, ``R_e`` along the line, projected on it,
+      give ``T_s`` and ``T_e``; a group with no extent gives ``"zero_length"``.
+    - Orientation: ``T_s -> T_e`` keeps the free side on its right. With reflection
+      directions (an :class:`EstimatedReflectionPoints`), the mean sensor-to-ERP direction
+      must point to the left (occupied) side. With plain points, the vector follows the ERP
+      order, which is the convention for a left-side sensor moving forward (section 6).
+    """
+    points, directions = _as_erps(erps)
+    indices = tuple(int(i) for i in group)
+    if any(i < 0 or i >= points.shape[0] for i in indices):
+        raise ValueError(f"group must hold positions in 0..{points.shape[0] - 1}, got {indices}")
+    if len(indices) < params.min_group_size:
+        return WallFit(GROUP_TOO_FEW_POINTS, indices)
+
+    members = points[list(indices)]
+    centroid = members.mean(axis=0)
+    centred = members - centroid
+    scatter = centred.T @ centred / len(indices)
+    eigenvalues, eigenvectors = np.linalg.eigh(scatter)
+    along = eigenvectors[:, 1]
+    residual_variance = float(max(eigenvalues[0], 0.0))
+    if residual_variance >= params.variance_threshold_m2:
+        return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
+
+    occupied_side = np.array([-along[1], along[0]])  # left of `along`
+    if directions is not None:
+        group_directions = directions[list(indices)]
+        towards_wall = np.array(
+            [np.cos(group_directions).sum(), np.sin(group_directions).sum()]
+        )
+        flip = float(occupied_side @ towards_wall) < 0.0
+    else:
+        flip = float((centred[-1] - centred[0]) @ along) < 0.0
+    if flip:
+        along = -along
+
+    positions_along = centred @ along
+    extent_start, extent_end = float(positions_along.min()), float(positions_along.max())
+    if extent_end - extent_start <= ZERO_LENGTH_M:
+        return WallFit(GROUP_ZERO_LENGTH, indices, residual_variance)
+    start = centroid + extent_start * along  # T_s, foot of the perpendicular from R_s
+    end = centroid + extent_end * along  # T_e, foot of the perpendicular from R_e
+    wall = DetectedWall(tuple(start), tuple(end), indices, residual_variance)
+    return WallFit(GROUP_OK, indices, residual_variance, wall)
+
+
+def fit_wall_groups(
+    erps: EstimatedReflectionPoints | npt.ArrayLike,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> list[WallFit]:
+    """Every group of :func:`group_erps` with its verdict, for plots of kept and dropped groups."""
+    return [fit_wall_group(erps, group, params) for group in group_erps(erps, params)]
+
+
+def detect_walls(
+    erps: EstimatedReflectionPoints | npt.ArrayLike,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> list[DetectedWall]:
+    """Flat walls in a sequence of ERPs (section 4.2.2-4.2.3): grouping, size, line, variance.
+
+    Args:
+        erps: the output of :func:`estimated_reflection_points`, or an ``(M, 2)`` array of ERPs
+            in metres in {W} in the order measured (then oriented as for a left-side sensor).
+        params: thresholds; section 6 values by default.
+
+    Returns:
+        The detected walls in order, each of positive length.
+    """
+    return [fit.wall for fit in fit_wall_groups(erps, params) if fit.wall is not None]
+
+
+def detect_walls_from_readings(
+    sensor_positions: npt.ArrayLike,
+    sensor_directions_rad: npt.ArrayLike,
+    ranges_m: npt.ArrayLike,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> tuple[EstimatedReflectionPoints, list[DetectedWall]]:
+    """ERPs (readings outside ``params.sensing_range_m`` are dropouts) and the walls in them."""
+    erps = estimated_reflection_points(
+        sensor_positions, sensor_directions_rad, ranges_m, valid_range_m=params.sensing_range_m
+    )
+    return erps, detect_walls(erps, params)
+
+
+# ---------------------------------------------------------------------------------------------
+# 4.3 Selection of landmark: matching to the map
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class WallCheck:
+    """How one map wall fared against a detected vector (section 4.3, Fig. 7).
+
+    Attributes:
+        map_index: position of the wall in the map.
+        wall: the map wall ``a_i``.
+        orientation_error_rad: angle from ``a_i`` to ``T_s -> T_e``, radians in (-pi, pi].
+        start_parameter: where ``V_s`` lies on ``a_i`` (0 at its start, 1 at its end).
+        end_parameter: where ``V_e`` lies on ``a_i``.
+        endpoint_distance_squared_m2: ``d1^2 + d2^2``, square metres.
+        orientation_ok: ``|orientation_error_rad| <= orientation tolerance``.
+        inclusion_ok: ``V_s V_e`` lies within ``a_i`` (both parameters in [0, 1]).
+        distance_ok: ``d1^2 + d2^2`` below its threshold.
+    """
+
+    map_index: int
+    wall: WallVector
+    orientation_error_rad: float
+    start_parameter: float
+    end_parameter: float
+    endpoint_distance_squared_m2: float
+    orientation_ok: bool
+    inclusion_ok: bool
+    distance_ok: bool
+
+    @property
+    def matched(self) -> bool:
+        """Whether all three conditions hold."""
+        return self.orientation_ok and self.inclusion_ok and self.distance_ok
+
+    @property
+    def reason(self) -> str | None:
+        """The first failed condition in the paper's order, or ``None`` when matched."""
+        if not self.orientation_ok:
+            return REJECT_ORIENTATION
+        if not self.inclusion_ok:
+            return REJECT_INCLUSION
+        if not self.distance_ok:
+            return REJECT_DISTANCE
+        return None
+
+    @property
+    def failed_conditions(self) -> tuple[str, ...]:
+        """Every failed condition (``"orientation"``, ``"inclusion"``, ``"distance"``)."""
+        failed = []
+        if not self.orientation_ok:
+            failed.append(REJECT_ORIENTATION)
+        if not self.inclusion_ok:
+            failed.append(REJECT_INCLUSION)
+        if not self.distance_ok:
+            failed.append(REJECT_DISTANCE)
+        return tuple(failed)
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """Outcome of matching one detected vector against the map (section 4.3).
+
+    Attributes:
+        status: ``"matched"`` (exactly one map wall passes), ``"no_match"`` (none) or
+            ``"ambiguous"`` (more than one; the paper then does not correct, Fig. 2).
+        detected: the detected vector ``T_s -> T_e``.
+        checks: one :class:`WallCheck` per map wall, in map order.
+        wall: the matched map wall when ``status == "matched"``, else ``None``.
+        wall_index: its position in the map, else ``None``.
+    """
+
+    status: str
+    detected: WallVector
+    checks: tuple[WallCheck, ...]
+    wall: WallVector | None = None
+    wall_index: int | None = None
+
+    @property
+    def matched(self) -> bool:
+        """Whether exactly one map wall matched."""
+        return self.status == MATCHED
+
+    @property
+    def candidate_indices(self) -> tuple[int, ...]:
+        """Map positions of every wall that passed all three conditions."""
+        return tuple(check.map_index for check in self.checks if check.matched)
+
+    @property
+    def rejections(self) -> dict[int, str]:
+        """Map position -> reason, for every wall that failed a condition."""
+        return {c.map_index: c.reason for c in self.checks if c.reason is not None}
+
+
+def check_wall(
+    detected: WallVector,
+    map_wall: WallVector,
+    map_index: int = 0,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> WallCheck:
+    """The three conditions of section 4.3 for one map wall ``a_i`` (Fig. 7).
+
+    ``T_s`` and ``T_e`` are projected on the line of ``a_i`` to ``V_s`` and ``V_e``;
+    ``d1 = |T_s V_s|`` and ``d2 = |T_e V_e|`` are the distances of the detected end points
+    from that line.
+    """
+    orientation_error = angle_difference(detected.direction_angle, map_wall.direction_angle)
+    start_parameter = map_wall.projection_parameter(detected.start)
+    end_parameter = map_wall.projection_parameter(detected.end)
+    d1 = map_wall.signed_distance(detected.start)
+    d2 = map_wall.signed_distance(detected.end)
+    distance_squared = d1 * d1 + d2 * d2
+    slack = 1e-12
+    inside = all(-slack <= t <= 1.0 + slack for t in (start_parameter, end_parameter))
+    return WallCheck(
+        map_index=map_index,
+        wall=map_wall,
+        orientation_error_rad=orientation_error,
+        start_parameter=start_parameter,
+        end_parameter=end_parameter,
+        endpoint_distance_squared_m2=distance_squared,
+        orientation_ok=abs(orientation_error) <= params.orientation_tolerance_rad,
+        inclusion_ok=inside,
+        distance_ok=distance_squared < params.endpoint_distance_squared_m2,
+    )
+
+
+def match_wall(
+    detected: DetectedWall | WallVector,
+    wall_map: Sequence[WallVector],
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> MatchResult:
+    """Match a detected vector against every wall of the map (section 4.3).
+
+    A map wall matches when the orientations agree within ``params.orientation_tolerance_rad``
+    (+-0.5 deg), the projection ``V_s V_e`` lies within it, and ``d1^2 + d2^2`` is below
+    ``params.endpoint_distance_squared_m2`` (200 cm^2). Only a unique match is a match.
+
+    Raises:
+        ValueError: if ``detected`` or an entry of ``wall_map`` has the wrong type.
+    """
+    if isinstance(detected, DetectedWall):
+        vector = detected.vector
+    elif isinstance(detected, WallVector):
+        vector = detected
+    else:
+        raise ValueError(
+            f"detected must be a DetectedWall or WallVector, got {type(detected).__name__}"
+        )
+    walls = list(wall_map)
+    for index, wall in enumerate(walls):
+        if not isinstance(wall, WallVector):
+            raise ValueError(f"wall_map[{index}] must be a WallVector, got {type(wall).__name__}")
+    checks = tuple(check_wall(vector, wall, index, params) for index, wall in enumerate(walls))
+    candidates = [check for check in checks if check.matched]
+    if len(candidates) == 1:
+        return MatchResult(MATCHED, vector, checks, candidates[0].wall, candidates[0].map_index)
+    return MatchResult(AMBIGUOUS if candidates else NO_MATCH, vector, checks)

@@ -1,0 +1,1138 @@
+"""Beom & Cho (1995): pose from one rotating sonar and two passive cylindrical beacons.
+
+The chain of the paper, section by section:
+
+* section II.A, eq. (1): range from round-trip time of flight, and the speed-of-sound
+  self-calibration against a reflector at the known distance ``d_c = 0.515 m``;
+* section III.A, eqs (3)-(5): regions of constant distance (RCDs) in a pan;
+* section III.B: the angular-extent filter ``18.0 deg <= eta <= 26.0 deg``;
+* section III.C, eq. (6): the symmetry measure ``gamma`` and the filter ``gamma < gamma_T``;
+* section III.D, eq. (7): the pair of RCDs whose implied beacon distance is nearest the known
+  one (within 0.04 m), with the large/small assignment by angular extent;
+* section IV, eqs (8)-(15): the two-circle intersection, the root chosen by the sign rule, and
+  the heading.
+
+Readings chosen where the text leaves room (each is restated where it is implemented):
+
+* An RCD is a maximal run of at least two consecutive finite samples whose neighbouring ranges
+  differ by less than ``eps`` (eqs (3)-(5)); a NaN (dropout) or the end of a partial pan breaks
+  a run; a full turn wraps across +-180 deg.
+* ``eta = beta_e - beta_s`` with ``beta_s``, ``beta_e`` the angles of the first and last samples
+  of the RCD, no increment added (the paper's own definition). An RCD of ``N`` samples at
+  increment ``dphi`` has ``eta = (N - 1) dphi``; Table II's 22.0 and 24.0 deg are 23 and 25
+  samples at 1 deg, whose centre sample sits exactly at ``beta``.
+* ``delta`` is the range at ``beta`` ("the range value along the angle beta"): the centre
+  sample when ``N`` is odd, the mean of the two central samples when ``N`` is even. The centre
+  is the sample least bent by the threshold delay that lengthens ranges at an RCD's edges.
+* Eq. (11) as printed, ``x_R = y_R tan(psi) + L``, has a sign slip: subtracting eq. (9) from
+  eq. (8) gives the radical axis ``x_R = L - y_R tan(psi)``, and eqs (10) and (12) are the
+  quadratic obtained with this minus sign. The printed plus sign yields points that lie on
+  neither circle (8.9 mm off the small-beacon circle for Table II), so the minus sign is used.
+* Eq. (10)'s ``+-``: the root whose ``delta-phi`` (eqs (13)-(14)) has the sign of
+  ``delta-beta = beta_S - beta_L`` (both wrapped to (-pi, pi]); the ``tan^-1`` of eqs (13)-(15)
+  is the four-quadrant ``atan2``.
+* ``D < 0`` (eq. (12)) gives the status ``"no_intersection"``, never a NaN.
+
+Poses: :func:`localize_rcds` returns the pose of the sensor frame {P} on the pan axis (where
+ranges are measured from) with the heading of the robot frame {R} (pan angles are relative to
+the robot's x-axis); :func:`localize_scan` moves that to the robot centre using the sensor
+offset of the scenario.
+
+Beside the paper's solution, ``method="least_squares"`` refines it with a weighted
+Gauss-Newton fit over both beacons' ranges and bearings
+(:mod:`sonar_gym.localization.beom_cho_refine`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.localization.beom_cho_refine import central_range_estimate, refine_two_beacon_pose
+from sonar_gym.localization.result import OK, Localization
+from sonar_gym.pose import Pose, angle_difference, wrap_angle
+from sonar_gym.sonar.scan import Scan
+
+__all__ = [
+    "METHODS",
+    "RCD",
+    "BeaconLike",
+    "BeaconLocalization",
+    "BeomChoParameters",
+    "RobotLike",
+    "ScenarioLike",
+    "TwoCircleSolution",
+    "ASSIGNMENTS",
+    "EXTRACTIONS",
+    "assign_large_and_small",
+    "assigned_pair_distance_error",
+    "extract_rcds",
+    "filter_beacon_candidates",
+    "heading_from_large_beacon",
+    "localize_rcds",
+    "localize_scan",
+    "localize_scans",
+    "make_rcd",
+    "pair_distance_error",
+    "range_from_tof",
+    "solve_two_circles",
+    "speed_of_sound_from_reflector",
+    "symmetry_measure",
+]
+
+METHODS = ("paper", "least_squares")
+"""Values of the ``method`` argument: the paper's closed form, or its least-squares refinement."""
+ASSIGNMENTS = ("extent", "best_fit")
+"""Values of :attr:`BeomChoParameters.assignment`: the paper's rule, or both tried."""
+EXTRACTIONS = ("paper", "occlusion_aware")
+"""Values of :attr:`BeomChoParameters.extraction`: the paper's RCDs only, or a second try with
+beacons rebuilt from RCDs that nearer echoes cut (:mod:`sonar_gym.localization.beom_cho_occlusion`)."""
+
+SMALL_BEACON_NAME = "small_beacon"
+LARGE_BEACON_NAME = "large_beacon"
+
+REFLECTOR_DISTANCE_M = 0.515
+"""``d_c`` of section II.A: distance from the rotating sonar to the calibration reflector."""
+
+MIN_RCD_SAMPLES = 2
+"""An RCD needs at least two samples (one pair of neighbours closer than ``eps``)."""
+
+_EXTENT_TOLERANCE_RAD = 1e-9
+"""Slack on the angular-extent bounds and on "equal extents", so that an extent of exactly
+18 or 26 increments survives the rounding of angle differences."""
+
+_PAPER_FORMULA_MIN_COS_PSI = 0.05
+"""Eqs (10)-(12) divide by ``x_L - x_S`` and lose about ``2 log10|tan psi|`` significant digits;
+when ``|x_L - x_S| < 0.05 d_0`` (the line of centres within 2.9 deg of the y-axis) the same two
+intersection points are computed with the rotation-invariant construction instead."""
+
+
+# --------------------------------------------------------------------------------------------
+# Argument checks
+# --------------------------------------------------------------------------------------------
+
+
+def _require_finite(name: str, value: float) -> None:
+    if not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+
+
+def _require_positive(name: str, value: float) -> None:
+    _require_finite(name, value)
+    if value <= 0.0:
+        raise ValueError(f"{name} must be > 0, got {value!r}")
+
+
+def _require_non_negative(name: str, value: float) -> None:
+    _require_finite(name, value)
+    if value < 0.0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+
+
+def _point(name: str, value: tuple[float, float] | npt.ArrayLike) -> tuple[float, float]:
+    array = np.asarray(value, dtype=np.float64)
+    if array.shape != (2,) or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
+    return float(array[0]), float(array[1])
+
+
+# --------------------------------------------------------------------------------------------
+# Parameters and the RCD feature
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BeomChoParameters:
+    """Parameters of the method; defaults are the paper's (Table I and section III).
+
+    Attributes:
+        eps_m: ``epsilon`` of eqs (3)-(5), metres: neighbouring ranges closer than this belong
+            to one RCD (Table I: 0.02 m).
+        eta_min_rad, eta_max_rad: angular-extent window of section III.B, radians
+            (18.0 deg and 26.0 deg), bounds included.
+        gamma_threshold_m: ``gamma_T`` of section III.C, metres; an RCD passes when
+            ``gamma < gamma_T`` (Table I: 0.005).
+        distance_tolerance_m: largest accepted ``Delta d_0`` of eq. (7), metres (0.04 m).
+        r_min_m, r_max_m: sensing range of the sensor, metres (Table I: 0.3 m and 4.0 m).
+            Readings outside it are dropouts, and an RCD whose ``delta`` lies outside it is not
+            a beacon candidate.
+        range_sigma_m: standard deviation of one range sample, metres; weights the
+            least-squares refinement only.
+        bearing_sigma_rad: standard deviation of an RCD's centre angle ``beta``, radians;
+            weights the least-squares refinement only.
+        assignment: which RCD of a pair is the large beacon. ``"extent"`` is the paper's rule
+            (section III.D: the larger ``eta``; on a tie the larger ``delta``). ``"best_fit"``
+            (not in the paper) tries both assignments in eq. (7) and keeps the one with the
+            smaller error. It helps a sensor whose extents do not tell the beacons apart
+            (an ideal piston at a fixed threshold, where range changes the extent as much as
+            diameter does); with a sensor like the Polaroid preset, whose extents grow with
+            diameter and not with range (Fig. 4), it swaps the beacons more often than the
+            paper's rule does.
+        extraction: ``"paper"`` (eqs (3)-(5) only) or ``"occlusion_aware"`` (not in the paper):
+            when the paper's RCDs give no pair, try again with RCDs split where another object
+            takes over and beacons rebuilt from RCDs a nearer echo cut short
+            (:mod:`sonar_gym.localization.beom_cho_occlusion`).
+        expected_extents_rad: angular extents of the small and the large beacon's full RCDs,
+            radians (Table II: 22 and 24 deg); used by ``"occlusion_aware"`` only.
+        min_visible_extent_rad: the smallest visible part of a cut RCD that is rebuilt,
+            radians (5 deg: five samples at the paper's 1 deg increment); ``"occlusion_aware"``
+            only.
+        rebuilt_agreement_m: with ``"occlusion_aware"``, the retry gives a pose only if every
+            beacon pair within eq. (7)'s tolerance puts the sensor within this many metres of
+            the best one (a rebuilt RCD does not tell which beacon it was, so swapped pairs
+            often pass eq. (7) too); ``None`` keeps the best pair regardless. On 1000 lab
+            poses at 20 deg C, 0.1 m takes the retry's gain from +9.2 to +6.5 points of success
+            and the poses it adds off by more than 10 cm from 1.3 % to 0.5 % of all poses.
+    """
+
+    eps_m: float = 0.02
+    eta_min_rad: float = math.radians(18.0)
+    eta_max_rad: float = math.radians(26.0)
+    gamma_threshold_m: float = 0.005
+    distance_tolerance_m: float = 0.04
+    r_min_m: float = 0.3
+    r_max_m: float = 4.0
+    range_sigma_m: float = 0.003
+    bearing_sigma_rad: float = math.radians(0.5)
+    assignment: str = "extent"
+    extraction: str = "paper"
+    expected_extents_rad: tuple[float, float] = (math.radians(22.0), math.radians(24.0))
+    min_visible_extent_rad: float = math.radians(5.0)
+    rebuilt_agreement_m: float | None = 0.1
+
+    def __post_init__(self) -> None:
+        if self.assignment not in ASSIGNMENTS:
+            raise ValueError(
+                f"BeomChoParameters.assignment must be one of {ASSIGNMENTS}; got {self.assignment!r}"
+            )
+        if self.extraction not in EXTRACTIONS:
+            raise ValueError(
+                f"BeomChoParameters.extraction must be one of {EXTRACTIONS}; got {self.extraction!r}"
+            )
+        extents = self.expected_extents_rad
+        if (
+            not isinstance(extents, tuple)
+            or len(extents) != 2
+            or not all(isinstance(e, (int, float)) and 0.0 < e < math.pi for e in extents)
+        ):
+            raise ValueError(
+                "BeomChoParameters.expected_extents_rad must be (small, large) extents in "
+                f"(0, pi) radians; got {extents!r}"
+            )
+        for name in (
+            "eps_m",
+            "eta_max_rad",
+            "gamma_threshold_m",
+            "distance_tolerance_m",
+            "r_max_m",
+            "range_sigma_m",
+            "bearing_sigma_rad",
+        ):
+            _require_positive(f"BeomChoParameters.{name}", getattr(self, name))
+        if self.rebuilt_agreement_m is not None:
+            _require_positive("BeomChoParameters.rebuilt_agreement_m", self.rebuilt_agreement_m)
+        for name in ("eta_min_rad", "r_min_m", "min_visible_extent_rad"):
+            _require_non_negative(f"BeomChoParameters.{name}", getattr(self, name))
+        if self.eta_min_rad > self.eta_max_rad:
+            raise ValueError(
+                "BeomChoParameters.eta_min_rad must not exceed eta_max_rad "
+                f"(got {self.eta_min_rad!r} > {self.eta_max_rad!r})"
+            )
+        if self.r_min_m >= self.r_max_m:
+            raise ValueError(
+                "BeomChoParameters.r_min_m must be below r_max_m "
+                f"(got {self.r_min_m!r} >= {self.r_max_m!r})"
+            )
+
+
+@dataclass(frozen=True)
+class RCD:
+    """A region of constant distance: the geometric parameter set ``chi = {delta, beta, eta}``
+    of section III.A plus the symmetry measure of eq. (6).
+
+    Attributes:
+        delta: range of the RCD in metres, the range at ``beta`` (the centre sample, or the
+            mean of the two central samples when the RCD has an even number of samples).
+        beta: centre angle ``(beta_s + beta_e) / 2`` in radians in the robot frame {R},
+            wrapped to (-pi, pi].
+        eta: angular extent ``beta_e - beta_s`` in radians, ``beta_s`` and ``beta_e`` being the
+            angles of the first and last samples.
+        gamma: symmetry measure of eq. (6), metres.
+        start_index, end_index: indices into the scan arrays of the first and last samples;
+            on an RCD that wraps across +-180 deg, ``start_index > end_index``. ``-1`` for an
+            RCD not taken from a scan (e.g. typed in from Table II).
+        indices: every index the RCD spans, in angular order (empty when not from a scan).
+        sample_ranges: the ranges of those samples in metres, same order (empty when not from
+            a scan). Used by the least-squares refinement; the paper's method needs only
+            ``delta``.
+        role: ``None`` for an RCD seen in a pan, whose beacon section III.D assigns by
+            extent; ``"small_beacon"`` or ``"large_beacon"`` for an RCD rebuilt as that beacon
+            by the occlusion-aware extraction (not in the paper), which pairs only in that role.
+    """
+
+    delta: float
+    beta: float
+    eta: float
+    gamma: float = 0.0
+    start_index: int = -1
+    end_index: int = -1
+    indices: tuple[int, ...] = ()
+    sample_ranges: tuple[float, ...] = ()
+    role: str | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("delta", "beta", "eta", "gamma"):
+            value = float(getattr(self, name))
+            if not math.isfinite(value):
+                raise ValueError(f"RCD.{name} must be finite, got {value!r}")
+            object.__setattr__(self, name, value)
+        for name in ("delta", "eta", "gamma"):
+            _require_non_negative(f"RCD.{name}", getattr(self, name))
+        object.__setattr__(self, "beta", wrap_angle(self.beta))
+        object.__setattr__(self, "indices", tuple(int(i) for i in self.indices))
+        object.__setattr__(self, "sample_ranges", tuple(float(r) for r in self.sample_ranges))
+        if self.role not in (None, SMALL_BEACON_NAME, LARGE_BEACON_NAME):
+            raise ValueError(
+                f"RCD.role must be None, {SMALL_BEACON_NAME!r} or {LARGE_BEACON_NAME!r}; got {self.role!r}"
+            )
+        if self.sample_ranges and len(self.sample_ranges) != len(self.indices):
+            raise ValueError(
+                "RCD.sample_ranges must have one range per entry of RCD.indices "
+                f"(got {len(self.sample_ranges)} and {len(self.indices)})"
+            )
+
+    @classmethod
+    def from_degrees(
+        cls, delta_m: float, beta_deg: float, eta_deg: float, gamma_m: float = 0.0
+    ) -> RCD:
+        """Build an RCD from a row as the paper prints it (Table II: m, deg, deg, m)."""
+        return cls(
+            delta=delta_m,
+            beta=math.radians(beta_deg),
+            eta=math.radians(eta_deg),
+            gamma=gamma_m,
+        )
+
+
+# --------------------------------------------------------------------------------------------
+# Section II.A: time of flight and speed-of-sound self-calibration
+# --------------------------------------------------------------------------------------------
+
+
+def range_from_tof(tof_s: float, speed_of_sound_mps: float) -> float:
+    """Eq. (1): range ``delta = v_s t_0 / 2`` in metres from the round-trip time of flight.
+
+    Args:
+        tof_s: round-trip time of flight ``t_0``, seconds, > 0.
+        speed_of_sound_mps: ``v_s``, metres per second, > 0.
+    """
+    _require_positive("tof_s", tof_s)
+    _require_positive("speed_of_sound_mps", speed_of_sound_mps)
+    return float(speed_of_sound_mps) * float(tof_s) / 2.0
+
+
+def speed_of_sound_from_reflector(
+    round_trip_tof_s: float, reflector_distance_m: float = REFLECTOR_DISTANCE_M
+) -> float:
+    """Section II.A self-calibration: ``v_s = 2 d_c / t_0`` (eq. (1) solved for ``v_s``), m/s.
+
+    The sonar, tilted to 53.1 deg, pings the reflector on the robot's front face at the known
+    distance ``d_c``; the measured round-trip time gives the current speed of sound without a
+    temperature or humidity sensor.
+
+    Args:
+        round_trip_tof_s: measured round-trip time of flight to the reflector, seconds, > 0.
+        reflector_distance_m: ``d_c``, metres, > 0 (the paper's 0.515 m by default).
+    """
+    _require_positive("round_trip_tof_s", round_trip_tof_s)
+    _require_positive("reflector_distance_m", reflector_distance_m)
+    return 2.0 * float(reflector_distance_m) / float(round_trip_tof_s)
+
+
+# --------------------------------------------------------------------------------------------
+# Section III.A: RCD extraction, eqs (3)-(5); section III.C: symmetry, eq. (6)
+# --------------------------------------------------------------------------------------------
+
+
+def extract_rcds(angles: npt.ArrayLike, ranges: npt.ArrayLike, eps: float = 0.02) -> list[RCD]:
+    """All RCDs of a pan, eqs (3)-(5), each with its symmetry measure, eq. (6).
+
+    A sample starts an RCD when it differs from its predecessor by at least ``eps`` and from
+    its successor by less (eq. (3)); it ends one in the mirrored case (eq. (4)); inside, both
+    neighbours are closer than ``eps`` (eq. (5)). So an RCD is a maximal run of at least
+    :data:`MIN_RCD_SAMPLES` (two) consecutive samples whose neighbouring ranges differ by less
+    than ``eps``. A single isolated sample is no RCD.
+
+    A NaN range (dropout) breaks an RCD. When the angles cover a full turn (their span plus
+    one increment is 2 pi) the sample after the last is the first, and an RCD may wrap across
+    +-180 deg (then ``start_index > end_index``); otherwise the ends of the pan break RCDs.
+    If every neighbouring pair of a full turn is close, the whole pan is one RCD, not wrapped.
+
+    Args:
+        angles: pan angles in radians in the robot frame {R}, one-dimensional, equally spaced
+            and strictly ascending.
+        ranges: ranges in metres, same length; NaN for dropouts.
+        eps: ``epsilon`` of eqs (3)-(5), metres, > 0 (Table I: 0.02 m).
+
+    Returns:
+        The RCDs in the order of their first sample in the arrays (a wrapped RCD comes last).
+    """
+    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges)
+    _require_positive("eps", eps)
+    sample_count = len(angles_rad)
+    if sample_count < MIN_RCD_SAMPLES:
+        return []
+    increment_rad = (angles_rad[-1] - angles_rad[0]) / (sample_count - 1)
+
+    finite = np.isfinite(ranges_m)
+    with np.errstate(invalid="ignore"):
+        close_to_next = finite[:-1] & finite[1:] & (np.abs(np.diff(ranges_m)) < eps)
+    if not _covers_full_turn(angles_rad, increment_rad):
+        runs = _runs_of_links(close_to_next)
+        return [make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
+
+    wrap_link = bool(finite[-1] and finite[0] and abs(ranges_m[0] - ranges_m[-1]) < eps)
+    links = np.append(close_to_next, wrap_link)
+    if links.all():
+        return [make_rcd(angles_rad, ranges_m, np.arange(sample_count))]
+    first_break = int(np.flatnonzero(~links)[0])
+    order = np.roll(np.arange(sample_count), -(first_break + 1))
+    rotated_links = np.roll(links, -(first_break + 1))[:-1]
+    rcds = [
+        make_rcd(angles_rad, ranges_m, order[a : b + 1]) for a, b in _runs_of_links(rotated_links)
+    ]
+    return sorted(rcds, key=lambda rcd: (rcd.start_index > rcd.end_index, rcd.start_index))
+
+
+def symmetry_measure(
+    angles: npt.ArrayLike, ranges: npt.ArrayLike, rcd_indices: Sequence[int] | npt.ArrayLike
+) -> float:
+    """Eq. (6): ``gamma = (1/M) sum_{i=1..M} |delta(beta + i eta/2M) - delta(beta - i eta/2M)|``.
+
+    ``M = INT(N/2)`` with ``N`` the number of samples of the RCD. With ``eta`` measured between
+    the first and last samples, an RCD of odd ``N`` has its samples exactly at
+    ``beta +- i eta / (2M)``, so eq. (6) pairs samples symmetric about the centre. For even
+    ``N`` those angles fall between samples and the ranges there are interpolated linearly
+    (the outermost pair, ``i = M``, is still the first and last sample).
+
+    Args:
+        angles: pan angles in radians, as for :func:`extract_rcds`.
+        ranges: ranges in metres, same length.
+        rcd_indices: indices of the RCD's samples in angular order (may wrap across +-180 deg),
+            at least two, with finite ranges.
+
+    Returns:
+        ``gamma`` in metres; 0 for a profile symmetric about ``beta``.
+    """
+    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges)
+    indices = np.asarray(rcd_indices, dtype=np.int64).reshape(-1)
+    if len(indices) < MIN_RCD_SAMPLES:
+        raise ValueError(
+            f"rcd_indices must name at least {MIN_RCD_SAMPLES} samples, got {len(indices)}"
+        )
+    if indices.min() < 0 or indices.max() >= len(angles_rad):
+        raise ValueError(f"rcd_indices must lie in [0, {len(angles_rad) - 1}]")
+    rcd_ranges = ranges_m[indices]
+    if not np.all(np.isfinite(rcd_ranges)):
+        raise ValueError("ranges at rcd_indices must be finite (an RCD holds no dropout)")
+    rcd_angles = np.unwrap(angles_rad[indices])
+    if np.any(np.diff(rcd_angles) <= 0.0):
+        raise ValueError("rcd_indices must be in ascending angular order")
+    beta = 0.5 * (rcd_angles[0] + rcd_angles[-1])
+    eta = rcd_angles[-1] - rcd_angles[0]
+    half_count = len(indices) // 2
+    offsets = np.arange(1, half_count + 1) * eta / (2 * half_count)
+    above = np.interp(beta + offsets, rcd_angles, rcd_ranges)
+    below = np.interp(beta - offsets, rcd_angles, rcd_ranges)
+    return float(np.mean(np.abs(above - below)))
+
+
+def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """``(first, last)`` sample positions of each maximal run of true links.
+
+    ``links[k]`` says whether samples ``k`` and ``k + 1`` are close; a run of links
+    ``k0..k1`` makes the RCD of samples ``k0..k1 + 1``.
+    """
+    padded = np.concatenate(([False], links, [False])).astype(np.int8)
+    edges = np.diff(padded)
+    starts = np.flatnonzero(edges == 1)
+    stops = np.flatnonzero(edges == -1)
+    return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+
+
+def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:
+    """The parameter set of the RCD made of ``indices`` (angular order), section III.A.
+
+    ``angles_rad`` and ``ranges_m`` are the whole pan (radians in {R}, metres); ``indices``
+    may wrap across +-180 deg on a full turn.
+    """
+    start, end = int(indices[0]), int(indices[-1])
+    beta_start = angles_rad[start]
+    beta_end = angles_rad[end] + (2.0 * math.pi if end < start else 0.0)
+    count = len(indices)
+    if count % 2 == 1:
+        delta = float(ranges_m[indices[count // 2]])
+    else:
+        delta = float(0.5 * (ranges_m[indices[count // 2 - 1]] + ranges_m[indices[count // 2]]))
+    return RCD(
+        delta=delta,
+        beta=0.5 * (beta_start + beta_end),
+        eta=float(beta_end - beta_start),
+        gamma=symmetry_measure(angles_rad, ranges_m, indices),
+        start_index=start,
+        end_index=end,
+        indices=tuple(int(i) for i in indices),
+        sample_ranges=tuple(float(r) for r in ranges_m[indices]),
+    )
+
+
+def _covers_full_turn(angles_rad: np.ndarray, increment_rad: float) -> bool:
+    """Whether the pan is a full turn: span plus one increment equals 2 pi (to 1e-3 step)."""
+    span_rad = angles_rad[-1] - angles_rad[0]
+    return bool(abs(span_rad + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad)
+
+
+def _validated_scan_arrays(
+    angles: npt.ArrayLike, ranges: npt.ArrayLike
+) -> tuple[np.ndarray, np.ndarray]:
+    angles_rad = np.asarray(angles, dtype=np.float64)
+    ranges_m = np.asarray(ranges, dtype=np.float64)
+    if angles_rad.ndim != 1:
+        raise ValueError(f"angles must be one-dimensional, got shape {angles_rad.shape}")
+    if ranges_m.shape != angles_rad.shape:
+        raise ValueError(
+            f"ranges must have the shape of angles {angles_rad.shape}, got {ranges_m.shape}"
+        )
+    if not np.all(np.isfinite(angles_rad)):
+        raise ValueError("angles must be finite")
+    if len(angles_rad) >= 2:
+        steps = np.diff(angles_rad)
+        increment = (angles_rad[-1] - angles_rad[0]) / (len(angles_rad) - 1)
+        if increment <= 0.0 or np.any(np.abs(steps - increment) > 1e-4 * increment):
+            raise ValueError("angles must be strictly ascending and equally spaced")
+        if angles_rad[-1] - angles_rad[0] >= 2.0 * math.pi:
+            raise ValueError("angles must span less than a full turn (2 pi)")
+    if np.any(ranges_m[np.isfinite(ranges_m)] < 0.0):
+        raise ValueError("ranges must be non-negative or NaN")
+    return angles_rad, ranges_m
+
+
+# --------------------------------------------------------------------------------------------
+# Sections III.B-III.D: filters and pair selection, eq. (7)
+# --------------------------------------------------------------------------------------------
+
+
+def filter_beacon_candidates(
+    rcds: Sequence[RCD], params: BeomChoParameters = BeomChoParameters()
+) -> tuple[RCD, ...]:
+    """The RCDs that may be beacons: angular extent in ``[eta_min, eta_max]`` (section III.B),
+    ``gamma < gamma_T`` (section III.C, eq. (6)) and ``r_min <= delta <= r_max`` (Table I)."""
+    return tuple(
+        rcd
+        for rcd in rcds
+        if params.eta_min_rad - _EXTENT_TOLERANCE_RAD
+        <= rcd.eta
+        <= params.eta_max_rad + _EXTENT_TOLERANCE_RAD
+        and rcd.gamma < params.gamma_threshold_m
+        and params.r_min_m <= rcd.delta <= params.r_max_m
+    )
+
+
+def assign_large_and_small(rcd_a: RCD, rcd_b: RCD) -> tuple[RCD, RCD]:
+    """Section III.D: ``(small, large)`` for a pair of RCDs.
+
+    The RCD of larger angular extent ``eta`` is the large beacon's; on equal extents (to
+    1e-9 rad) the one of larger range ``delta``. If both are equal too, ``rcd_b`` is taken
+    as the large one.
+    """
+    if abs(rcd_a.eta - rcd_b.eta) > _EXTENT_TOLERANCE_RAD:
+        return (rcd_b, rcd_a) if rcd_a.eta > rcd_b.eta else (rcd_a, rcd_b)
+    return (rcd_b, rcd_a) if rcd_a.delta > rcd_b.delta else (rcd_a, rcd_b)
+
+
+def _role_assignment(rcd_a: RCD, rcd_b: RCD) -> list[tuple[RCD, RCD]]:
+    """``[(small, large)]`` for a pair in which an RCD has a fixed role; ``[]`` if they clash."""
+    for small, large in ((rcd_a, rcd_b), (rcd_b, rcd_a)):
+        if small.role in (None, SMALL_BEACON_NAME) and large.role in (None, LARGE_BEACON_NAME):
+            return [(small, large)]
+    return []
+
+
+def pair_distance_error(
+    rcd_a: RCD,
+    rcd_b: RCD,
+    small_radius: float,
+    large_radius: float,
+    beacon_distance: float,
+) -> float:
+    """Eq. (7): ``|d_0 - sqrt(d_S^2 + d_L^2 - 2 d_L d_S cos(phi_S - phi_L))|``, metres.
+
+    The pair is assigned with :func:`assign_large_and_small`; ``d_S = delta_S + r_S`` and
+    ``d_L = delta_L + r_L`` are the distances to the beacon centres and ``phi = beta``.
+
+    On the rounded Table II this gives 2.049 m for RCDs (1, 4) and 0.253 m for (2, 4), where
+    the paper prints 2.049 m and 0.257 m, and 0.005 m for (1, 2), where it prints 0.031 m
+    (0.032 m is what (1, 2) gives with the radii left out); the choice of (1, 2) is the same.
+
+    Args:
+        rcd_a, rcd_b: the two RCDs, in any order.
+        small_radius, large_radius: beacon radii ``r_S``, ``r_L``, metres, > 0.
+        beacon_distance: known distance ``d_0`` between the beacon centres, metres, > 0.
+    """
+    _require_positive("small_radius", small_radius)
+    _require_positive("large_radius", large_radius)
+    _require_positive("beacon_distance", beacon_distance)
+    small, large = assign_large_and_small(rcd_a, rcd_b)
+    return assigned_pair_distance_error(small, large, small_radius, large_radius, beacon_distance)
+
+
+def assigned_pair_distance_error(
+    small: RCD, large: RCD, small_radius: float, large_radius: float, beacon_distance: float
+) -> float:
+    """Eq. (7) for a pair whose small and large beacon are already assigned, metres."""
+    small_distance = small.delta + small_radius
+    large_distance = large.delta + large_radius
+    squared = (
+        small_distance**2
+        + large_distance**2
+        - 2.0 * large_distance * small_distance * math.cos(small.beta - large.beta)
+    )
+    return abs(beacon_distance - math.sqrt(max(squared, 0.0)))
+
+
+# --------------------------------------------------------------------------------------------
+# Section IV: two-circle solution, eqs (8)-(14), and heading, eq. (15)
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class TwoCircleSolution:
+    """Outcome of eqs (8)-(14).
+
+    Attributes:
+        status: ``"ok"`` or ``"no_intersection"`` (``D < 0``).
+        position: the intersection chosen by the sign rule, ``(x, y)`` metres in {W};
+            ``None`` unless ok.
+        other_position: the mirror intersection the sign rule rejected; ``None`` unless ok.
+        discriminant: ``D`` of eq. (12), m^2. When the line of centres is nearly parallel to
+            the y-axis and the rotation-invariant construction is used instead, this is the
+            squared half-chord ``h^2``, which has the sign of ``D`` (``D = h^2 (1 + tan^2 psi)``).
+        used_paper_formula: whether eqs (10)-(12) were used (False on the fallback).
+    """
+
+    status: str
+    position: tuple[float, float] | None
+    other_position: tuple[float, float] | None
+    discriminant: float
+    used_paper_formula: bool
+
+
+def solve_two_circles(
+    small_center: tuple[float, float] | npt.ArrayLike,
+    small_distance: float,
+    large_center: tuple[float, float] | npt.ArrayLike,
+    large_distance: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14): the sensor position as an intersection of two circles.
+
+    Eqs (8)-(9) are the circles of radius ``d_L`` about ``(x_L, y_L)`` and ``d_S`` about
+    ``(x_S, y_S)``. With ``tan psi = (y_L - y_S)/(x_L - x_S)`` and
+    ``L = (d_S^2 - d_L^2 + x_L^2 - x_S^2 + y_L^2 - y_S^2) / (2 (x_L - x_S))``:
+    ``y_R = (-(x_L tan psi - L tan psi - y_L) +- sqrt(D)) / (1 + tan^2 psi)`` (eq. (10)),
+    ``x_R = L - y_R tan psi`` (eq. (11), with the sign the subtraction of eq. (9) from
+    eq. (8) gives; the text prints ``+``), and ``D`` of eq. (12).
+
+    The root is chosen by the sign rule: ``delta-phi = phi_S - phi_L`` of eqs (13)-(14),
+    wrapped to (-pi, pi], must have the sign of the measured ``delta-beta``. The two roots
+    are mirror images across the line of centres, so their ``delta-phi`` are opposite; when
+    the sign does not decide (``delta-beta`` or ``delta-phi`` zero or pi) the root with
+    ``delta-phi`` nearer ``delta-beta`` is taken.
+
+    When ``|x_L - x_S| < 0.05 d_0`` eqs (10)-(12) are ill-conditioned (they divide by
+    ``x_L - x_S``) and the same intersections are computed rotation-invariantly: the foot
+    ``a = (d_L^2 - d_S^2 + d_0^2) / (2 d_0)`` along the line of centres from the large beacon
+    and the half-chord ``h = sqrt(d_L^2 - a^2)`` across it.
+
+    Args:
+        small_center, large_center: beacon centres ``(x, y)``, metres, in {W}; distinct.
+        small_distance, large_distance: ``d_S = delta_S + r_S`` and ``d_L = delta_L + r_L``,
+            metres, > 0.
+        bearing_difference: ``delta-beta = beta_S - beta_L``, radians.
+    """
+    small_xy = _point("small_center", small_center)
+    large_xy = _point("large_center", large_center)
+    _require_positive("small_distance", small_distance)
+    _require_positive("large_distance", large_distance)
+    _require_finite("bearing_difference", bearing_difference)
+    beacon_distance = math.dist(small_xy, large_xy)
+    if beacon_distance <= 0.0:
+        raise ValueError("small_center and large_center must be distinct points")
+
+    x_s, y_s = small_xy
+    x_l, y_l = large_xy
+    d_s, d_l = float(small_distance), float(large_distance)
+    if abs(x_l - x_s) >= _PAPER_FORMULA_MIN_COS_PSI * beacon_distance:
+        tan_psi = (y_l - y_s) / (x_l - x_s)
+        offset_l = (d_s**2 - d_l**2 + x_l**2 - x_s**2 + y_l**2 - y_s**2) / (2.0 * (x_l - x_s))
+        half_b = x_l * tan_psi - offset_l * tan_psi - y_l
+        discriminant = half_b**2 - (tan_psi**2 + 1.0) * ((x_l - offset_l) ** 2 + y_l**2 - d_l**2)
+        if discriminant < 0.0:
+            return TwoCircleSolution("no_intersection", None, None, discriminant, True)
+        root = math.sqrt(discriminant)
+        candidates = []
+        for sign in (1.0, -1.0):
+            y_r = (-half_b + sign * root) / (1.0 + tan_psi**2)
+            candidates.append((offset_l - y_r * tan_psi, y_r))
+        used_paper_formula = True
+    else:
+        unit = ((x_s - x_l) / beacon_distance, (y_s - y_l) / beacon_distance)
+        along = (d_l**2 - d_s**2 + beacon_distance**2) / (2.0 * beacon_distance)
+        discriminant = d_l**2 - along**2
+        if discriminant < 0.0:
+            return TwoCircleSolution("no_intersection", None, None, discriminant, False)
+        half_chord = math.sqrt(discriminant)
+        foot = (x_l + along * unit[0], y_l + along * unit[1])
+        candidates = [
+            (foot[0] - sign * half_chord * unit[1], foot[1] + sign * half_chord * unit[0])
+            for sign in (1.0, -1.0)
+        ]
+        used_paper_formula = False
+
+    measured = wrap_angle(bearing_difference)
+    first, second = candidates
+    delta_phi_first = _bearing_difference_at(first, small_xy, large_xy)
+    delta_phi_second = _bearing_difference_at(second, small_xy, large_xy)
+    first_sign_ok = delta_phi_first * measured > 0.0
+    second_sign_ok = delta_phi_second * measured > 0.0
+    if first_sign_ok != second_sign_ok:
+        choose_first = first_sign_ok
+    else:
+        choose_first = abs(angle_difference(delta_phi_first, measured)) <= abs(
+            angle_difference(delta_phi_second, measured)
+        )
+    chosen, other = (first, second) if choose_first else (second, first)
+    return TwoCircleSolution(OK, chosen, other, discriminant, used_paper_formula)
+
+
+def heading_from_large_beacon(
+    sensor_position: tuple[float, float] | npt.ArrayLike,
+    large_center: tuple[float, float] | npt.ArrayLike,
+    large_bearing: float,
+) -> float:
+    """Eq. (15): ``theta = atan2(y_L - y_R, x_L - x_R) - phi_L``, radians in (-pi, pi].
+
+    ``phi_L`` is the bearing (``beta``) of the large beacon's RCD in the robot frame.
+    """
+    x_r, y_r = _point("sensor_position", sensor_position)
+    x_l, y_l = _point("large_center", large_center)
+    _require_finite("large_bearing", large_bearing)
+    return wrap_angle(math.atan2(y_l - y_r, x_l - x_r) - large_bearing)
+
+
+def _bearing_difference_at(
+    position: tuple[float, float], small_xy: tuple[float, float], large_xy: tuple[float, float]
+) -> float:
+    """``delta-phi = phi_S - phi_L`` of eqs (13)-(14) seen from ``position``, wrapped."""
+    phi_s = math.atan2(small_xy[1] - position[1], small_xy[0] - position[0])
+    phi_l = math.atan2(large_xy[1] - position[1], large_xy[0] - position[0])
+    return angle_difference(phi_s, phi_l)
+
+
+# --------------------------------------------------------------------------------------------
+# The whole method
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BeaconLocalization(Localization):
+    """A :class:`Localization` with what the Beom & Cho chain found on the way.
+
+    Attributes:
+        small_rcd, large_rcd: the chosen pair (section III.D), ``None`` when none was found.
+        pair_error_m: ``Delta d_0`` of eq. (7) for the chosen pair, metres; on
+            ``"no_pair"`` the smallest error over all pairs (``None`` with fewer than two
+            candidates).
+        candidates: the RCDs that passed the angular-extent, symmetry and range filters.
+        discriminant: ``D`` of eq. (12), m^2 (see :class:`TwoCircleSolution`); ``None``
+            before eqs (8)-(12) were reached.
+    """
+
+    small_rcd: RCD | None = None
+    large_rcd: RCD | None = None
+    pair_error_m: float | None = None
+    candidates: tuple[RCD, ...] = ()
+    discriminant: float | None = None
+
+
+def localize_rcds(
+    rcds: Sequence[RCD],
+    small_center: tuple[float, float] | npt.ArrayLike,
+    small_radius: float,
+    large_center: tuple[float, float] | npt.ArrayLike,
+    large_radius: float,
+    distance_tolerance: float | None = None,
+    params: BeomChoParameters = BeomChoParameters(),
+    method: str = "paper",
+    prior: Pose | None = None,
+    prior_gate_m: float = 0.5,
+    agreement_m: float | None = None,
+) -> BeaconLocalization:
+    """Sections III.B-IV: the sensor pose from a pan's RCDs and the two known beacons.
+
+    Steps: the angular-extent, symmetry and range filters (:func:`filter_beacon_candidates`);
+    over all pairs of candidates, eq. (7) with the known ``d_0 = |c_S - c_L|``, keeping the
+    pair of smallest error if it is within the tolerance; eqs (8)-(14) for the position and
+    eq. (15) for the heading. With ``method="least_squares"`` that solution is refined by
+    :func:`sonar_gym.localization.beom_cho_refine.refine_two_beacon_pose` over both beacons'
+    ranges (the mean of each RCD's central samples when they are known) and bearings.
+
+    Args:
+        rcds: RCDs of one pan (:func:`extract_rcds`), unfiltered.
+        small_center, large_center: beacon centres ``(x, y)``, metres, in {W}; distinct.
+        small_radius, large_radius: beacon radii, metres, > 0 (paper: 0.0191 m and 0.07 m).
+        distance_tolerance: allowed ``Delta d_0``, metres, > 0; ``None`` takes
+            ``params.distance_tolerance_m`` (0.04 m).
+        params: filter thresholds and noise levels.
+        method: ``"paper"`` or ``"least_squares"``.
+        prior: an optional estimate of the sensor pose (odometry), {W}. Not in the paper:
+            when given, pairs are tried in order of their eq. (7) error and the first whose
+            solution lies within ``prior_gate_m`` of the prior is kept, so a coincidental
+            pair of walls or corners cannot win against the beacons.
+        prior_gate_m: the gate radius around ``prior``, metres, > 0.
+        agreement_m: not in the paper: when given (metres, > 0), every pair within the
+            tolerance must put the sensor within this distance of the best pair's position;
+            otherwise the pan is ``"ambiguous_pair"`` (no pose) rather than a coin toss
+            between places.
+
+    Returns:
+        Status ``"ok"`` with the pose of the sensor frame {P} (position of the pan axis in
+        {W}, heading of the robot's x-axis), or ``"no_candidates"`` (no RCD passed the
+        filters), ``"no_pair"`` (no pair within the tolerance, or a single candidate),
+        ``"ambiguous_pair"`` (see ``agreement_m``) or ``"no_intersection"`` (``D < 0``).
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    small_xy = _point("small_center", small_center)
+    large_xy = _point("large_center", large_center)
+    _require_positive("small_radius", small_radius)
+    _require_positive("large_radius", large_radius)
+    tolerance_m = params.distance_tolerance_m if distance_tolerance is None else distance_tolerance
+    _require_positive("distance_tolerance", tolerance_m)
+    for position, rcd in enumerate(rcds):
+        if not isinstance(rcd, RCD):
+            message = f"rcds[{position}] must be an RCD, got {type(rcd).__name__}"
+            raise ValueError(message)  # noqa: TRY004 (bad arguments raise ValueError here)
+    beacon_distance = math.dist(small_xy, large_xy)
+    if beacon_distance <= 0.0:
+        raise ValueError("small_center and large_center must be distinct points")
+
+    candidates = filter_beacon_candidates(rcds, params)
+    if not candidates:
+        return BeaconLocalization(
+            "no_candidates",
+            message=f"none of {len(rcds)} RCDs passed the extent, symmetry and range filters",
+        )
+
+    pairs = _ranked_pairs(candidates, params, small_radius, large_radius, beacon_distance)
+    if not pairs or pairs[0][0] > tolerance_m:
+        return BeaconLocalization(
+            "no_pair",
+            message=(
+                "a single candidate RCD"
+                if not pairs
+                else f"smallest beacon-distance error {pairs[0][0]:.4f} m exceeds {tolerance_m} m"
+            ),
+            pair_error_m=None if not pairs else pairs[0][0],
+            candidates=candidates,
+        )
+    if prior is not None:
+        _require_positive("prior_gate_m", prior_gate_m)
+        gated = _first_pair_near_prior(
+            [pair for pair in pairs if pair[0] <= tolerance_m],
+            small_xy, small_radius, large_xy, large_radius, prior, prior_gate_m,
+        )
+        if gated is None:
+            return BeaconLocalization(
+                "no_pair_near_prior",
+                message=f"no beacon pair within tolerance puts the robot within {prior_gate_m} m of the prior",
+                pair_error_m=pairs[0][0],
+                candidates=candidates,
+            )
+        pairs = [gated]
+    pair_error, small_rcd, large_rcd = pairs[0]
+
+    solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, small_rcd, large_rcd)
+    if agreement_m is not None and solution.position is not None:
+        _require_positive("agreement_m", agreement_m)
+        if not _pairs_agree(
+            [pair for pair in pairs[1:] if pair[0] <= tolerance_m],
+            solution.position, small_xy, small_radius, large_xy, large_radius, agreement_m,
+        ):
+            return BeaconLocalization(
+                "ambiguous_pair",
+                message=f"beacon pairs within tolerance disagree by more than {agreement_m} m",
+                pair_error_m=pair_error,
+                candidates=candidates,
+            )
+    found = {
+        "small_rcd": small_rcd,
+        "large_rcd": large_rcd,
+        "pair_error_m": pair_error,
+        "candidates": candidates,
+        "discriminant": solution.discriminant,
+    }
+    if solution.position is None:
+        return BeaconLocalization(
+            "no_intersection",
+            message=f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)",
+            **found,
+        )
+    heading = heading_from_large_beacon(solution.position, large_xy, large_rcd.beta)
+    sensor_pose = Pose(solution.position[0], solution.position[1], heading)
+
+    if method == "least_squares":
+        small_range, small_sigma = central_range_estimate(
+            small_rcd.delta, small_rcd.sample_ranges, params.range_sigma_m
+        )
+        large_range, large_sigma = central_range_estimate(
+            large_rcd.delta, large_rcd.sample_ranges, params.range_sigma_m
+        )
+        sensor_pose = refine_two_beacon_pose(
+            sensor_pose,
+            centers=(small_xy, large_xy),
+            center_distances_m=(small_range + small_radius, large_range + large_radius),
+            range_sigmas_m=(small_sigma, large_sigma),
+            bearings_rad=(small_rcd.beta, large_rcd.beta),
+            bearing_sigma_rad=params.bearing_sigma_rad,
+        )
+    return BeaconLocalization(
+        OK,
+        sensor_pose,
+        small_rcd=small_rcd,
+        large_rcd=large_rcd,
+        pair_error_m=pair_error,
+        candidates=candidates,
+        discriminant=solution.discriminant,
+    )
+
+
+def _ranked_pairs(
+    candidates: Sequence[RCD],
+    params: BeomChoParameters,
+    small_radius: float,
+    large_radius: float,
+    beacon_distance: float,
+) -> list[tuple[float, RCD, RCD]]:
+    """Every assigned pair ``(Delta d_0, small, large)`` of candidates, smallest eq. (7) error first."""
+    pairs: list[tuple[float, RCD, RCD]] = []
+    for rcd_a, rcd_b in itertools.combinations(candidates, 2):
+        if rcd_a.role is not None or rcd_b.role is not None:
+            assignments = _role_assignment(rcd_a, rcd_b)
+        elif params.assignment == "extent":
+            assignments = [assign_large_and_small(rcd_a, rcd_b)]
+        else:
+            assignments = [(rcd_a, rcd_b), (rcd_b, rcd_a)]
+        for small, large in assignments:
+            error = assigned_pair_distance_error(
+                small, large, small_radius, large_radius, beacon_distance
+            )
+            pairs.append((error, small, large))
+    pairs.sort(key=lambda pair: pair[0])
+    return pairs
+
+
+def _solve_pair(
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    small_rcd: RCD,
+    large_rcd: RCD,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14) for an assigned pair of RCDs."""
+    return solve_two_circles(
+        small_xy,
+        small_rcd.delta + small_radius,
+        large_xy,
+        large_rcd.delta + large_radius,
+        angle_difference(small_rcd.beta, large_rcd.beta),
+    )
+
+
+def _pairs_agree(
+    pairs: Sequence[tuple[float, RCD, RCD]],
+    position: tuple[float, float],
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    agreement_m: float,
+) -> bool:
+    """Whether every pair that solves puts the sensor within ``agreement_m`` of ``position``."""
+    for pair in pairs:
+        solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, pair[1], pair[2])
+        if solution.position is not None and math.dist(solution.position, position) > agreement_m:
+            return False
+    return True
+
+
+def _first_pair_near_prior(
+    pairs: Sequence[tuple[float, RCD, RCD]],
+    small_xy: tuple[float, float],
+    small_radius: float,
+    large_xy: tuple[float, float],
+    large_radius: float,
+    prior: Pose,
+    gate_m: float,
+) -> tuple[float, RCD, RCD] | None:
+    """The first pair (in the given order) whose eqs (8)-(14) solution lies near ``prior``."""
+    for pair in pairs:
+        solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, pair[1], pair[2])
+        if solution.position is not None and math.dist(solution.position, (prior.x, prior.y)) <= gate_m:
+            return pair
+    return None
+
+
+class BeaconLike(Protocol):
+    """What :func:`localize_scan` reads of a beacon: centre (x, y) in metres in {W}, radius in m."""
+
+    @property
+    def center(self) -> tuple[float, float]: ...
+
+    @property
+    def radius(self) -> float: ...
+
+
+class RobotLike(Protocol):
+    """What :func:`localize_scan` reads of the robot: the pan axis (x, y) in metres in {R}."""
+
+    @property
+    def sensor_offset(self) -> tuple[float, float]: ...
+
+
+class ScenarioLike(Protocol):
+    """What :func:`localize_scan` reads of a scenario (:mod:`sonar_gym.scenario`)."""
+
+    @property
+    def robot(self) -> RobotLike: ...
+
+    def beacon(self, name: str) -> BeaconLike: ...
+
+
+def localize_scan(
+    scan: Scan,
+    scenario: ScenarioLike,
+    params: BeomChoParameters = BeomChoParameters(),
+    method: str = "paper",
+) -> BeaconLocalization:
+    """The whole chain on one pan: the robot-centre pose in {W}.
+
+    Readings outside ``[r_min, r_max]`` become dropouts; RCDs are extracted with
+    ``params.eps_m`` (eqs (3)-(6)); :func:`localize_rcds` gives the pose of the pan axis; the
+    robot centre is ``p_sensor - R(theta) sensor_offset``.
+
+    Args:
+        scan: the pan; ``scan.angles`` in radians in {R}, ``scan.ranges`` in metres from the pan
+            axis, NaN for dropouts.
+        scenario: provides ``beacon("small_beacon")`` and ``beacon("large_beacon")`` (each with
+            ``center`` (x, y) in metres in {W} and ``radius`` in metres) and
+            ``robot.sensor_offset`` (x, y) in metres in {R}.
+        params: as for :func:`localize_rcds`.
+        method: ``"paper"`` or ``"least_squares"``.
+    """
+    return localize_scans([scan], scenario, params, method)
+
+
+def localize_scans(
+    scans: Sequence[Scan],
+    scenario: ScenarioLike,
+    params: BeomChoParameters = BeomChoParameters(),
+    method: str = "paper",
+    prior: Pose | None = None,
+    prior_gate_m: float = 0.5,
+) -> BeaconLocalization:
+    """:func:`localize_scan` over several pans from one robot pose (e.g. sector pans).
+
+    Each pan must be equally spaced on its own (sectors at different increments are separate
+    pans); RCDs are extracted from each and pooled before the filters and pair selection.
+    Angles may be unwrapped past pi (a sector across the robot's back); RCD bearings are
+    wrapped to (-pi, pi] before they are used. ``prior`` (the robot-centre pose from
+    odometry, {W}) and ``prior_gate_m`` gate the pair choice as in :func:`localize_rcds`;
+    without a prior, and with ``params.extraction="paper"``, this is the paper's method. With
+    ``"occlusion_aware"``, a pan whose RCDs give no pair is tried once more with
+    :func:`sonar_gym.localization.beom_cho_occlusion.occlusion_aware_rcds` (a pose, or
+    ``"ambiguous_pair"`` when its pairs disagree on the place; otherwise the paper's status
+    stands); the paper's answer stands whenever it finds a pair.
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    pans = []
+    for scan in scans:
+        ranges_m = np.asarray(scan.ranges, dtype=np.float64).copy()
+        with np.errstate(invalid="ignore"):
+            ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
+        pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    rcds = [rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)]
+    small = scenario.beacon(SMALL_BEACON_NAME)
+    large = scenario.beacon(LARGE_BEACON_NAME)
+
+    def localize(candidate_rcds: list[RCD], agreement_m: float | None = None) -> BeaconLocalization:
+        return localize_rcds(
+            candidate_rcds,
+            small_center=small.center,
+            small_radius=small.radius,
+            large_center=large.center,
+            large_radius=large.radius,
+            params=params,
+            method=method,
+            prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+            prior_gate_m=prior_gate_m,
+            agreement_m=agreement_m,
+        )
+
+    result = localize(rcds)
+    if params.extraction == "occlusion_aware" and result.status in ("no_candidates", "no_pair"):
+        # Imported here: that module builds on this one's RCD and extraction.
+        from sonar_gym.localization.beom_cho_occlusion import occlusion_aware_rcds
+
+        rebuilt = [
+            rcd
+            for angles, ranges_m in pans
+            for rcd in occlusion_aware_rcds(
+                angles,
+                ranges_m,
+                params.eps_m,
+                params.expected_extents_rad,
+                params.min_visible_extent_rad,
+            )
+        ]
+        second_try = localize(rebuilt, agreement_m=params.rebuilt_agreement_m)
+        if second_try.ok or second_try.status == "ambiguous_pair":
+            result = second_try
+    if result.pose is None:
+        return result
+    offset_x, offset_y = _point("scenario.robot.sensor_offset", scenario.robot.sensor_offset)
+    sensor_pose = result.pose
+    cos_t, sin_t = math.cos(sensor_pose.theta), math.sin(sensor_pose.theta)
+    robot_pose = Pose(
+        sensor_pose.x - (cos_t * offset_x - sin_t * offset_y),
+        sensor_pose.y - (sin_t * offset_x + cos_t * offset_y),
+        sensor_pose.theta,
+    )
+    return BeaconLocalization(
+        OK,
+        robot_pose,
+        result.message,
+        small_rcd=result.small_rcd,
+        large_rcd=result.large_rcd,
+        pair_error_m=result.pair_error_m,
+        candidates=result.candidates,
+        discriminant=result.discriminant,
+    )

@@ -1,0 +1,675 @@
+"""Kim, Lee & Jeong: voting localization on a certainty grid, with odometry and an EKF.
+
+Kim, Lee & Jeong, *Self localization of mobile robot using sonar sensing and map building*.
+This module holds the voting localization of sec. 3.3 and re-exports the rest of the method:
+
+- :mod:`sonar_gym.localization.kim_ekf`: odometry prediction with covariance (sec. 3.1) and
+  the EKF correction (sec. 3.2);
+- :mod:`sonar_gym.localization.kim_grid`: the occupancy / certainty grid (sec. 2.2) and the
+  servo sweeps.
+
+Voting (sec. 3.3). "Apply the end of each vector to an occupied cell; if the vector is
+unobstructed, increase the certainty value (or vote) of the cell at the start of the vector.
+This procedure is repeated for all occupied cells and range vectors." Here, for a candidate
+heading ``psi`` of the robot and a reading whose end point is ``e`` in the robot frame, the
+hypothesis "this reading ended at occupied cell ``c``" puts the robot at ``t = c - R(psi) e``
+and adds a vote to the cell holding ``t`` when the ray from the sensor to ``c`` is unobstructed.
+
+Choices the paper leaves open, and the ones made here:
+
+- *Unobstructed*: no occupied cell (and no point outside the grid) on the ray between the
+  sensor and ``c``, sampled every half cell from ``end_clearance_m`` (one cell by default)
+  before ``c`` back to the sensor. The clearance skips ``c`` itself and the neighbouring cells
+  of the same wall, which a ray meeting a wall obliquely crosses just before its end cell. The
+  test is tabulated once per grid as the free distance behind every occupied cell in
+  ``direction_bins`` directions (1 degree by default), so voting is a table look-up.
+- *Headings*: the paper does not search heading; here the heading of the robot is searched over
+  candidates: given ``heading_candidates``; else the prior heading of ``search_center`` +- the
+  heading window (10 degrees) in steps of ``heading_step_rad`` (1 degree); else the full circle
+  in that step.
+- *Several sweeps* (sec. 3.3: "between two and four sweeps"): each sweep's readings are moved
+  into the robot frame of the FIRST sweep through ``Sweep.odometry`` (dead reckoning), so every
+  reading votes for the pose of the first sweep. That pose is ``VoteLocalization.pose``; the
+  pose of the last sweep, through the same odometry, is ``last_sweep_pose``.
+- *Best cell* ("not always as straightforward as simply choosing the cell with the highest
+  certainty value"): ``selection="smoothed"`` (default) takes the maximum of the vote map
+  smoothed by a 3x3 binomial kernel ``[1 2 1]^T [1 2 1]`` over all candidate headings, so a peak
+  spread over neighbouring cells beats an isolated spike; ``selection="max"`` is the raw
+  maximum, ties broken by the heading with most tied cells and, within it, the tied cell
+  nearest to the centroid of the tied cells. The position is then refined (``refine=
+  "vote_mean"``, default) to the mean of the continuous vote positions inside the 3x3 window
+  around the chosen cell at the chosen heading, or kept at the cell centre (``"cell_center"``,
+  with ``"max"``: the centroid of the tied cells). The heading is the chosen candidate.
+- *Where a vector ends in its cell*: ``anchor="cell_center"`` (default, the paper's reading)
+  applies the end of the vector to the cell centre. A wall lying on a cell edge then shifts the
+  votes of every reading off it by half a cell; ``anchor="obstacle_point"`` (offered beside it)
+  applies it to ``OccupancyGrid.obstacle_points_m``, where the obstacle lies inside the cell.
+- *Resolution*: the end points are known to a cell only, so votes spread by about half a cell
+  along each surface; a heading error ``d`` moves a vote by ``range * d``. With 5 cm cells one
+  90-degree sweep resolves the heading to about 1-2 degrees; several sweeps do better.
+- *Ambiguity* (optional, ``ambiguity_ratio``): when a rival peak farther than
+  ``ambiguity_distance_m`` or ``ambiguity_heading_rad`` from the winner scores at least
+  ``ambiguity_ratio`` times the winner's score, the status is ``"ambiguous"``.
+
+Statuses: ``"ok"``; ``"empty_sweep"`` (no reading with an echo); ``"no_votes"`` (the grid has no
+occupied cell, or no hypothesis was unobstructed inside the grid and search circle);
+``"ambiguous"``.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.localization.kim_ekf import (
+    INTEGRATIONS,
+    Integration,
+    ekf_update,
+    jacobian_state,
+    jacobian_wheels,
+    motion_model,
+    predict,
+    proportional_encoder_noise,
+)
+from sonar_gym.localization.kim_grid import (
+    PAPER_CELL_SIZE_M,
+    Bounds,
+    OccupancyGrid,
+    Sweep,
+    sweep_end_points,
+)
+from sonar_gym.localization.result import OK, Localization
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
+
+__all__ = [
+    "DEFAULT_HEADING_STEP_RAD",
+    "DEFAULT_HEADING_WINDOW_RAD",
+    "INTEGRATIONS",
+    "PAPER_CELL_SIZE_M",
+    "TABLE_1_ESTIMATED_POSITIONS_M",
+    "TABLE_1_TRUE_POSITIONS_M",
+    "Bounds",
+    "Integration",
+    "OccupancyGrid",
+    "Sweep",
+    "VoteLocalization",
+    "ekf_update",
+    "heading_candidates_around",
+    "jacobian_state",
+    "jacobian_wheels",
+    "motion_model",
+    "predict",
+    "proportional_encoder_noise",
+    "sweep_end_points",
+    "vote_localize",
+]
+
+EMPTY_SWEEP = "empty_sweep"
+NO_VOTES = "no_votes"
+AMBIGUOUS = "ambiguous"
+
+TABLE_1_TRUE_POSITIONS_M: FloatArray = (
+    np.array(
+        [
+            [2.50, 10.00],
+            [45.00, 42.50],
+            [22.50, 75.00],
+            [107.50, 82.50],
+            [185.00, 147.50],
+            [192.50, 175.00],
+            [180.00, 190.00],
+        ]
+    )
+    / 100.0
+)
+"""Table 1 of sec. 4.1, true positions ``(x_r, y_r)``: printed in cm (the arena is 2 m), here m."""
+
+TABLE_1_ESTIMATED_POSITIONS_M: FloatArray = (
+    np.array(
+        [
+            [3.02, 10.57],
+            [46.21, 45.41],
+            [23.45, 70.97],
+            [105.13, 84.21],
+            [186.11, 148.46],
+            [194.41, 176.44],
+            [183.01, 193.21],
+        ]
+    )
+    / 100.0
+)
+"""Table 1 of sec. 4.1, the paper's estimates ``(x_e, y_e)`` of the same positions, m."""
+
+DEFAULT_HEADING_STEP_RAD = math.radians(1.0)
+"""Spacing of the candidate headings (1 degree)."""
+
+DEFAULT_HEADING_WINDOW_RAD = math.radians(10.0)
+"""Half-width of the heading window searched around a prior heading (10 degrees)."""
+
+Selection = Literal["smoothed", "max"]
+Refinement = Literal["vote_mean", "cell_center"]
+Anchor = Literal["cell_center", "obstacle_point"]
+_ANCHORS = ("cell_center", "obstacle_point")
+_SELECTIONS = ("smoothed", "max")
+_REFINEMENTS = ("vote_mean", "cell_center")
+_CHUNK_ELEMENTS = 2_000_000
+"""Upper bound on the elements of one vectorised block (keeps memory to tens of MB)."""
+
+
+@dataclass(frozen=True, eq=False)
+class VoteLocalization(Localization):
+    """Outcome of :func:`vote_localize`.
+
+    Attributes:
+        votes: raw vote count (the certainty value of sec. 2.2 / 3.3) of the chosen cell at the
+            chosen heading; 0 when nothing voted.
+        vote_map: ``(nx, ny)`` raw votes at the chosen heading on the grid's cell layout
+            (indexed ``[ix, iy]``), or None when not requested or nothing was voted.
+        heading_rad: the chosen candidate heading of the first sweep's robot frame in {W}
+            (rad); None unless ``status == "ok"``.
+        last_sweep_pose: the pose of the last sweep, ``pose.compose(sweeps[-1].odometry)``;
+            None unless ``status == "ok"``.
+    """
+
+    votes: int = 0
+    vote_map: npt.NDArray[np.int64] | None = None
+    heading_rad: float | None = None
+    last_sweep_pose: Pose | None = None
+
+
+def heading_candidates_around(
+    prior_heading_rad: float,
+    window_rad: float = DEFAULT_HEADING_WINDOW_RAD,
+    step_rad: float = DEFAULT_HEADING_STEP_RAD,
+) -> FloatArray:
+    """Headings ``prior + k step`` for ``|k step| <= window``, wrapped to (-pi, pi] (rad)."""
+    if not math.isfinite(float(prior_heading_rad)):
+        raise ValueError(f"prior_heading_rad must be finite, got {prior_heading_rad!r}")
+    if not (math.isfinite(float(step_rad)) and step_rad > 0.0):
+        raise ValueError(f"heading_step_rad must be a finite angle > 0 rad, got {step_rad!r}")
+    if not (math.isfinite(float(window_rad)) and window_rad >= 0.0):
+        raise ValueError(f"heading_window_rad must be a finite angle >= 0 rad, got {window_rad!r}")
+    count = math.floor(window_rad / step_rad + 1e-9)
+    count = min(count, math.ceil(math.pi / step_rad))
+    return wrap_angles(prior_heading_rad + step_rad * np.arange(-count, count + 1))
+
+
+# -- the unobstructed-ray table ---------------------------------------------------------------
+
+
+class _FreeDistanceTable:
+    """Free distance behind each occupied cell, per quantised beam direction.
+
+    ``distance[d, k]`` is how far (m) a ray arriving at the centre of occupied cell ``k`` with
+    direction ``2 pi d / n`` can be traced back, from ``end_clearance_m`` before the cell, before
+    it meets another occupied cell or leaves the grid. Rows are filled on first use. The table
+    keeps the grid's arrays, not the grid, so the per-grid cache below can let the grid go.
+    """
+
+    def __init__(self, grid: OccupancyGrid, direction_bins: int, end_clearance_m: float) -> None:
+        nx, ny = grid.shape
+        # A one-cell border of "blocked" stands for everything off the grid.
+        self.blocked_cells = np.ones((nx + 2, ny + 2), dtype=bool)
+        self.blocked_cells[1:-1, 1:-1] = grid.occupied
+        self.origin_m = grid.origin_m
+        self.cell_size_m = grid.cell_size_m
+        self.direction_bins = direction_bins
+        self.end_clearance_m = end_clearance_m
+        self.centers = grid.occupied_centers()
+        step = 0.5 * grid.cell_size_m
+        x_min, y_min, x_max, y_max = grid.bounds
+        longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
+        self.samples_m = end_clearance_m + step * np.arange(math.ceil(longest / step) + 1)
+        self.distance = np.zeros((direction_bins, self.centers.shape[0]))
+        self.filled = np.zeros(direction_bins, dtype=bool)
+
+    def columns(self, direction_indices: npt.NDArray[np.intp]) -> FloatArray:
+        """The table, with the given direction rows filled."""
+        missing = np.unique(direction_indices[~self.filled[direction_indices]])
+        if missing.size:
+            per_direction = max(1, self.centers.shape[0] * self.samples_m.size)
+            chunk = max(1, _CHUNK_ELEMENTS // per_direction)
+            for start in range(0, missing.size, chunk):
+                block = missing[start : start + chunk]
+                self.distance[block] = self._trace(block)
+            self.filled[missing] = True
+        return self.distance
+
+    def _trace(self, directions: npt.NDArray[np.intp]) -> FloatArray:
+        """March back from every cell centre in the given directions, a block of samples at a
+        time, keeping only the rays not yet blocked."""
+        nx, ny = self.blocked_cells.shape[0] - 2, self.blocked_cells.shape[1] - 2
+        x0, y0 = self.origin_m
+        cell_size = self.cell_size_m
+        angles = 2.0 * np.pi * directions / self.direction_bins
+        back_x = np.repeat(-np.cos(angles), self.centers.shape[0])
+        back_y = np.repeat(-np.sin(angles), self.centers.shape[0])
+        start_x = np.tile((self.centers[:, 0] - x0) / cell_size, directions.size)
+        start_y = np.tile((self.centers[:, 1] - y0) / cell_size, directions.size)
+        samples = self.samples_m / cell_size
+        distance = np.full(back_x.size, self.samples_m[-1])
+        pending = np.arange(back_x.size)
+        block = 8
+        for first in range(0, samples.size, block):
+            steps = samples[first : first + block]
+            cell_x = np.floor(start_x[pending, None] + steps[None, :] * back_x[pending, None])
+            cell_y = np.floor(start_y[pending, None] + steps[None, :] * back_y[pending, None])
+            cell_x = np.clip(cell_x, -1, nx).astype(np.intp) + 1
+            cell_y = np.clip(cell_y, -1, ny).astype(np.intp) + 1
+            blocked = self.blocked_cells[cell_x, cell_y]
+            hit = blocked.any(axis=1)
+            distance[pending[hit]] = self.samples_m[first + np.argmax(blocked[hit], axis=1)]
+            pending = pending[~hit]
+            if pending.size == 0:
+                break
+        return distance.reshape(directions.size, self.centers.shape[0])
+
+
+_TABLES: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, float], _FreeDistanceTable]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _free_distance_table(
+    grid: OccupancyGrid, direction_bins: int, end_clearance_m: float
+) -> _FreeDistanceTable:
+    tables = _TABLES.setdefault(grid, {})
+    key = (direction_bins, end_clearance_m)
+    if key not in tables:
+        tables[key] = _FreeDistanceTable(grid, direction_bins, end_clearance_m)
+    return tables[key]
+
+
+# -- argument checks ----------------------------------------------------------------------------
+
+
+def _check_sweeps(sweeps: Sequence[Sweep] | Sweep) -> list[Sweep]:
+    if isinstance(sweeps, Sweep):
+        return [sweeps]
+    checked = list(sweeps)
+    if not checked:
+        raise ValueError("sweeps must hold at least one Sweep")
+    for index, sweep in enumerate(checked):
+        if not isinstance(sweep, Sweep):
+            raise ValueError(f"sweeps[{index}] must be a Sweep, got {type(sweep).__name__}")
+    first = checked[0].odometry
+    if max(abs(first.x), abs(first.y), abs(first.theta)) > 1e-12:
+        raise ValueError(
+            "sweeps[0].odometry must be the identity Pose(0, 0, 0): odometry is measured from the "
+            f"first sweep's pose, got {first}"
+        )
+    return checked
+
+
+def _check_center(
+    search_center: Pose | npt.ArrayLike | None,
+) -> tuple[FloatArray | None, float | None]:
+    """``(position, prior heading or None)`` of the search centre."""
+    if search_center is None:
+        return None, None
+    if isinstance(search_center, Pose):
+        return search_center.position, search_center.theta
+    values = np.asarray(search_center, dtype=np.float64)
+    if values.shape not in ((2,), (3,)) or not np.all(np.isfinite(values)):
+        raise ValueError(
+            f"search_center must be a Pose or a finite (x, y[, theta]), got {search_center!r}"
+        )
+    return values[:2].copy(), (float(values[2]) if values.size == 3 else None)
+
+
+def _resolve_headings(
+    heading_candidates: npt.ArrayLike | None,
+    prior_heading: float | None,
+    heading_step_rad: float,
+    heading_window_rad: float,
+) -> FloatArray:
+    if heading_candidates is not None:
+        headings = np.asarray(heading_candidates, dtype=np.float64).reshape(-1)
+        if headings.size == 0 or not np.all(np.isfinite(headings)):
+            raise ValueError("heading_candidates must be a non-empty array of finite angles (rad)")
+        return wrap_angles(headings)
+    if prior_heading is not None:
+        return heading_candidates_around(prior_heading, heading_window_rad, heading_step_rad)
+    if not (math.isfinite(float(heading_step_rad)) and heading_step_rad > 0.0):
+        raise ValueError(
+            f"heading_step_rad must be a finite angle > 0 rad, got {heading_step_rad!r}"
+        )
+    count = max(1, math.ceil(2.0 * math.pi / heading_step_rad - 1e-9))
+    return wrap_angles(-math.pi + 2.0 * math.pi * np.arange(count) / count)
+
+
+def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+    """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer, zero outside the grid."""
+    padded = np.pad(volume, ((0, 0), (1, 1), (0, 0)))
+    along_x = padded[:, :-2] + 2 * padded[:, 1:-1] + padded[:, 2:]
+    padded = np.pad(along_x, ((0, 0), (0, 0), (1, 1)))
+    return padded[:, :, :-2] + 2 * padded[:, :, 1:-1] + padded[:, :, 2:]
+
+
+# -- voting -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Readings:
+    """All valid readings moved into the first sweep's robot frame."""
+
+    end_xy: FloatArray  # (J, 2) end points (m)
+    beam_rad: FloatArray  # (J,) beam directions (rad)
+    range_m: FloatArray  # (J,) ranges (m)
+
+
+def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Readings:
+    ends, beams, ranges = [], [], []
+    for sweep in sweeps:
+        sensor_xy, end_xy, beam = sweep_end_points(sweep, sweep.odometry, max_range_m)
+        ends.append(end_xy)
+        beams.append(beam)
+        ranges.append(np.linalg.norm(end_xy - sensor_xy, axis=1))
+    return _Readings(np.concatenate(ends), np.concatenate(beams), np.concatenate(ranges))
+
+
+def _direction_index(
+    headings: FloatArray, readings: _Readings, direction_bins: int
+) -> npt.NDArray[np.intp]:
+    """``(h, J)`` quantised world beam direction of every reading under every heading."""
+    turns = (headings[:, None] + readings.beam_rad[None, :]) * (direction_bins / (2.0 * np.pi))
+    return np.rint(turns).astype(np.intp) % direction_bins
+
+
+def _vote_positions(
+    readings: _Readings,
+    anchors: FloatArray,
+    table: FloatArray,
+    headings: FloatArray,
+    direction_index: npt.NDArray[np.intp],
+) -> tuple[npt.NDArray[np.intp], FloatArray, FloatArray]:
+    """Unobstructed hypotheses for a block of headings: ``(heading index, t_x, t_y)``.
+
+    A reading ending at ``anchors[k]`` puts the robot at ``t = anchors[k] - R(heading) e``.
+    ``table[d, k]`` is the free distance behind occupied cell ``k`` in direction ``d``; a
+    reading of range ``r`` may have ended at cell ``k`` when ``r`` is below it.
+    """
+    free = table[direction_index] > readings.range_m[None, :, None]  # (h, J, K)
+    heading_i, reading_i, cell_i = np.nonzero(free)
+    cos_h, sin_h = np.cos(headings), np.sin(headings)
+    end_x = readings.end_xy[:, 0]
+    end_y = readings.end_xy[:, 1]
+    rotated_x = cos_h[:, None] * end_x[None, :] - sin_h[:, None] * end_y[None, :]
+    rotated_y = sin_h[:, None] * end_x[None, :] + cos_h[:, None] * end_y[None, :]
+    t_x = anchors[cell_i, 0] - rotated_x[heading_i, reading_i]
+    t_y = anchors[cell_i, 1] - rotated_y[heading_i, reading_i]
+    return heading_i, t_x, t_y
+
+
+def _vote_cells(
+    grid: OccupancyGrid,
+    t_x: FloatArray,
+    t_y: FloatArray,
+    center: FloatArray | None,
+    radius: float | None,
+) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
+    """Cells of vote positions and the mask of votes that count (in grid and search circle)."""
+    x0, y0 = grid.origin_m
+    nx, ny = grid.shape
+    cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
+    cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
+    keep = (cell_x >= 0) & (cell_x < nx) & (cell_y >= 0) & (cell_y < ny)
+    if center is not None and radius is not None:
+        keep &= (t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius
+    return cell_x, cell_y, keep
+
+
+def _failure(status: str, message: str) -> VoteLocalization:
+    return VoteLocalization(status=status, message=message)
+
+
+def vote_localize(
+    grid: OccupancyGrid,
+    sweeps: Sequence[Sweep] | Sweep,
+    heading_candidates: npt.ArrayLike | None = None,
+    search_center: Pose | npt.ArrayLike | None = None,
+    search_radius: float | None = None,
+    *,
+    heading_step_rad: float = DEFAULT_HEADING_STEP_RAD,
+    heading_window_rad: float = DEFAULT_HEADING_WINDOW_RAD,
+    max_range_m: float | None = None,
+    end_clearance_m: float | None = None,
+    direction_bins: int = 360,
+    selection: Selection = "smoothed",
+    refine: Refinement = "vote_mean",
+    anchor: Anchor = "cell_center",
+    ambiguity_ratio: float | None = None,
+    ambiguity_distance_m: float = 0.15,
+    ambiguity_heading_rad: float = math.radians(10.0),
+    return_vote_map: bool = True,
+) -> VoteLocalization:
+    """Voting localization of sec. 3.3 on a known occupancy grid.
+
+    Args:
+        grid: the global map with its occupied cells.
+        sweeps: one to (typically) four sweeps; ``sweeps[0].odometry`` must be the identity and
+            each later sweep's odometry is its dead-reckoned pose in the first sweep's frame.
+        heading_candidates: headings (rad, {W}) of the first sweep's robot frame to try. None:
+            around the heading of ``search_center`` if it has one, else the full circle.
+        search_center: the dead-reckoning estimate, a :class:`Pose` or ``(x, y[, theta])`` in
+            {W}; its heading (if any) centres the heading window.
+        search_radius: if given, votes count only within this distance (m) of
+            ``search_center`` (sec. 3.3: "restricted ... within a circle").
+        heading_step_rad: spacing of generated candidate headings (rad).
+        heading_window_rad: half-width of the window around a prior heading (rad).
+        max_range_m: readings at or beyond this range (m) count as no echo.
+        end_clearance_m: length before the end cell over which the ray is not checked for
+            obstruction (m); one cell by default.
+        direction_bins: number of quantised beam directions of the obstruction table.
+        selection: ``"smoothed"`` or ``"max"`` (see the module docstring).
+        refine: ``"vote_mean"`` or ``"cell_center"`` (see the module docstring).
+        anchor: where a range vector ends in an occupied cell: ``"cell_center"`` (the paper)
+            or ``"obstacle_point"`` (``OccupancyGrid.obstacle_points_m``, the obstacle's
+            position inside the cell, which removes the half-cell shift of walls lying on
+            cell edges).
+        ambiguity_ratio: in (0, 1]; enables the ambiguity test. None disables it.
+        ambiguity_distance_m: a rival peak must be farther than this (m) ...
+        ambiguity_heading_rad: ... or differ in heading by more than this (rad).
+        return_vote_map: include the raw vote map of the chosen heading.
+
+    Returns:
+        A :class:`VoteLocalization`; ``pose`` is the pose of the first sweep's robot frame.
+    """
+    if not isinstance(grid, OccupancyGrid):
+        raise ValueError(f"grid must be an OccupancyGrid, got {type(grid).__name__}")
+    sweep_list = _check_sweeps(sweeps)
+    center, prior_heading = _check_center(search_center)
+    radius: float | None = None
+    if search_radius is not None:
+        radius = float(search_radius)
+        if not (math.isfinite(radius) and radius > 0.0):
+            raise ValueError(
+                f"search_radius must be a finite distance > 0 m, got {search_radius!r}"
+            )
+        if center is None:
+            raise ValueError("search_radius needs a search_center")
+    if max_range_m is not None and not (float(max_range_m) > 0.0):
+        raise ValueError(f"max_range_m must be > 0 m or None, got {max_range_m!r}")
+    clearance = grid.cell_size_m if end_clearance_m is None else float(end_clearance_m)
+    if not (math.isfinite(clearance) and clearance >= 0.0):
+        raise ValueError(
+            f"end_clearance_m must be a finite distance >= 0 m, got {end_clearance_m!r}"
+        )
+    if int(direction_bins) != direction_bins or direction_bins < 8:
+        raise ValueError(f"direction_bins must be an integer >= 8, got {direction_bins!r}")
+    if selection not in _SELECTIONS:
+        raise ValueError(f"selection must be one of {_SELECTIONS}, got {selection!r}")
+    if refine not in _REFINEMENTS:
+        raise ValueError(f"refine must be one of {_REFINEMENTS}, got {refine!r}")
+    if anchor not in _ANCHORS:
+        raise ValueError(f"anchor must be one of {_ANCHORS}, got {anchor!r}")
+    if ambiguity_ratio is not None and not (0.0 < float(ambiguity_ratio) <= 1.0):
+        raise ValueError(f"ambiguity_ratio must lie in (0, 1] or be None, got {ambiguity_ratio!r}")
+    if not (ambiguity_distance_m >= 0.0 and ambiguity_heading_rad >= 0.0):
+        raise ValueError("ambiguity_distance_m and ambiguity_heading_rad must be >= 0")
+    headings = _resolve_headings(
+        heading_candidates, prior_heading, heading_step_rad, heading_window_rad
+    )
+    direction_bins = int(direction_bins)
+
+    readings = _gather_readings(sweep_list, max_range_m)
+    if readings.range_m.size == 0:
+        return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
+    table_cache = _free_distance_table(grid, direction_bins, clearance)
+    anchors = table_cache.centers if anchor == "cell_center" else grid.occupied_obstacle_points()
+    if anchors.shape[0] == 0:
+        return _failure(NO_VOTES, "the grid has no occupied cell")
+
+    # Vote volume over (heading, ix, iy), built in blocks of headings.
+    nx, ny = grid.shape
+    cells_per_layer = nx * ny
+    volume = np.zeros((headings.size, nx, ny), dtype=np.int64)
+    per_heading = readings.range_m.size * anchors.shape[0]
+    block = max(1, _CHUNK_ELEMENTS // per_heading)
+    for start in range(0, headings.size, block):
+        block_headings = headings[start : start + block]
+        direction_index = _direction_index(block_headings, readings, direction_bins)
+        table = table_cache.columns(direction_index.ravel())
+        heading_i, t_x, t_y = _vote_positions(
+            readings, anchors, table, block_headings, direction_index
+        )
+        cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
+        flat = heading_i[keep] * cells_per_layer + cell_x[keep] * ny + cell_y[keep]
+        counts = np.bincount(flat, minlength=block_headings.size * cells_per_layer)
+        volume[start : start + block_headings.size] = counts.reshape(-1, nx, ny)
+
+    if not volume.any():
+        return _failure(
+            NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
+        )
+
+    choice = _choose(grid, volume, selection)
+    heading = float(headings[choice.heading_index])
+    vote_map = volume[choice.heading_index].copy() if return_vote_map else None
+    votes = int(volume[choice.heading_index, choice.cell[0], choice.cell[1]])
+
+    if ambiguity_ratio is not None:
+        rival = _rival_score(grid, choice, headings, ambiguity_distance_m, ambiguity_heading_rad)
+        if rival >= float(ambiguity_ratio) * choice.best_score:
+            return VoteLocalization(
+                status=AMBIGUOUS,
+                message=(
+                    f"a rival peak scores {rival} against the best {choice.best_score} "
+                    f"(ratio threshold {ambiguity_ratio})"
+                ),
+                votes=votes,
+                vote_map=vote_map,
+            )
+
+    if refine == "cell_center":
+        position = choice.centre
+    else:
+        position = _mean_vote_position(
+            grid, readings, table_cache, anchors, heading, direction_bins, choice, center, radius
+        )
+    pose = Pose(float(position[0]), float(position[1]), heading)
+    return VoteLocalization(
+        status=OK,
+        pose=pose,
+        votes=votes,
+        vote_map=vote_map,
+        heading_rad=heading,
+        last_sweep_pose=pose.compose(sweep_list[-1].odometry),
+    )
+
+
+@dataclass(frozen=True)
+class _Choice:
+    """The chosen heading and cells.
+
+    ``window_low``..``window_high`` (inclusive cell indices) bound the cells whose votes make the
+    chosen peak; ``cell`` is the cell of the window with most raw votes; ``centre`` the
+    position used without refinement; ``score`` the selection score over (heading, ix, iy).
+    """
+
+    heading_index: int
+    cell: tuple[int, int]
+    window_low: tuple[int, int]
+    window_high: tuple[int, int]
+    centre: FloatArray
+    score: npt.NDArray[np.int64]
+
+    @property
+    def best_score(self) -> int:
+        return int(self.score[self.heading_index].max())
+
+
+def _choose(grid: OccupancyGrid, volume: npt.NDArray[np.int64], selection: str) -> _Choice:
+    """Pick the heading and cell from the vote volume ``(heading, ix, iy)``.
+
+    ``"smoothed"``: maximum of the 3x3 binomial smoothing, window = the chosen cell +- 1.
+    ``"max"``: raw maximum; ties go to the heading with most tied cells, then to the tied cell
+    nearest the centroid of the tied cells (the centroid is the unrefined position).
+    """
+    nx, ny = grid.shape
+    if selection == "max":
+        tied = np.argwhere(volume == volume.max())
+        heading_index = int(np.argmax(np.bincount(tied[:, 0], minlength=volume.shape[0])))
+        cells = tied[tied[:, 0] == heading_index, 1:]
+        centres = grid.cell_to_world(cells)
+        centroid = centres.mean(axis=0)
+        nearest = cells[int(np.argmin(np.sum((centres - centroid) ** 2, axis=1)))]
+        cell = (int(nearest[0]), int(nearest[1]))
+        low = (max(cell[0] - 1, 0), max(cell[1] - 1, 0))
+        high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
+        return _Choice(heading_index, cell, low, high, centroid, volume)
+    score = _binomial_smooth(volume)
+    heading_index, best_x, best_y = (
+        int(i) for i in np.unravel_index(int(np.argmax(score)), score.shape)
+    )
+    cell = (best_x, best_y)
+    low = (max(best_x - 1, 0), max(best_y - 1, 0))
+    high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
+    return _Choice(heading_index, cell, low, high, grid.cell_to_world(np.array(cell)), score)
+
+
+def _rival_score(
+    grid: OccupancyGrid,
+    choice: _Choice,
+    headings: FloatArray,
+    distance_m: float,
+    heading_rad: float,
+) -> int:
+    """Best score outside the neighbourhood (in position and heading) of the winner."""
+    nx, ny = grid.shape
+    cells = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij"), axis=-1)
+    offsets = (cells - np.array(choice.cell)) * grid.cell_size_m
+    near_position = np.hypot(offsets[..., 0], offsets[..., 1]) <= distance_m
+    near_heading = np.abs(wrap_angles(headings - headings[choice.heading_index])) <= heading_rad
+    excluded = near_heading[:, None, None] & near_position[None, :, :]
+    return int(np.where(excluded, -1, choice.score).max())
+
+
+def _mean_vote_position(
+    grid: OccupancyGrid,
+    readings: _Readings,
+    table_cache: _FreeDistanceTable,
+    anchors: FloatArray,
+    heading: float,
+    direction_bins: int,
+    choice: _Choice,
+    center: FloatArray | None,
+    radius: float | None,
+) -> FloatArray:
+    """Mean of the continuous vote positions in the chosen window of cells."""
+    headings = np.array([heading])
+    direction_index = _direction_index(headings, readings, direction_bins)
+    table = table_cache.columns(direction_index.ravel())
+    _, t_x, t_y = _vote_positions(readings, anchors, table, headings, direction_index)
+    cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
+    keep &= (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
+    keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
+    if not keep.any():
+        return choice.centre
+    return np.array([t_x[keep].mean(), t_y[keep].mean()])

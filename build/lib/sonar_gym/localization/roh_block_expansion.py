@@ -1,0 +1,972 @@
+"""Block expansion of Roh et al.: three-point extraction, the area-to-area runner, path errors.
+
+The robot starts in a triangular area whose three beacons it knows (Table I, beacons A-C)
+and localizes by trilateration (Sec. III.A). Approaching the boundary to the next area, it
+saves three of its own (estimated) positions at user-chosen distances d1, d2, d3 from the
+boundary (Sec. III.C, Figs. 1-2), ranges the next area's new beacon there, and
+auto-calibrates it (Sec. III.B). Once past the boundary it trilaterates with the new beacon
+and the two boundary beacons, and repeats the procedure for the next area (Sec. II, Fig. 3).
+
+Areas of Table I. The beacons form the parallelogram A-C-D-B; its diagonal BC splits it into
+Area 1 = (A, B, C) and Area 2 = (B, C, D), and beacon E adds Area 3 = (B, D, E) across BD.
+Fig. 3 agrees for Area 3 (B, D, E) but prints Area 2 as (A, B, D); with Table I that
+triangle overlaps Area 1 and does not share the boundary the text describes (the new area
+is "the fourth beacon and the two beacons at the end of the border line segment"), so the
+partition (A, B, C), (B, C, D), (B, D, E) is used. Any other chain of triangles can be
+configured.
+
+Conditioning. The three saved positions lie on a short stretch of a gently curved path, so
+they are nearly collinear (condition numbers of 20-100 on the default parabola). The spheres
+then pin the new beacon only up to a rotation about the line of the positions, resolved by
+the path's few millimetres of bow: millimetres of range noise move the calibrated beacon by
+decimetres, and sometimes the three spheres miss each other (``"no_intersection"``). Which
+d's keep this in check is the free choice the paper leaves to its user (Sec. IV.E).
+
+Units: metres inside; Table I and Tables II-V are kept in millimetres as printed and
+converted here.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from scipy.optimize import brentq
+
+from sonar_gym.localization.result import OK
+from sonar_gym.localization.roh_trilateration import (
+    DEFAULT_MAX_CALIBRATION_CONDITION,
+    DEFAULT_SENSOR_HEIGHT_M,
+    TRILATERATION_METHODS,
+    CalibrationResult,
+    TrilaterationResult,
+    _frozen,
+    auto_calibrate,
+    trilaterate,
+)
+from sonar_gym.pose import FloatArray
+
+IntArray = npt.NDArray[np.int64]
+
+# ---------------------------------------------------------------------------------------------
+# The paper's numbers (millimetres as printed, converted at this edge)
+# ---------------------------------------------------------------------------------------------
+
+TABLE_I_BEACONS_MM: dict[str, tuple[float, float, float]] = {
+    "A": (3467.0, 101.0, 825.0),
+    "B": (1551.0, 139.0, 1441.0),
+    "C": (2459.0, 1870.0, 1457.0),
+    "D": (921.0, 2065.0, 1341.0),
+    "E": (351.0, 132.0, 835.0),
+}
+"""Table I: initial beacon coordinates (x, y, z), millimetres."""
+
+TABLE_I_BEACONS_M: dict[str, tuple[float, float, float]] = {
+    name: (x / 1000.0, y / 1000.0, z / 1000.0) for name, (x, y, z) in TABLE_I_BEACONS_MM.items()
+}
+"""Table I in metres."""
+
+PAPER_TWO_AREAS: tuple[tuple[str, str, str], ...] = (("A", "B", "C"), ("B", "C", "D"))
+"""Areas 1-2 of Sec. IV.B (see the module docstring for the reading of Fig. 3)."""
+
+PAPER_THREE_AREAS: tuple[tuple[str, str, str], ...] = (
+    ("A", "B", "C"),
+    ("B", "C", "D"),
+    ("B", "D", "E"),
+)
+"""Areas 1-3 of Sec. IV.D and Fig. 3."""
+
+TABLE_II_III_D_MM: tuple[tuple[float, float, float], ...] = (
+    (450.0, 320.0, 100.0),
+    (450.0, 250.0, 150.0),
+    (450.0, 250.0, 50.0),
+    (450.0, 250.0, 20.0),
+    (450.0, 210.0, 150.0),
+    (450.0, 200.0, 110.0),
+)
+"""(d1, d2, d3) of Tables II and III, millimetres."""
+
+TABLE_II_SIGMA_MM: tuple[float, ...] = (44.4, 43.4, 29.3, 31.3, 35.4, 28.2)
+"""Table II: sigma (RMS y difference) per row of :data:`TABLE_II_III_D_MM`; mean 33.3 mm."""
+
+TABLE_III_SIGMA_PRIME_MM: tuple[float, ...] = (30.2, 29.1, 16.3, 19.3, 22.8, 13.9)
+"""Table III: sigma' (mean distance to the true path); mean 21.9 mm."""
+
+TABLE_IV_V_D_MM: tuple[tuple[float, float, float, float, float, float], ...] = (
+    (450.0, 250.0, 50.0, 200.0, 200.0, 200.0),
+    (450.0, 250.0, 20.0, 300.0, 400.0, 700.0),
+    (450.0, 250.0, 20.0, 300.0, 600.0, 750.0),
+)
+"""(d1, ..., d6) of Tables IV and V, millimetres."""
+
+TABLE_IV_SIGMA_MM: tuple[float, ...] = (34.9, 66.9, 37.6)
+"""Table IV: sigma over three areas; mean 46.5 mm."""
+
+TABLE_V_SIGMA_PRIME_MM: tuple[float, ...] = (14.8, 17.9, 19.1)
+"""Table V: sigma' over three areas; mean 17.3 mm."""
+
+PAPER_D123_M: tuple[float, float, float] = (0.45, 0.25, 0.05)
+"""The (d1, d2, d3) of Figs. 6-7, metres."""
+
+STATUS_NOT_REACHED = "not_reached"
+STATUS_NOT_ATTEMPTED = "not_attempted"
+STATUS_CALIBRATION_FAILED = "calibration_failed"
+STATUS_LOCALIZATION_FAILED = "localization_failed"
+
+# ---------------------------------------------------------------------------------------------
+# Plane geometry helpers
+# ---------------------------------------------------------------------------------------------
+
+
+def _points_array(points: npt.ArrayLike, name: str, min_count: int = 1) -> FloatArray:
+    array = np.asarray(points, dtype=np.float64)
+    if array.ndim != 2 or array.shape[1] != 2 or array.shape[0] < min_count:
+        raise ValueError(
+            f"{name} must have shape (n, 2) of (x, y) in metres with n >= {min_count}, "
+            f"got {array.shape}"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite")
+    return array
+
+
+def _planar_point(point: npt.ArrayLike, name: str) -> FloatArray:
+    array = np.asarray(point, dtype=np.float64).reshape(-1)
+    if array.shape not in ((2,), (3,)) or not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be a finite (x, y) or (x, y, z) point in metres")
+    return array[:2].copy()
+
+
+def distance_to_segment(
+    points: npt.ArrayLike, start: npt.ArrayLike, end: npt.ArrayLike
+) -> FloatArray:
+    """Euclidean distance (metres) of each 2D point to the segment ``start``-``end``.
+
+    Args:
+        points: ``(n, 2)`` or ``(2,)`` points in metres.
+        start, end: the segment's end points ``(2,)``.
+
+    Returns:
+        ``(n,)`` distances (a 0-d array for a single point).
+    """
+    p = np.asarray(points, dtype=np.float64)
+    a = np.asarray(start, dtype=np.float64).reshape(2)
+    b = np.asarray(end, dtype=np.float64).reshape(2)
+    direction = b - a
+    length_sq = float(direction @ direction)
+    if length_sq == 0.0:
+        return np.hypot(p[..., 0] - a[0], p[..., 1] - a[1])
+    t = np.clip(((p - a) @ direction) / length_sq, 0.0, 1.0)
+    foot = a + t[..., None] * direction
+    return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
+
+
+def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
+    """Distance (metres) from each point to the nearest segment of a polyline.
+
+    This is the per-point "path error" of Figs. 5, 7 and 8.
+
+    Args:
+        points: ``(m, 2)`` points, metres.
+        polyline: ``(n, 2)`` vertices in order, n >= 2, metres.
+
+    Returns:
+        ``(m,)`` distances.
+    """
+    p = _points_array(points, "points")
+    line = _points_array(polyline, "polyline", min_count=2)
+    starts, ends = line[:-1], line[1:]
+    direction = ends - starts
+    length_sq = np.einsum("ij,ij->i", direction, direction)
+    safe_length_sq = np.where(length_sq > 0.0, length_sq, 1.0)
+    result = np.empty(len(p))
+    block = 512
+    for first in range(0, len(p), block):
+        chunk = p[first : first + block]
+        relative = chunk[:, None, :] - starts[None, :, :]
+        t = np.clip(np.einsum("mnk,nk->mn", relative, direction) / safe_length_sq, 0.0, 1.0)
+        t = np.where(length_sq > 0.0, t, 0.0)
+        gap = relative - t[..., None] * direction[None, :, :]
+        result[first : first + block] = np.sqrt(np.min(np.einsum("mnk,mnk->mn", gap, gap), axis=1))
+    return result
+
+
+def _y_on_path(x: FloatArray, true_path: FloatArray) -> FloatArray:
+    """``f(x)`` of a path ``y = f(x)`` given as a polyline with strictly monotonic x.
+
+    Linear interpolation between vertices; beyond the ends, linear extrapolation of the end
+    segments.
+    """
+    order = np.argsort(true_path[:, 0])
+    xs, ys = true_path[order, 0], true_path[order, 1]
+    inside = np.interp(x, xs, ys)
+    low_slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
+    high_slope = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
+    below = ys[0] + low_slope * (x - xs[0])
+    above = ys[-1] + high_slope * (x - xs[-1])
+    return np.where(x < xs[0], below, np.where(x > xs[-1], above, inside))
+
+
+def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, float]:
+    """The path errors ``(sigma, sigma_prime)`` of Sec. IV.B, metres.
+
+    * ``sigma``: the RMS "difference between the y-coordinate of a localized path and that
+      of an actual path". The actual path is a curve ``y = f(x)``; for each localized point
+      ``(x_e, y_e)`` the difference is ``y_e - f(x_e)``, with ``f`` the true polyline
+      interpolated linearly at the same x (extrapolated linearly beyond its ends). It is not
+      the difference between points of equal time index. It grows where the path is steep:
+      a normal offset ``e`` shows as ``e * sqrt(1 + f'(x)^2)`` in y.
+    * ``sigma_prime``: "an average distance from every single data point in a localized path
+      to an actual path": the mean over localized points of the Euclidean distance to the
+      true polyline (nearest point on any of its segments).
+
+    Args:
+        estimated: ``(m, 2)`` localized points, metres (only successful fixes; no NaN).
+        true: ``(n, 2)`` vertices of the true path, n >= 2, whose x is strictly monotonic
+            (increasing or decreasing) so that it is a function ``y = f(x)``.
+
+    Returns:
+        ``(sigma, sigma_prime)`` in metres.
+
+    Raises:
+        ValueError: on wrong shapes, non-finite values, or a true path whose x is not
+            strictly monotonic.
+    """
+    points = _points_array(estimated, "estimated")
+    true_path = _points_array(true, "true", min_count=2)
+    steps = np.diff(true_path[:, 0])
+    if not (np.all(steps > 0.0) or np.all(steps < 0.0)):
+        raise ValueError("true must be a path y = f(x): its x must be strictly monotonic")
+    y_difference = points[:, 1] - _y_on_path(points[:, 0], true_path)
+    sigma = float(np.sqrt(np.mean(y_difference**2)))
+    sigma_prime = float(np.mean(distances_to_polyline(points, true_path)))
+    return sigma, sigma_prime
+
+
+def parabolic_path(
+    x_start_m: float = 2.75,
+    x_end_m: float = 0.55,
+    vertex_m: tuple[float, float] = (1.6, 1.45),
+    quadratic_coefficient_per_m: float = -0.9,
+    step_m: float = 0.004,
+) -> FloatArray:
+    """A parabolic path ``y = y_v + a (x - x_v)^2`` sampled at equal arc-length steps.
+
+    The robot of Sec. IV.A drove a parabola, localizing every 40 ms. The paper does not print
+    the curve; the defaults cross Areas 1-3 of Table I (A-B-C, B-C-D, B-D-E) from right to
+    left, and ``step_m = 0.004`` is 0.1 m/s over a 40 ms step.
+
+    Args:
+        x_start_m, x_end_m: x of the first and last point, metres (either order).
+        vertex_m: the vertex ``(x_v, y_v)``, metres.
+        quadratic_coefficient_per_m: ``a`` in 1/m (negative opens downwards).
+        step_m: arc length between samples, metres (> 0).
+
+    Returns:
+        ``(n, 2)`` points from ``x_start_m`` towards ``x_end_m``; the last is the end point.
+    """
+    for name, value in (
+        ("x_start_m", x_start_m),
+        ("x_end_m", x_end_m),
+        ("quadratic_coefficient_per_m", quadratic_coefficient_per_m),
+    ):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be finite, got {value!r}")
+    if not (math.isfinite(step_m) and step_m > 0.0):
+        raise ValueError(f"step_m must be a positive finite number of metres, got {step_m!r}")
+    vertex = _planar_point(vertex_m, "vertex_m")
+    if x_start_m == x_end_m:
+        raise ValueError("x_start_m and x_end_m must differ")
+
+    def curve(x: FloatArray) -> FloatArray:
+        return np.column_stack([x, vertex[1] + quadratic_coefficient_per_m * (x - vertex[0]) ** 2])
+
+    dense = curve(np.linspace(x_start_m, x_end_m, 20001))
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    stations = np.arange(0.0, arc[-1], step_m)
+    if arc[-1] - stations[-1] > 1e-9:
+        stations = np.append(stations, arc[-1])
+    x = np.interp(stations, arc, dense[:, 0])
+    return curve(x)
+
+
+# ---------------------------------------------------------------------------------------------
+# Three-point extraction (Sec. III.C, Figs. 1-2)
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, eq=False)
+class ThreePoints:
+    """Outcome of the three-point extraction.
+
+    Attributes:
+        status: ``"ok"`` when all three distances were crossed, else ``"not_reached"``.
+        distances_m: the (d1, d2, d3) searched for, metres.
+        indices: for each crossing found, the index of the first sample at which it was
+            observed: the position the robot of Fig. 1 saves.
+        sample_points: ``(k, 2)`` those samples, metres.
+        points: ``(k, 2)`` the crossings interpolated on the segment from the previous
+            sample to the saved one, where ``D`` equals the distance exactly, metres.
+        fractions: for each crossing, ``t`` in [0, 1] along that segment
+            (``point = previous + t (saved - previous)``; 1.0 means the sample itself).
+        message: explanation when not ok.
+    """
+
+    status: str
+    distances_m: tuple[float, ...]
+    indices: tuple[int, ...]
+    sample_points: FloatArray
+    points: FloatArray
+    fractions: tuple[float, ...]
+    message: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """Whether all three points were found."""
+        return self.status == OK
+
+
+class ThreePointExtractor:
+    """The online three-point extraction of Sec. III.C, one position at a time.
+
+    ``D(x, y)`` is the (unsigned) distance from the robot to the boundary segment A'B', the
+    projections of the two boundary beacons on the sensor plane. Following the text, a
+    position is saved "when D(x, y) becomes bigger than d1 for the first time or becomes
+    smaller than d1 for the first time": the search for ``d_k`` starts at the sample where
+    ``d_(k-1)`` was saved (at the first sample for d1), notes on which side of ``d_k`` that
+    sample's D lies, and saves the first later sample on the other side (or exactly on it).
+    Decreasing d's are thus met approaching the boundary; a d larger than the previous one is
+    met moving away from the boundary, e.g. on its far side, since D is unsigned; a repeated
+    d (Table IV's 200/200/200 mm) needs the path to cross that distance again. Because the
+    data are discrete, the saved sample overshoots the exact crossing; the crossing on the
+    last segment is also found (``D`` along a segment is convex, so it is the one root there)
+    for users who prefer to interpolate.
+    """
+
+    def __init__(
+        self, boundary_a: npt.ArrayLike, boundary_b: npt.ArrayLike, distances: npt.ArrayLike
+    ) -> None:
+        self.boundary_a = _planar_point(boundary_a, "boundary_a")
+        self.boundary_b = _planar_point(boundary_b, "boundary_b")
+        if np.array_equal(self.boundary_a, self.boundary_b):
+            raise ValueError("boundary_a and boundary_b must be distinct points")
+        targets = np.asarray(distances, dtype=np.float64)
+        if targets.shape != (3,) or not np.all(np.isfinite(targets)) or np.any(targets < 0.0):
+            raise ValueError(
+                f"distances must be three finite non-negative metres, got {distances!r}"
+            )
+        self.distances_m: tuple[float, ...] = tuple(float(d) for d in targets)
+        self._indices: list[int] = []
+        self._samples: list[FloatArray] = []
+        self._points: list[FloatArray] = []
+        self._fractions: list[float] = []
+        self._reference_sign: float | None = None
+        self._previous: FloatArray | None = None
+
+    @property
+    def done(self) -> bool:
+        """Whether all three points have been saved."""
+        return len(self._indices) == len(self.distances_m)
+
+    @property
+    def found(self) -> int:
+        """How many points have been saved so far."""
+        return len(self._indices)
+
+    @property
+    def fractions(self) -> tuple[float, ...]:
+        """Fractions of the crossings saved so far (see :class:`ThreePoints`)."""
+        return tuple(self._fractions)
+
+    @property
+    def points(self) -> FloatArray:
+        """Interpolated crossings saved so far, ``(k, 2)`` metres."""
+        return np.array(self._points, dtype=np.float64).reshape(-1, 2)
+
+    def boundary_distance(self, position: npt.ArrayLike) -> float:
+        """``D(x, y)``: distance from a position to the boundary segment A'B', metres."""
+        return float(distance_to_segment(position, self.boundary_a, self.boundary_b))
+
+    def update(self, position: npt.ArrayLike, index: int) -> int:
+        """Feed the next position (metres) with its sample index; returns how many were saved."""
+        point = np.asarray(position, dtype=np.float64).reshape(2)
+        saved_before = self.found
+        boundary_distance = self.boundary_distance(point)
+        if self._reference_sign is not None and not self.done:
+            target = self.distances_m[self.found]
+            side = float(np.sign(boundary_distance - target))
+            if side != self._reference_sign:
+                assert self._previous is not None
+                fraction = self._crossing_fraction(self._previous, point, target, side)
+                self._save(index, point, fraction)
+                self._reference_sign = None
+        while not self.done and self._reference_sign is None:
+            side = float(np.sign(boundary_distance - self.distances_m[self.found]))
+            if side == 0.0:
+                self._save(index, point, 1.0)
+            else:
+                self._reference_sign = side
+        self._previous = point
+        return self.found - saved_before
+
+    def result(self) -> ThreePoints:
+        """The points saved so far, with status ``"ok"`` or ``"not_reached"``."""
+        message = ""
+        if not self.done:
+            missing = self.distances_m[self.found]
+            message = f"the distance {missing:.4g} m to the boundary was never crossed"
+        return ThreePoints(
+            status=OK if self.done else STATUS_NOT_REACHED,
+            distances_m=self.distances_m,
+            indices=tuple(self._indices),
+            sample_points=_frozen(np.array(self._samples).reshape(-1, 2)),
+            points=_frozen(self.points),
+            fractions=tuple(self._fractions),
+            message=message,
+        )
+
+    def _save(self, index: int, sample: FloatArray, fraction: float) -> None:
+        previous = self._previous if self._previous is not None else sample
+        self._indices.append(int(index))
+        self._samples.append(sample.copy())
+        self._points.append(previous + fraction * (sample - previous))
+        self._fractions.append(float(fraction))
+
+    def _crossing_fraction(
+        self, previous: FloatArray, current: FloatArray, target: float, current_side: float
+    ) -> float:
+        if current_side == 0.0:
+            return 1.0
+
+        def excess(t: float) -> float:
+            return self.boundary_distance(previous + t * (current - previous)) - target
+
+        return float(brentq(excess, 0.0, 1.0, xtol=1e-15, rtol=4.0 * np.finfo(float).eps))
+
+
+def extract_three_points(
+    path: npt.ArrayLike,
+    boundary_a: npt.ArrayLike,
+    boundary_b: npt.ArrayLike,
+    distances: npt.ArrayLike,
+) -> ThreePoints:
+    """Three-point extraction of Sec. III.C over a whole path.
+
+    Args:
+        path: ``(n, 2)`` positions in the order visited, metres (the robot uses its own
+            localized positions).
+        boundary_a, boundary_b: the boundary beacons (``(x, y)`` or ``(x, y, z)``; only their
+            projections A', B' on the sensor plane are used), metres.
+        distances: ``(3,)`` the user's (d1, d2, d3), metres (the paper: 0.45, 0.25, 0.05).
+
+    Returns:
+        :class:`ThreePoints` with the saved sample indices, the samples and the crossings
+        interpolated on the segment where each happened (see :class:`ThreePointExtractor`).
+
+    Raises:
+        ValueError: on wrong shapes, non-finite values, a degenerate boundary or negative
+            distances.
+    """
+    positions = _points_array(path, "path")
+    extractor = ThreePointExtractor(boundary_a, boundary_b, distances)
+    for index, position in enumerate(positions):
+        extractor.update(position, index)
+        if extractor.done:
+            break
+    return extractor.result()
+
+
+# ---------------------------------------------------------------------------------------------
+# The block expansion runner (Sec. II, Fig. 3)
+# ---------------------------------------------------------------------------------------------
+
+RangeFunction = Callable[[FloatArray, FloatArray], float]
+"""``measure(xy, beacon_xyz) -> range``: a slant range in metres (NaN for a dropout) from the
+sensor at the robot's true ``xy`` to a beacon at its true ``beacon_xyz``."""
+
+
+@dataclass(frozen=True)
+class BlockExpansionConfig:
+    """Setup of a block expansion run.
+
+    Attributes:
+        beacons_m: true beacon positions ``name -> (x, y, z)``, metres; defaults to Table I.
+            Only the first area's beacons are known to the robot; the others are used only to
+            simulate ranges and to score their calibration.
+        areas: the chain of triangular areas as beacon-name triples. Consecutive areas share
+            two beacons (their boundary) and the later one adds one beacon not used before.
+        calibration_distances_m: (d1, d2, d3) per boundary, metres; one triple per boundary
+            (the paper's d4..d6 are the second boundary's triple).
+        sensor_height_m: sensor height above the floor, metres (not printed in the paper).
+        range_noise_std_m: standard deviation of the Gaussian noise the runner adds to each
+            simulated range, metres (not added to a precomputed table).
+        trilateration_method: ``"paper"`` or ``"least_squares"`` (see :func:`trilaterate`).
+        max_calibration_condition: passed to :func:`auto_calibrate` as ``max_condition``.
+    """
+
+    beacons_m: Mapping[str, tuple[float, float, float]] = field(
+        default_factory=lambda: dict(TABLE_I_BEACONS_M)
+    )
+    areas: tuple[tuple[str, str, str], ...] = PAPER_TWO_AREAS
+    calibration_distances_m: tuple[tuple[float, float, float], ...] = (PAPER_D123_M,)
+    sensor_height_m: float = DEFAULT_SENSOR_HEIGHT_M
+    range_noise_std_m: float = 0.0
+    trilateration_method: str = "paper"
+    max_calibration_condition: float = DEFAULT_MAX_CALIBRATION_CONDITION
+
+    def __post_init__(self) -> None:
+        beacons: dict[str, tuple[float, float, float]] = {}
+        for name, xyz in dict(self.beacons_m).items():
+            values = np.asarray(xyz, dtype=np.float64)
+            if not isinstance(name, str) or values.shape != (3,) or not np.all(np.isfinite(values)):
+                raise ValueError(
+                    f"beacons_m must map names to finite (x, y, z) metres; bad entry {name!r}"
+                )
+            beacons[name] = (float(values[0]), float(values[1]), float(values[2]))
+        object.__setattr__(self, "beacons_m", beacons)
+        areas = tuple(tuple(area) for area in self.areas)
+        if not areas:
+            raise ValueError("areas must hold at least one beacon-name triple")
+        seen: set[str] = set()
+        for number, area in enumerate(areas):
+            if len(area) != 3 or len(set(area)) != 3 or not set(area) <= beacons.keys():
+                raise ValueError(
+                    f"areas[{number}] must be three distinct names from beacons_m, got {area!r}"
+                )
+            if number > 0:
+                shared = set(area) & set(areas[number - 1])
+                added = set(area) - shared
+                if len(shared) != 2 or added & seen:
+                    raise ValueError(
+                        f"areas[{number}] must share two beacons with areas[{number - 1}] and "
+                        f"add one beacon not used before, got {area!r}"
+                    )
+            seen |= set(area)
+        object.__setattr__(self, "areas", areas)
+        triples = tuple(tuple(float(d) for d in triple) for triple in self.calibration_distances_m)
+        if len(triples) != len(areas) - 1 or any(
+            len(t) != 3 or not all(math.isfinite(d) and d >= 0.0 for d in t) for t in triples
+        ):
+            raise ValueError(
+                f"calibration_distances_m must hold one (d1, d2, d3) of non-negative metres per "
+                f"boundary ({len(areas) - 1}), got {self.calibration_distances_m!r}"
+            )
+        object.__setattr__(self, "calibration_distances_m", triples)
+        if not math.isfinite(self.sensor_height_m):
+            raise ValueError(f"sensor_height_m must be finite, got {self.sensor_height_m!r}")
+        if not (math.isfinite(self.range_noise_std_m) and self.range_noise_std_m >= 0.0):
+            raise ValueError(
+                f"range_noise_std_m must be a finite non-negative number of metres, "
+                f"got {self.range_noise_std_m!r}"
+            )
+        if self.trilateration_method not in TRILATERATION_METHODS:
+            raise ValueError(
+                f"trilateration_method must be one of {TRILATERATION_METHODS}, "
+                f"got {self.trilateration_method!r}"
+            )
+        if not self.max_calibration_condition > 1.0:
+            raise ValueError(
+                f"max_calibration_condition must be > 1, got {self.max_calibration_condition!r}"
+            )
+
+    @classmethod
+    def paper(
+        cls, distances_mm: Sequence[float] = (450.0, 250.0, 50.0), **overrides: object
+    ) -> BlockExpansionConfig:
+        """The Table I setup with the paper's d's in millimetres.
+
+        Three d's give the two areas of Sec. IV.B; six give the three areas of Sec. IV.D.
+        """
+        values = tuple(float(d) / 1000.0 for d in distances_mm)
+        if len(values) not in (3, 6):
+            raise ValueError(f"distances_mm must hold 3 or 6 values, got {len(values)}")
+        areas = PAPER_TWO_AREAS if len(values) == 3 else PAPER_THREE_AREAS
+        triples = tuple((values[i], values[i + 1], values[i + 2]) for i in range(0, len(values), 3))
+        return cls(areas=areas, calibration_distances_m=triples, **overrides)  # type: ignore[arg-type]
+
+    @property
+    def beacon_names(self) -> tuple[str, ...]:
+        """Beacon names in the column order of a distance table."""
+        return tuple(self.beacons_m)
+
+    @property
+    def boundaries(self) -> tuple[tuple[str, str], ...]:
+        """The boundary beacon pair between each area and the next."""
+        return tuple(
+            tuple(name for name in self.areas[k] if name in self.areas[k + 1])  # type: ignore[misc]
+            for k in range(len(self.areas) - 1)
+        )
+
+    @property
+    def new_beacons(self) -> tuple[str, ...]:
+        """The beacon each later area adds, to be auto-calibrated."""
+        return tuple(
+            next(name for name in self.areas[k + 1] if name not in self.areas[k])
+            for k in range(len(self.areas) - 1)
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class BoundaryCalibration:
+    """What happened at one boundary.
+
+    Attributes:
+        boundary: the two boundary beacons' names.
+        new_beacon: the name of the beacon calibrated there.
+        status: ``"ok"``, ``"not_reached"`` (a d, or after calibrating the boundary itself,
+            was never crossed), ``"not_attempted"`` (an
+            earlier boundary failed or was never passed), or the calibration's status
+            (``"collinear_positions"``, ``"no_intersection"``, ``"missing_distance"``).
+        three_points: the extraction's result, ``None`` if not attempted.
+        calibration_points_xy: ``(k, 2)`` the estimated positions used to calibrate, metres.
+        calibration_ranges_m: ``(k,)`` the ranges to the new beacon there (NaN for a dropout).
+        calibration: the auto-calibration result, ``None`` if it was not run.
+        true_position_m: the new beacon's true ``(x, y, z)``, metres.
+        error_m: distance between the calibrated and the true beacon, metres; ``None``
+            unless calibrated.
+        switch_index: the path index from which the next area's beacons were used, or
+            ``None``.
+    """
+
+    boundary: tuple[str, str]
+    new_beacon: str
+    status: str
+    three_points: ThreePoints | None
+    calibration_points_xy: FloatArray
+    calibration_ranges_m: FloatArray
+    calibration: CalibrationResult | None
+    true_position_m: FloatArray
+    error_m: float | None
+    switch_index: int | None
+
+
+@dataclass(frozen=True, eq=False)
+class BlockExpansionResult:
+    """Outcome of :meth:`BlockExpansion.run`.
+
+    Attributes:
+        status: ``"ok"``; ``"calibration_failed"`` when some boundary was not calibrated or
+            not passed; ``"localization_failed"`` when every boundary succeeded but some
+            fix did not.
+        localizations: per path point, the trilateration result.
+        area_indices: ``(n,)`` index of the area whose beacons were used at each point.
+        estimated_indices: ``(k,)`` path indices of the successful fixes.
+        estimated_xy: ``(k, 2)`` those fixes, metres.
+        calibrations: one :class:`BoundaryCalibration` per boundary.
+        message: explanation when not ok.
+    """
+
+    status: str
+    localizations: tuple[TrilaterationResult, ...]
+    area_indices: IntArray
+    estimated_indices: IntArray
+    estimated_xy: FloatArray
+    calibrations: tuple[BoundaryCalibration, ...]
+    message: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """Whether every boundary was calibrated and passed and every fix succeeded."""
+        return self.status == OK
+
+    @property
+    def statuses(self) -> tuple[str, ...]:
+        """Per path point, the trilateration status."""
+        return tuple(result.status for result in self.localizations)
+
+    @property
+    def calibrated_beacons_m(self) -> dict[str, FloatArray]:
+        """Calibrated positions of the new beacons, metres."""
+        return {
+            c.new_beacon: c.calibration.position
+            for c in self.calibrations
+            if c.calibration is not None and c.calibration.position is not None
+        }
+
+    @property
+    def calibration_errors_m(self) -> dict[str, float]:
+        """Distance between calibrated and true position per calibrated beacon, metres."""
+        return {c.new_beacon: c.error_m for c in self.calibrations if c.error_m is not None}
+
+    def path_errors(self, true_path: npt.ArrayLike) -> tuple[float, float]:
+        """``(sigma, sigma_prime)`` of the successful fixes against the true path, metres."""
+        return path_errors(self.estimated_xy, true_path)
+
+    def errors_along_path(self, true_path: npt.ArrayLike) -> FloatArray:
+        """Per successful fix, its distance to the true path (Figs. 5, 7, 8), metres."""
+        return distances_to_polyline(self.estimated_xy, true_path)
+
+
+class _BoundaryProgress:
+    """Mutable bookkeeping for one boundary while the runner walks the path."""
+
+    def __init__(
+        self, config: BlockExpansionConfig, number: int, known: Mapping[str, FloatArray]
+    ) -> None:
+        self.boundary = config.boundaries[number]
+        self.new_beacon = config.new_beacons[number]
+        self.new_column = config.beacon_names.index(self.new_beacon)
+        self.extractor = ThreePointExtractor(
+            known[self.boundary[0]], known[self.boundary[1]], config.calibration_distances_m[number]
+        )
+        opposite = next(n for n in config.areas[number] if n not in self.boundary)
+        self.origin = known[self.boundary[0]][:2]
+        self.direction = known[self.boundary[1]][:2] - self.origin
+        self.inner_side = self._side(known[opposite][:2])
+        self.points: list[FloatArray] = []
+        self.ranges: list[float] = []
+        self.calibration: CalibrationResult | None = None
+        self.switch_index: int | None = None
+
+    def _side(self, xy: FloatArray) -> float:
+        offset = xy - self.origin
+        return float(np.sign(self.direction[0] * offset[1] - self.direction[1] * offset[0]))
+
+    def is_past(self, xy: FloatArray) -> bool:
+        """Whether a position lies strictly on the far side of the boundary line."""
+        side = self._side(xy)
+        return side != 0.0 and side != self.inner_side
+
+
+class BlockExpansion:
+    """The block expansion algorithm of Sec. II over a chain of triangular areas (Fig. 3).
+
+    At each path point the robot trilaterates with the current area's beacons (true
+    positions for the first area, calibrated ones after). While the next area's beacon is
+    not yet calibrated, its estimated positions feed the three-point extraction for the
+    boundary ahead; when the three points are saved it auto-calibrates the new beacon from
+    the ranges measured there. It switches to the next area's beacons at the first fix past
+    the boundary (by its own estimate) once the new beacon is calibrated; the next boundary's
+    extraction starts at that fix. A failed calibration is recorded and the robot carries on
+    with the beacons it has.
+
+    >>> config = BlockExpansionConfig.paper((450.0, 250.0, 50.0))
+    >>> run = BlockExpansion(config).run(parabolic_path(x_end_m=1.3))
+    >>> run.status, sorted(run.calibrated_beacons_m)
+    ('ok', ['D'])
+    """
+
+    def __init__(self, config: BlockExpansionConfig) -> None:
+        if not isinstance(config, BlockExpansionConfig):
+            raise ValueError(f"config must be a BlockExpansionConfig, got {type(config).__name__}")
+        self.config = config
+
+    def slant_range_m(self, xy: FloatArray, beacon_xyz: FloatArray) -> float:
+        """Noise-free slant range from the sensor at ``xy`` (configured height) to a beacon."""
+        dx, dy = xy[0] - beacon_xyz[0], xy[1] - beacon_xyz[1]
+        dz = self.config.sensor_height_m - beacon_xyz[2]
+        return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+    def measure_ranges(
+        self,
+        path: npt.ArrayLike,
+        rng: np.random.Generator | None = None,
+        measure: RangeFunction | None = None,
+    ) -> FloatArray:
+        """``(n, beacons)`` simulated ranges along a true path, metres (NaN for dropouts).
+
+        Columns follow :attr:`BlockExpansionConfig.beacon_names`. ``measure`` (default: the
+        noise-free slant range) is called with the true position and the true beacon
+        position; the runner adds Gaussian noise of ``range_noise_std_m`` drawn from ``rng``
+        (one draw per point and beacon, row by row). Negative or infinite values become NaN.
+        """
+        positions = _points_array(path, "path")
+        noise = self.config.range_noise_std_m
+        if noise > 0.0 and not isinstance(rng, np.random.Generator):
+            raise ValueError("rng must be a numpy.random.Generator when range_noise_std_m > 0")
+        range_of = measure if measure is not None else self.slant_range_m
+        if not callable(range_of):
+            raise ValueError("measure must be callable as measure(xy, beacon_xyz) -> metres")
+        beacons = np.array([self.config.beacons_m[n] for n in self.config.beacon_names])
+        table = np.array([[float(range_of(xy, b)) for b in beacons] for xy in positions])
+        if noise > 0.0:
+            assert rng is not None
+            table = table + rng.normal(0.0, noise, size=table.shape)
+        return np.where(np.isfinite(table) & (table >= 0.0), table, np.nan)
+
+    def run(
+        self,
+        path: npt.ArrayLike,
+        rng: np.random.Generator | None = None,
+        measure: RangeFunction | None = None,
+        distance_table: npt.ArrayLike | None = None,
+    ) -> BlockExpansionResult:
+        """Localize along a true path, calibrating each new beacon on the way.
+
+        Args:
+            path: ``(n, 2)`` true positions of the sensor in order, metres.
+            rng: source of the range noise (required when ``range_noise_std_m > 0`` and no
+                table is given).
+            measure: ``measure(xy, beacon_xyz) -> metres``, the ranging sensor (see
+                :meth:`measure_ranges`); default the noise-free slant range.
+            distance_table: instead of ``measure``, precomputed measured ranges
+                ``(n, beacons)`` in the column order of ``config.beacon_names`` (NaN for a
+                dropout); used as given, without added noise.
+
+        Returns:
+            A :class:`BlockExpansionResult`.
+
+        Raises:
+            ValueError: on wrong shapes, a missing ``rng`` when noise is configured, or both
+                ``measure`` and ``distance_table``.
+        """
+        positions = _points_array(path, "path")
+        config = self.config
+        names = config.beacon_names
+        if distance_table is not None:
+            if measure is not None:
+                raise ValueError("give either measure or distance_table, not both")
+            table = np.array(distance_table, dtype=np.float64)
+            if table.shape != (len(positions), len(names)):
+                raise ValueError(
+                    f"distance_table must have shape ({len(positions)}, {len(names)}) "
+                    f"(path points x beacons {names}), got {table.shape}"
+                )
+            table[~np.isfinite(table) | (table < 0.0)] = np.nan
+        else:
+            table = self.measure_ranges(positions, rng, measure)
+
+        known: dict[str, FloatArray] = {
+            name: np.array(config.beacons_m[name]) for name in config.areas[0]
+        }
+        boundary_count = len(config.areas) - 1
+        progress: list[_BoundaryProgress] = []
+        if boundary_count:
+            progress.append(_BoundaryProgress(config, 0, known))
+        area = 0
+        localizations: list[TrilaterationResult] = []
+        area_indices = np.empty(len(positions), dtype=np.int64)
+
+        for index, ranges in enumerate(table):
+            area_names = config.areas[area]
+            columns = [names.index(n) for n in area_names]
+            fix = trilaterate(
+                np.array([known[n] for n in area_names]),
+                ranges[columns],
+                config.sensor_height_m,
+                config.trilateration_method,
+            )
+            localizations.append(fix)
+            area_indices[index] = area
+            if not fix.ok or area >= boundary_count:
+                continue
+            assert fix.position is not None
+            current = progress[area]
+            if current.calibration is None:
+                self._extract(current, fix.position, index, ranges)
+            calibration = current.calibration
+            if calibration is not None and calibration.ok and current.is_past(fix.position):
+                assert calibration.position is not None
+                known[current.new_beacon] = np.array(calibration.position)
+                current.switch_index = index + 1
+                area += 1
+                if area < boundary_count:
+                    progress.append(_BoundaryProgress(config, area, known))
+
+        return self._result(localizations, area_indices, progress, positions)
+
+    def _extract(
+        self, current: _BoundaryProgress, position: FloatArray, index: int, ranges: FloatArray
+    ) -> None:
+        """Feed one fix to the extraction; calibrate once the three samples are saved.
+
+        As in Fig. 1 the robot keeps the saved samples themselves (its estimate and the range
+        to the new beacon measured there): no range was measured at an interpolated crossing.
+        """
+        saved = current.extractor.update(position, index)
+        for _ in range(saved):
+            current.points.append(np.array(position))
+            current.ranges.append(float(ranges[current.new_column]))
+        if current.extractor.done:
+            current.calibration = auto_calibrate(
+                np.array(current.points),
+                np.array(current.ranges),
+                self.config.sensor_height_m,
+                max_condition=self.config.max_calibration_condition,
+            )
+
+    def _result(
+        self,
+        localizations: list[TrilaterationResult],
+        area_indices: IntArray,
+        progress: list[_BoundaryProgress],
+        positions: FloatArray,
+    ) -> BlockExpansionResult:
+        config = self.config
+        calibrations: list[BoundaryCalibration] = []
+        for number in range(len(config.areas) - 1):
+            new_beacon = config.new_beacons[number]
+            truth = _frozen(config.beacons_m[new_beacon])
+            if number >= len(progress):
+                calibrations.append(
+                    BoundaryCalibration(
+                        boundary=config.boundaries[number],
+                        new_beacon=new_beacon,
+                        status=STATUS_NOT_ATTEMPTED,
+                        three_points=None,
+                        calibration_points_xy=_frozen(np.empty((0, 2))),
+                        calibration_ranges_m=_frozen(np.empty(0)),
+                        calibration=None,
+                        true_position_m=truth,
+                        error_m=None,
+                        switch_index=None,
+                    )
+                )
+                continue
+            item = progress[number]
+            three_points = item.extractor.result()
+            calibration = item.calibration
+            if calibration is None:
+                status = three_points.status
+            elif not calibration.ok:
+                status = calibration.status
+            elif item.switch_index is None:
+                status = STATUS_NOT_REACHED
+            else:
+                status = OK
+            error = None
+            if calibration is not None and calibration.position is not None:
+                error = float(np.linalg.norm(calibration.position - truth))
+            calibrations.append(
+                BoundaryCalibration(
+                    boundary=item.boundary,
+                    new_beacon=new_beacon,
+                    status=status,
+                    three_points=three_points,
+                    calibration_points_xy=_frozen(np.array(item.points).reshape(-1, 2)),
+                    calibration_ranges_m=_frozen(np.array(item.ranges, dtype=np.float64)),
+                    calibration=calibration,
+                    true_position_m=truth,
+                    error_m=error,
+                    switch_index=item.switch_index,
+                )
+            )
+        ok_indices = np.array([i for i, r in enumerate(localizations) if r.ok], dtype=np.int64)
+        estimated = np.array(
+            [r.position for r in localizations if r.position is not None], dtype=np.float64
+        ).reshape(-1, 2)
+        failed_boundaries = [c for c in calibrations if c.status != OK]
+        if failed_boundaries:
+            status = STATUS_CALIBRATION_FAILED
+            first = failed_boundaries[0]
+            message = f"beacon {first.new_beacon}: {first.status}"
+        elif len(ok_indices) < len(positions):
+            status = STATUS_LOCALIZATION_FAILED
+            message = f"{len(positions) - len(ok_indices)} of {len(positions)} fixes failed"
+        else:
+            status, message = OK, ""
+        area_indices = area_indices.copy()
+        area_indices.flags.writeable = False
+        ok_indices.flags.writeable = False
+        return BlockExpansionResult(
+            status=status,
+            localizations=tuple(localizations),
+            area_indices=area_indices,
+            estimated_indices=ok_indices,
+            estimated_xy=_frozen(estimated),
+            calibrations=tuple(calibrations),
+            message=message,
+        )

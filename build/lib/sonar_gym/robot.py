@@ -1,0 +1,411 @@
+"""Differential-drive kinematics, odometry noise and wheel slip.
+
+The motion model is that of Kim, Lee & Jeong, section 3.1 (after Komoriya et al.): with the
+wheel increments ``d_r = T u_r`` and ``d_l = T u_l`` over one sampling period ``T``,
+
+    x(k+1)     = x(k) + (d_r + d_l)/2 cos(theta(k))
+    y(k+1)     = y(k) + (d_r + d_l)/2 sin(theta(k))
+    theta(k+1) = theta(k) + (d_r - d_l)/l
+
+where ``l`` is the wheel base. The paper's ``F(k)`` prints ``T/1`` in its last row; it is
+``T/l``, the derivative of the heading equation above, and the heading change here divides by
+the wheel base.
+
+:func:`unicycle_step` offers three integrations of the same model: ``"euler"`` (the equations
+exactly as printed), ``"midpoint"`` (the second-order form ``x += d cos(theta + dtheta/2)``,
+the default) and ``"arc"`` (exact for constant wheel speeds: the centre moves along a circular
+arc, ``x += d sinc(dtheta/2) cos(theta + dtheta/2)``). All three agree exactly for a straight
+move and for a turn in place, and converge as the increments shrink.
+
+:class:`DifferentialDriveRobot` executes commanded wheel increments: the *true* motion (with
+wheel scale errors and slip) runs through the pymunk world, so walls stop it; the *odometry*
+integrates the encoder increments (commanded plus encoder noise), which see neither slip nor a
+blocked robot.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from sonar_gym.pose import Pose, angle_difference
+from sonar_gym.world import World
+
+Integration = Literal["euler", "midpoint", "arc"]
+INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
+
+
+def unicycle_step(
+    pose: Pose,
+    d_left_m: float,
+    d_right_m: float,
+    wheel_base_m: float,
+    integration: Integration = "midpoint",
+) -> Pose:
+    """Advance ``pose`` by wheel increments of a differential-drive robot (Kim et al. sec. 3.1).
+
+    Args:
+        pose: the pose before the step ({W}; metres, radians).
+        d_left_m, d_right_m: distance rolled by the left and right wheel, metres (``T u_l`` and
+            ``T u_r`` of the paper); positive is forward.
+        wheel_base_m: distance between the wheels ``l``, metres (> 0).
+        integration: ``"euler"``: the printed equations, ``x += d cos(theta)``; ``"midpoint"``:
+            ``x += d cos(theta + dtheta/2)``; ``"arc"``: the exact circular arc.
+            ``d = (d_r + d_l)/2`` and ``dtheta = (d_r - d_l)/l`` in all three.
+
+    Returns:
+        the pose after the step, heading wrapped to (-pi, pi].
+    """
+    if integration not in INTEGRATIONS:
+        raise ValueError(
+            f"argument 'integration' must be one of {list(INTEGRATIONS)}; got {integration!r}"
+        )
+    wheel_base_m = float(wheel_base_m)
+    if not math.isfinite(wheel_base_m) or wheel_base_m <= 0.0:
+        raise ValueError(
+            f"argument 'wheel_base_m' must be a finite positive number (metres); "
+            f"got {wheel_base_m!r}"
+        )
+    d_left_m, d_right_m = float(d_left_m), float(d_right_m)
+    if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+        raise ValueError(
+            f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+        )
+    distance = 0.5 * (d_right_m + d_left_m)
+    dtheta = (d_right_m - d_left_m) / wheel_base_m
+    if integration == "euler":
+        direction, length = pose.theta, distance
+    else:
+        direction = pose.theta + 0.5 * dtheta
+        length = distance * (_sinc(0.5 * dtheta) if integration == "arc" else 1.0)
+    return Pose(
+        pose.x + length * math.cos(direction),
+        pose.y + length * math.sin(direction),
+        pose.theta + dtheta,
+    )
+
+
+def _sinc(x: float) -> float:
+    """``sin(x)/x`` with its limit 1 at 0 (series below 1e-4 rad)."""
+    if abs(x) < 1e-4:
+        return 1.0 - x * x / 6.0
+    return math.sin(x) / x
+
+
+@dataclass(frozen=True)
+class OdometryNoise:
+    """Odometry and wheel-ground errors of a small indoor differential-drive robot.
+
+    Attributes:
+        encoder_std_m_per_sqrt_m: random error of each encoder increment: zero-mean Gaussian
+            with variance ``encoder_std_m_per_sqrt_m**2 * |d|`` for a wheel increment ``d``
+            (metres), i.e. the standard deviation in metres after one metre of travel; the
+            variance grows with distance, so splitting a motion does not change it. This is
+            the wheel-speed error ``v(k)`` of Kim et al. Default 5 mm per metre.
+        scale_error_left, scale_error_right: systematic relative error of each wheel's
+            effective radius (dimensionless; 0.002 = the wheel rolls 0.2 % farther than the
+            encoder reports). Fixed for the robot, not redrawn. Defaults +/-0.2 %, i.e. a
+            heading drift of about 0.6 deg per metre on a 0.4 m wheel base.
+        slip_probability_per_m: probability that a wheel slips at least once while rolling one
+            metre, in [0, 1]; for an increment ``d`` the probability is
+            ``1 - (1 - p)**|d|``. Default 0.01.
+        slip_fraction_max: when a wheel slips, it loses a fraction ``U(0, slip_fraction_max)``
+            of its ground travel on that command (dimensionless, in [0, 1]). Default 0.3.
+    """
+
+    encoder_std_m_per_sqrt_m: float = 0.005
+    scale_error_left: float = 0.002
+    scale_error_right: float = -0.002
+    slip_probability_per_m: float = 0.01
+    slip_fraction_max: float = 0.3
+
+    def __post_init__(self) -> None:
+        for name in (
+            "encoder_std_m_per_sqrt_m",
+            "scale_error_left",
+            "scale_error_right",
+            "slip_probability_per_m",
+            "slip_fraction_max",
+        ):
+            value = getattr(self, name)
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+            ):
+                raise ValueError(f"OdometryNoise.{name} must be a finite number; got {value!r}")
+            object.__setattr__(self, name, float(value))
+        if self.encoder_std_m_per_sqrt_m < 0.0:
+            raise ValueError(
+                "OdometryNoise.encoder_std_m_per_sqrt_m must be >= 0; "
+                f"got {self.encoder_std_m_per_sqrt_m}"
+            )
+        for name in ("scale_error_left", "scale_error_right"):
+            if not -0.5 < getattr(self, name) < 0.5:
+                raise ValueError(
+                    f"OdometryNoise.{name} must be in (-0.5, 0.5); got {getattr(self, name)}"
+                )
+        for name in ("slip_probability_per_m", "slip_fraction_max"):
+            if not 0.0 <= getattr(self, name) <= 1.0:
+                raise ValueError(
+                    f"OdometryNoise.{name} must be in [0, 1]; got {getattr(self, name)}"
+                )
+
+    @classmethod
+    def none(cls) -> OdometryNoise:
+        """No noise at all: odometry equals the truth unless the robot is blocked."""
+        return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class MotionResult:
+    """Outcome of one command of :class:`DifferentialDriveRobot`.
+
+    Attributes:
+        true_pose: the robot's true pose afterwards ({W}; metres, radians).
+        odometry_pose: the dead-reckoning estimate afterwards, from the encoder increments.
+        collided: whether the robot touched and pushed against a static shape.
+        distance_m: path length of the true robot centre, metres.
+        encoder_left_m, encoder_right_m: the encoder increments the odometry integrated,
+            metres (the ``T u_l``, ``T u_r`` of Kim et al.; summed over the parts of a
+            compound move).
+        parts: for compound moves (:meth:`DifferentialDriveRobot.move_to`), the result of each
+            elementary command; empty otherwise.
+    """
+
+    true_pose: Pose
+    odometry_pose: Pose
+    collided: bool
+    distance_m: float
+    encoder_left_m: float = 0.0
+    encoder_right_m: float = 0.0
+    parts: tuple[MotionResult, ...] = field(default=())
+
+
+class DifferentialDriveRobot:
+    """A differential-drive robot that moves a :class:`~sonar_gym.world.World`'s body.
+
+    Args:
+        noise: the odometry, scale and slip errors (:class:`OdometryNoise`).
+        wheel_base_m: wheel base in metres; ``None`` takes the scenario's
+            ``robot.wheel_base`` at each command.
+        odometry_integration: how the odometry integrates encoder increments (see
+            :func:`unicycle_step`), applied per substep.
+        max_substep_m: largest wheel travel per physics substep, metres; together with
+            ``max_substep_rad`` sets the number of substeps of a command.
+        max_substep_rad: largest heading change per physics substep, radians.
+        odometry_pose: the initial dead-reckoning estimate; ``None`` starts it at the true pose
+            at the first command (a robot put down at a known pose).
+    """
+
+    def __init__(
+        self,
+        noise: OdometryNoise | None = None,
+        *,
+        wheel_base_m: float | None = None,
+        odometry_integration: Integration = "midpoint",
+        max_substep_m: float = 0.02,
+        max_substep_rad: float = math.radians(3.0),
+        odometry_pose: Pose | None = None,
+    ) -> None:
+        self.noise = OdometryNoise() if noise is None else noise
+        if not isinstance(self.noise, OdometryNoise):
+            raise ValueError(
+                f"argument 'noise' must be an OdometryNoise; got {type(noise).__name__}"
+            )
+        if wheel_base_m is not None and (not math.isfinite(wheel_base_m) or wheel_base_m <= 0.0):
+            raise ValueError(
+                "argument 'wheel_base_m' must be a positive number (metres) or None; "
+                f"got {wheel_base_m!r}"
+            )
+        if odometry_integration not in INTEGRATIONS:
+            raise ValueError(
+                f"argument 'odometry_integration' must be one of {list(INTEGRATIONS)}; "
+                f"got {odometry_integration!r}"
+            )
+        for name, value in (("max_substep_m", max_substep_m), ("max_substep_rad", max_substep_rad)):
+            if not math.isfinite(value) or value <= 0.0:
+                raise ValueError(
+                    f"argument '{name}' must be a finite positive number; got {value!r}"
+                )
+        self.wheel_base_m = wheel_base_m
+        self.odometry_integration: Integration = odometry_integration
+        self.max_substep_m = float(max_substep_m)
+        self.max_substep_rad = float(max_substep_rad)
+        self.odometry_pose: Pose | None = odometry_pose
+
+    def reset_odometry(self, pose: Pose | None) -> None:
+        """Set the dead-reckoning estimate (``None``: the true pose at the next command)."""
+        if pose is not None and not isinstance(pose, Pose):
+            raise ValueError(f"argument 'pose' must be a Pose or None; got {type(pose).__name__}")
+        self.odometry_pose = pose
+
+    def wheel_base_for(self, world: World) -> float:
+        """The wheel base used with ``world``, metres."""
+        return (
+            self.wheel_base_m if self.wheel_base_m is not None else world.scenario.robot.wheel_base
+        )
+
+    # --- elementary command ----------------------------------------------------------------
+
+    def drive(
+        self,
+        world: World,
+        d_left_m: float,
+        d_right_m: float,
+        rng: np.random.Generator,
+        substeps: int | None = None,
+    ) -> MotionResult:
+        """Command wheel increments; move the true robot through pymunk and update odometry.
+
+        Each call draws exactly two standard normals (encoder noise, left then right) and four
+        uniforms (slip occurrence left/right, slip size left/right) from ``rng``, whatever the
+        noise settings, so the random stream stays aligned across settings.
+
+        Args:
+            world: the world whose robot body moves.
+            d_left_m, d_right_m: commanded wheel increments, metres.
+            rng: the only source of randomness.
+            substeps: physics substeps; ``None`` picks enough that no wheel travels more than
+                ``max_substep_m`` and the heading changes by at most ``max_substep_rad`` per
+                substep.
+        """
+        d_left_m, d_right_m = float(d_left_m), float(d_right_m)
+        if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+            raise ValueError(
+                f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+            )
+        if not isinstance(rng, np.random.Generator):
+            raise ValueError(
+                f"argument 'rng' must be a numpy.random.Generator; got {type(rng).__name__}"
+            )
+        wheel_base = self.wheel_base_for(world)
+        noise = self.noise
+        normals = rng.standard_normal(2)
+        uniforms = rng.random(4)
+
+        commanded = np.array([d_left_m, d_right_m])
+        encoder = commanded + noise.encoder_std_m_per_sqrt_m * np.sqrt(np.abs(commanded)) * normals
+        slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
+        slipped = uniforms[:2] < slip_probability
+        slip_loss = np.where(slipped, uniforms[2:] * noise.slip_fraction_max, 0.0)
+        scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
+        ground = commanded * scale * (1.0 - slip_loss)
+
+        n = self._substep_count(ground, encoder, wheel_base, substeps)
+        start = world.robot_pose
+        odometry_start = start if self.odometry_pose is None else self.odometry_pose
+
+        fractions = np.arange(n + 1) / n
+        planned = np.array(
+            [
+                unicycle_step(start, f * ground[0], f * ground[1], wheel_base, "arc").as_array()
+                for f in fractions
+            ]
+        )
+        displacements = np.diff(planned, axis=0)
+        displacements[:, 2] = (ground[1] - ground[0]) / wheel_base / n
+        outcome = world.move_robot(displacements)
+
+        odometry = odometry_start
+        for _ in range(n):
+            odometry = unicycle_step(
+                odometry, encoder[0] / n, encoder[1] / n, wheel_base, self.odometry_integration
+            )
+        self.odometry_pose = odometry
+        return MotionResult(
+            true_pose=outcome.pose,
+            odometry_pose=odometry,
+            collided=outcome.collided,
+            distance_m=outcome.path_length_m,
+            encoder_left_m=float(encoder[0]),
+            encoder_right_m=float(encoder[1]),
+        )
+
+    def _substep_count(
+        self, ground: np.ndarray, encoder: np.ndarray, wheel_base: float, substeps: int | None
+    ) -> int:
+        if substeps is not None:
+            if int(substeps) != substeps or substeps < 1:
+                raise ValueError(
+                    f"argument 'substeps' must be a positive integer or None; got {substeps!r}"
+                )
+            return int(substeps)
+        travel = float(max(np.max(np.abs(ground)), np.max(np.abs(encoder))))
+        turn = abs(float(ground[1] - ground[0])) / wheel_base
+        return max(
+            1, math.ceil(travel / self.max_substep_m), math.ceil(turn / self.max_substep_rad)
+        )
+
+    # --- convenience commands -----------------------------------------------------------
+
+    def drive_straight(
+        self, world: World, distance_m: float, rng: np.random.Generator
+    ) -> MotionResult:
+        """Roll both wheels by ``distance_m`` metres (negative: backwards)."""
+        return self.drive(world, distance_m, distance_m, rng)
+
+    def turn(self, world: World, angle_rad: float, rng: np.random.Generator) -> MotionResult:
+        """Turn in place by ``angle_rad`` radians (counter-clockwise positive)."""
+        half = 0.5 * float(angle_rad) * self.wheel_base_for(world)
+        return self.drive(world, -half, half, rng)
+
+    def move_to(
+        self,
+        world: World,
+        target: Pose | tuple[float, float],
+        rng: np.random.Generator,
+        *,
+        from_pose: Pose | None = None,
+    ) -> MotionResult:
+        """Turn towards ``target``, drive straight to it, then turn to its heading (if a Pose).
+
+        The plan is made from ``from_pose`` (default: the odometry estimate, or the true pose
+        if odometry was never set), as a robot plans from its belief; noise and walls make the
+        true end pose differ. Each part is one :meth:`drive` command.
+        """
+        if from_pose is not None:
+            belief = from_pose
+        elif self.odometry_pose is not None:
+            belief = self.odometry_pose
+        else:
+            belief = world.robot_pose
+        if isinstance(target, Pose):
+            target_xy, target_heading = (target.x, target.y), target.theta
+        else:
+            tx, ty = np.asarray(target, dtype=np.float64).reshape(2)
+            target_xy, target_heading = (float(tx), float(ty)), None
+        dx, dy = target_xy[0] - belief.x, target_xy[1] - belief.y
+        distance = math.hypot(dx, dy)
+        parts: list[MotionResult] = []
+        heading = belief.theta
+        if distance > 1e-9:
+            bearing = math.atan2(dy, dx)
+            parts.append(self.turn(world, angle_difference(bearing, heading), rng))
+            parts.append(self.drive_straight(world, distance, rng))
+            heading = bearing
+        if target_heading is not None:
+            parts.append(self.turn(world, angle_difference(target_heading, heading), rng))
+        if not parts:
+            parts.append(self.drive(world, 0.0, 0.0, rng))
+        return MotionResult(
+            true_pose=parts[-1].true_pose,
+            odometry_pose=parts[-1].odometry_pose,
+            collided=any(p.collided for p in parts),
+            distance_m=sum(p.distance_m for p in parts),
+            encoder_left_m=sum(p.encoder_left_m for p in parts),
+            encoder_right_m=sum(p.encoder_right_m for p in parts),
+            parts=tuple(parts),
+        )
+
+
+__all__ = [
+    "DifferentialDriveRobot",
+    "INTEGRATIONS",
+    "MotionResult",
+    "OdometryNoise",
+    "unicycle_step",
+]

@@ -1,0 +1,215 @@
+"""Per-geometry constant tables that make :func:`~sonar_gym.sonar.echoes.echo_candidates` cheap.
+
+Almost everything the echo search needs is *affine* in the sensor position ``p = (px, py)``:
+the vector from ``p`` to a wall's foot of the perpendicular (``-n n^T (p - a)``), to a vertex
+(``v - p``) and to a cylinder's centre (``c - p``); where the foot falls along the wall; the
+signed distance of ``p`` from each wall's line; the two wedge tests of
+:meth:`~sonar_gym.geometry.StaticGeometry.is_concave_from`; and every pairwise quantity the
+occlusion test needs (``rel x d``, ``(a - p) x d``, ``(a - p) x rel``, ``(c - p) . rel``,
+written as a matrix acting on ``(rel_x, rel_y, 1)``). So each of them is a row of a constant
+matrix, and one matrix-vector product per sensor position evaluates them all.
+
+The tables are built once per :class:`~sonar_gym.geometry.StaticGeometry` and cached (weakly:
+a rebuilt geometry gets new tables).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonar_gym.geometry import StaticGeometry
+from sonar_gym.pose import FloatArray
+
+LOOP_TOLERANCE_M = 1e-9
+"""End points closer than this are the same point (closing polygons, pairing T-junctions)."""
+
+
+@dataclass(frozen=True, eq=False)
+class EchoTables:
+    """Constant tables of one geometry.
+
+    Candidates are numbered planes (one per segment, ``S``), then cylinders (``C``), then
+    vertices (``V``; those that can be concave corners first, ``W`` of them).
+
+    Attributes:
+        position_map: ``(3 (S+C+V) + 2 S + 2 W, 3)``; times ``(px, py, 1)`` it gives, in order,
+            ``(rel_x, rel_y, 1)`` of every candidate (``rel`` = echo point - ``p``; for a
+            cylinder its centre - ``p``), the foot position along each segment (0 at its
+            start, 1 at its end), the signed distance of ``p`` from each segment's line (left
+            positive), and the two wedge tests of each possibly-concave vertex.
+        occlusion_map: ``((3 S + C) 3, 3)``; times ``(px, py, 1)`` and reshaped to
+            ``(3 S + C, 3)`` it is the matrix ``N`` such that ``N @ (rel_x, rel_y, 1)`` gives,
+            for every segment, ``rel x d``, then for every segment ``(a - p) x d``, then
+            ``(a - p) x rel``, then for every circle ``(c - p) . rel``.
+        n_segments, n_circles, n_vertices, n_wedges: the counts ``S, C, V, W``.
+        radius, radius_sq: ``(C,)`` cylinder radii and their squares.
+        solid_side: ``(S,)`` +1 when the solid lies left of the segment, -1 right, 0 for open
+            chains (see :func:`convex_loops`).
+        encloses: ``(S,)`` whether the segment belongs to an enclosure (the room).
+        twin: ``(W,)`` the other vertex at the same point (a T-junction), else the vertex
+            itself; ``twin_comes_first``: whether that twin has the lower index.
+        kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
+    """
+
+    position_map: FloatArray
+    occlusion_map: FloatArray
+    n_segments: int
+    n_circles: int
+    n_vertices: int
+    n_wedges: int
+    radius: FloatArray
+    radius_sq: FloatArray
+    solid_side: FloatArray
+    encloses: np.ndarray
+    twin: np.ndarray
+    twin_comes_first: np.ndarray
+    kinds_template: np.ndarray
+
+
+_CACHE: weakref.WeakKeyDictionary[StaticGeometry, EchoTables] = weakref.WeakKeyDictionary()
+
+
+def echo_tables(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> EchoTables:
+    """The (cached) tables of ``geometry``; ``plane``, ``cylinder``, ``edge`` are the kind codes."""
+    cached = _CACHE.get(geometry)
+    if cached is None:
+        cached = _build(geometry, plane, cylinder, edge)
+        _CACHE[geometry] = cached
+    return cached
+
+
+def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> EchoTables:
+    a = geometry.segment_starts
+    d = geometry.segment_ends - a
+    n_segments, n_circles = geometry.n_segments, geometry.n_circles
+    length = np.hypot(d[:, 0], d[:, 1])
+    normal = np.column_stack([-d[:, 1], d[:, 0]]) / length[:, None]  # left unit normal
+    normal_offset = np.einsum("ij,ij->i", a, normal)
+
+    arm_a, arm_b = geometry.vertex_arms[:, 0], geometry.vertex_arms[:, 1]
+    cross_ab = arm_a[:, 0] * arm_b[:, 1] - arm_a[:, 1] * arm_b[:, 0]
+    wedge = np.abs(cross_ab) > 1e-9
+    order = np.concatenate([np.flatnonzero(wedge), np.flatnonzero(~wedge)])
+    vertices = geometry.vertices[order]
+    n_vertices, n_wedges = len(vertices), int(wedge.sum())
+
+    # (rel_x, rel_y, 1) rows of every candidate, as coefficients of (px, py, 1).
+    n_candidates = n_segments + n_circles + n_vertices
+    rel = np.zeros((n_candidates, 3, 3))
+    projector = normal[:, :, None] * normal[:, None, :]  # n n^T
+    rel[:n_segments, :2, :2] = -projector  # -n n^T (p - a)
+    rel[:n_segments, :2, 2] = normal * normal_offset[:, None]  # n (n . a)
+    points = np.concatenate([geometry.circles[:, :2], vertices])
+    rel[n_segments:, 0, 0] = -1.0
+    rel[n_segments:, 1, 1] = -1.0
+    rel[n_segments:, :2, 2] = points
+    rel[:, 2, 2] = 1.0
+
+    along = np.column_stack([d, -np.einsum("ij,ij->i", a, d)]) / (length * length)[:, None]
+    distance = np.column_stack([normal, -normal_offset])
+    sign = np.sign(cross_ab[order][:n_wedges])[:, None]
+    va, vb, vw = arm_a[order][:n_wedges], arm_b[order][:n_wedges], vertices[:n_wedges]
+    # sign * arm_a x (p - v) and sign * (p - v) x arm_b.
+    wedge_a = sign * np.column_stack(
+        [-va[:, 1], va[:, 0], va[:, 1] * vw[:, 0] - va[:, 0] * vw[:, 1]]
+    )
+    wedge_b = sign * np.column_stack(
+        [vb[:, 1], -vb[:, 0], vb[:, 0] * vw[:, 1] - vb[:, 1] * vw[:, 0]]
+    )
+    position_map = np.concatenate([rel.reshape(-1, 3), along, distance, wedge_a, wedge_b])
+
+    # Occlusion: N[row, column] as coefficients of (px, py, 1); columns act on (rel_x, rel_y, 1).
+    n_rows = 3 * n_segments + n_circles
+    occlusion = np.zeros((n_rows, 3, 3))
+    den, u_num, v_num = (
+        slice(0, n_segments),
+        slice(n_segments, 2 * n_segments),
+        slice(2 * n_segments, 3 * n_segments),
+    )
+    occlusion[den, 0, 2] = d[:, 1]  # rel x d = rel_x d_y - rel_y d_x
+    occlusion[den, 1, 2] = -d[:, 0]
+    occlusion[u_num, 2, 0] = -d[:, 1]  # (a - p) x d
+    occlusion[u_num, 2, 1] = d[:, 0]
+    occlusion[u_num, 2, 2] = a[:, 0] * d[:, 1] - a[:, 1] * d[:, 0]
+    occlusion[v_num, 0, 1] = 1.0  # (a - p) x rel = (a_x - p_x) rel_y - (a_y - p_y) rel_x
+    occlusion[v_num, 0, 2] = -a[:, 1]
+    occlusion[v_num, 1, 0] = -1.0
+    occlusion[v_num, 1, 2] = a[:, 0]
+    circles = slice(3 * n_segments, n_rows)  # (c - p) . rel
+    occlusion[circles, 0, 0] = -1.0
+    occlusion[circles, 0, 2] = geometry.circles[:, 0]
+    occlusion[circles, 1, 1] = -1.0
+    occlusion[circles, 1, 2] = geometry.circles[:, 1]
+
+    twin = np.arange(n_wedges)
+    for i in range(n_wedges):
+        same = np.flatnonzero(np.hypot(*(vertices[:n_wedges] - vertices[i]).T) < LOOP_TOLERANCE_M)
+        twin[i] = same[same != i][0] if len(same) > 1 else i
+    solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
+    return EchoTables(
+        position_map=position_map,
+        occlusion_map=occlusion.reshape(-1, 3),
+        n_segments=n_segments,
+        n_circles=n_circles,
+        n_vertices=n_vertices,
+        n_wedges=n_wedges,
+        radius=geometry.circles[:, 2].copy(),
+        radius_sq=geometry.circles[:, 2] ** 2,
+        solid_side=solid_side,
+        encloses=encloses,
+        twin=twin,
+        twin_comes_first=twin < np.arange(n_wedges),
+        kinds_template=np.concatenate(
+            [
+                np.full(n_segments, plane, dtype=np.int8),
+                np.full(n_circles, cylinder, dtype=np.int8),
+                np.full(n_vertices, edge, dtype=np.int8),
+            ]
+        ),
+    )
+
+
+def convex_loops(
+    starts: FloatArray, ends: FloatArray, centres: FloatArray
+) -> tuple[FloatArray, np.ndarray]:
+    """Per segment: the side of its solid and whether it belongs to an enclosure.
+
+    Segments chained end to start into a closed convex polygon are either an *enclosure* (the
+    polygon contains every end point and centre of the geometry: a room, solid outside) or an
+    obstacle (a box, solid inside). ``solid_side`` is +1 when the solid lies on the segment's
+    left, -1 on its right, and 0 for segments of open chains (free walls), which reflect on
+    both sides.
+    """
+    n = len(starts)
+    successor = np.full(n, -1)
+    for i in range(n):
+        matches = np.flatnonzero(np.hypot(*(starts - ends[i]).T) < LOOP_TOLERANCE_M)
+        if len(matches) == 1:
+            successor[i] = matches[0]
+    points = np.concatenate([starts, ends, centres])
+    solid_side = np.zeros(n)
+    encloses = np.zeros(n, dtype=bool)
+    seen = np.zeros(n, dtype=bool)
+    for first in range(n):
+        if seen[first]:
+            continue
+        loop = [first]
+        while successor[loop[-1]] >= 0 and successor[loop[-1]] not in loop:
+            loop.append(int(successor[loop[-1]]))
+        seen[loop] = True
+        if len(loop) < 3 or successor[loop[-1]] != first:
+            continue
+        d = ends[loop] - starts[loop]
+        turns = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
+        if not (np.all(turns > 1e-12) or np.all(turns < -1e-12)):
+            continue
+        interior_left = np.sign(turns[0])
+        offsets = points[None, :, :] - starts[loop][:, None, :]
+        sides = interior_left * (d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0])
+        enclosure = bool(np.all(sides >= -LOOP_TOLERANCE_M))
+        solid_side[loop] = -interior_left if enclosure else interior_left
+        encloses[loop] = enclosure
+    return solid_side, encloses

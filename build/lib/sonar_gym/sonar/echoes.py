@@ -1,0 +1,321 @@
+"""Echo candidates: where a pulse-echo sonar at one position can receive echoes from.
+
+Specular reflectors return an echo from a point that depends on where the sensor *is*, not on
+where it points (DESIGN sec. 3): the foot of the perpendicular on a wall, the point of a
+cylinder on the line to its centre, a corner or an edge itself. So for a sensor position ``p``
+({W}, metres) this module finds every such point once, with its one-way path length ``r`` and
+its on-axis echo amplitude; a ping then only multiplies by the two-way beam pattern ``D^2``
+of its off-axis angle (:mod:`sonar_gym.sonar.pulse_echo`).
+
+Amplitudes are pressures relative to the pressure the transducer radiates at 1 m on its axis
+(units 1/m, "the units of the echo model"); a detection threshold is in the same units.
+
+=========  ======================================  =============================================
+kind        echo point                              on-axis amplitude (before air absorption)
+=========  ======================================  =============================================
+plane       foot of the perpendicular from ``p``,   ``1 / (2 r)``: the image source at ``2 r``
+            when it lies inside the segment
+cylinder    the point on the line to the centre,    ``1/(2 r) sqrt(rho / (r + rho))``: ray optics
+            ``r = |c - p| - rho``                   of a convex mirror (horizontal radius ``rho``,
+                                                    vertically flat); for ``rho << r`` this is
+                                                    DESIGN's ``sqrt(rho/2) / r^1.5`` times
+                                                    ``1/sqrt(2)``, a constant the calibrated
+                                                    threshold absorbs
+corner      a vertex seen from inside its wedge     ``1 / (2 r)``: a right-angle dihedral is a
+            (opening < 180 deg)                     retro-reflector, image source at ``2 r``
+edge        any other vertex (convex corners of     weak: ``s / r^2``, a point-like diffractor
+            boxes and walls, free wall ends)        (default, ``edge_law="weak"``, see below);
+                                                    or ``G / (2 sqrt(pi k) r^1.5)``, Keller's
+                                                    geometrical theory of diffraction for an
+                                                    infinite rigid right-angle wedge seen along
+                                                    its bisector, ``G = 0.770``
+                                                    (``edge_law="gtd"``)
+=========  ======================================  =============================================
+
+Edges. Beom & Cho: "the edges produce weak echo", and in their Table II scan no edge survives
+the 18-26 deg angular-extent filter. The ideal wedge of the GTD is only about 20 dB below the
+1.9 cm beacon at the same range; with the sensitivity the beacon calibration implies (the
+small beacon heard to 11.5 deg off axis, 44 dB down its main lobe) it would give every box
+corner a beacon-like RCD of about 20 deg out to several metres. Real edges (table tops,
+monitor bezels, rounded cabinet corners) are short and blunt, so the default is an empirical
+point-diffractor law with strength :data:`EDGE_ECHO_STRENGTH_M`, chosen so that the Polaroid
+threshold with a constant receiver gain hears an edge on its axis only within about 0.75 m,
+and an edge's RCD spans under 18 deg (the lower bound of Beom & Cho's filter) even at the
+0.3 m minimum range. Through the Polaroid preset's gain ramp (:mod:`sonar_gym.sonar.receiver`),
+which is low at short range, an edge stays over 20 dB below the threshold at any range: the
+preset hears no edge. ``edge_law="gtd"`` gives the ideal-wedge law instead.
+
+Air absorption multiplies every amplitude by ``10^(-alpha 2 r / 20)``. A receiver with a
+time-varying gain (:mod:`sonar_gym.sonar.receiver`) then multiplies it by its gain ``G(r)``:
+the amplitudes are what the comparator sees, in the units of the threshold.
+
+An echo is kept only if its path ``p -> echo point`` crosses no segment and enters no circle
+before reaching the echo point (the reflector's own primitives touch the path only at its end,
+which is excluded with a relative tolerance of 1e-9), if ``r`` is at least the transducer's
+minimum range (echoes during the ring-down are not heard), if the echo point is outside the
+robot's footprint, and, when a threshold is given, if its on-axis amplitude reaches the
+threshold (no off-axis angle can make it louder). A box face seen from inside the box, or a
+room wall from outside the room, returns nothing. A T-junction (a free wall ending on another
+wall) is one vertex: a corner from whichever side is concave.
+
+The work is array arithmetic over all primitives at once, with per-geometry constant tables
+(:mod:`sonar_gym.sonar.echo_tables`) and the occlusion test as one ``(primitives x
+candidates)`` product.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.geometry import StaticGeometry
+from sonar_gym.pose import FloatArray
+from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.receiver import TimeVaryingGain
+
+EDGE_DIFFRACTION_COEFFICIENT = (4.0 / 3.0) * math.sin(2.0 * math.pi / 3.0) / 1.5
+"""``|D| sqrt(2 pi k)`` of Keller's diffraction coefficient for backscatter from a rigid wedge of
+exterior angle 270 deg (``n = 3/2``) seen along its bisector:
+``sin(pi/n) / n * |1 / (cos(pi/n) - 1) + 1 / (cos(pi/n) + 1)| = 0.770``."""
+EDGE_ECHO_STRENGTH_M = 2.0e-5
+"""Strength ``s`` (metres) of the default edge echo ``s / r^2`` (chosen, see the module docs)."""
+EDGE_LAWS = ("weak", "gtd")
+PATH_END_TOLERANCE = 1e-9
+"""Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
+
+
+class EchoKind(IntEnum):
+    """Kind of reflector an echo candidate comes from."""
+
+    PLANE = 0
+    CYLINDER = 1
+    CORNER = 2
+    EDGE = 3
+
+
+def plane_echo_amplitude(range_m: npt.ArrayLike) -> FloatArray:
+    """On-axis echo of a plane at normal incidence, ``1 / (2 r)`` (r in metres)."""
+    return 0.5 / np.asarray(range_m, dtype=np.float64)
+
+
+def cylinder_echo_amplitude(range_m: npt.ArrayLike, radius_m: npt.ArrayLike) -> FloatArray:
+    """On-axis echo of a vertical cylinder, ``1/(2 r) sqrt(rho / (r + rho))`` (metres)."""
+    r = np.asarray(range_m, dtype=np.float64)
+    rho = np.asarray(radius_m, dtype=np.float64)
+    return 0.5 / r * np.sqrt(rho / (r + rho))
+
+
+def corner_echo_amplitude(range_m: npt.ArrayLike) -> FloatArray:
+    """On-axis echo of a concave right-angle corner (a retro-reflector), ``1 / (2 r)``."""
+    return plane_echo_amplitude(range_m)
+
+
+def edge_echo_amplitude(
+    range_m: npt.ArrayLike, wavenumber: float, edge_law: str = "weak"
+) -> FloatArray:
+    """On-axis echo of a convex edge: ``s / r^2`` (``"weak"``) or ``G / (2 sqrt(pi k) r^1.5)``
+    (``"gtd"``); ``r`` in metres, ``k`` in rad/m."""
+    r = np.asarray(range_m, dtype=np.float64)
+    if edge_law == "weak":
+        return EDGE_ECHO_STRENGTH_M / (r * r)
+    if edge_law == "gtd":
+        return (
+            EDGE_DIFFRACTION_COEFFICIENT
+            / (2.0 * math.sqrt(math.pi * wavenumber))
+            / (r * np.sqrt(r))
+        )
+    raise ValueError(f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {edge_law!r}")
+
+
+@dataclass(frozen=True)
+class EchoCandidates:
+    """Every echo a sensor at ``position`` can receive, sorted by path length (nearest first).
+
+    Attributes:
+        position: the sensor position in {W}, metres, shape ``(2,)``.
+        directions: ``(K, 2)`` unit vectors from ``position`` towards each echo point.
+        path_lengths: ``(K,)`` one-way path lengths ``r``, metres.
+        amplitudes: ``(K,)`` on-axis echo amplitudes including air absorption and the
+            receiver's gain, if any (1/m, the units of the threshold).
+        kinds: ``(K,)`` :class:`EchoKind` codes (computed on first use).
+    """
+
+    position: FloatArray
+    directions: FloatArray
+    path_lengths: FloatArray
+    amplitudes: FloatArray
+    _primitive_indices: np.ndarray = field(repr=False)
+    _concave: np.ndarray = field(repr=False)
+    _tables: EchoTables = field(repr=False)
+
+    def __len__(self) -> int:
+        return len(self.path_lengths)
+
+    @functools.cached_property
+    def kinds(self) -> np.ndarray:
+        """``(K,)`` :class:`EchoKind` codes."""
+        tables = self._tables
+        kinds = tables.kinds_template.copy()
+        corners = tables.n_segments + tables.n_circles + np.flatnonzero(self._concave)
+        kinds[corners] = EchoKind.CORNER
+        return kinds[self._primitive_indices]
+
+    @property
+    def points(self) -> FloatArray:
+        """``(K, 2)`` echo points in {W}, metres."""
+        return self.position + self.directions * self.path_lengths[:, None]
+
+
+_UV_CENTRE = np.array([(1.0 - PATH_END_TOLERANCE) / 2.0, 0.5])[:, None, None]
+_UV_HALF_WIDTH = _UV_CENTRE.copy()
+
+
+def echo_candidates(
+    geometry: StaticGeometry,
+    position: tuple[float, float] | FloatArray,
+    *,
+    wavenumber: float,
+    absorption_db_per_m: float = 0.0,
+    min_range_m: float = 0.0,
+    detection_threshold: float = 0.0,
+    footprint_center: tuple[float, float] | FloatArray | None = None,
+    footprint_radius_m: float = 0.0,
+    edge_law: str = "weak",
+    receiver_gain: TimeVaryingGain | None = None,
+) -> EchoCandidates:
+    """Find the echo candidates of a sensor at ``position`` (see the module docstring).
+
+    Args:
+        geometry: the static reflectors ({W}, metres).
+        position: sensor position ``(x, y)`` in {W}, metres.
+        wavenumber: acoustic wavenumber ``k`` in rad/m (for the GTD edge law).
+        absorption_db_per_m: air absorption in dB per metre of path (0 disables it).
+        min_range_m: echoes from nearer than this (one way, metres) are dropped.
+        detection_threshold: echoes whose on-axis amplitude is below this are dropped.
+        footprint_center, footprint_radius_m: echo points inside this circle (the robot's
+            body, {W}, metres) are dropped.
+        edge_law: ``"weak"`` (default) or ``"gtd"``, the edge echo of the module docstring.
+        receiver_gain: the receiver's time-varying gain, applied to every amplitude before the
+            threshold test (None: a constant gain of 1).
+    """
+    tables = echo_tables(geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    px, py = float(position[0]), float(position[1])
+    n_segments, n_wedges = tables.n_segments, tables.n_wedges
+    n_specular = n_segments + tables.n_circles
+    n_candidates = n_specular + tables.n_vertices
+    wedge_end = n_specular + n_wedges
+
+    mapped = tables.position_map @ np.array((px, py, 1.0))
+    rel = mapped[: 3 * n_candidates].reshape(n_candidates, 3)  # (rel_x, rel_y, 1) per candidate
+    along = mapped[3 * n_candidates : 3 * n_candidates + n_segments]
+    signed_distance = mapped[3 * n_candidates + n_segments : 3 * n_candidates + 2 * n_segments]
+    wedge_tests = mapped[3 * n_candidates + 2 * n_segments :]
+    concave = (wedge_tests[:n_wedges] > 0.0) & (wedge_tests[n_wedges:] > 0.0)
+
+    # Ranges: planes and vertices are |rel|; a cylinder is its centre distance minus its radius.
+    ranges = np.hypot(rel[:, 0], rel[:, 1])
+    centre_distance = ranges[n_segments:n_specular].copy()
+    ranges[n_segments:n_specular] -= tables.radius
+    rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
+        :, None
+    ]
+
+    safe = np.maximum(ranges, 1e-9)
+    amplitudes = 0.5 / safe  # planes and corners
+    cylinder_ranges = safe[n_segments:n_specular]
+    amplitudes[n_segments:n_specular] *= np.sqrt(tables.radius / (cylinder_ranges + tables.radius))
+    edges = edge_echo_amplitude(safe[n_specular:], wavenumber, edge_law)
+    amplitudes[n_specular:wedge_end] = np.where(
+        concave, amplitudes[n_specular:wedge_end], edges[:n_wedges]
+    )
+    amplitudes[wedge_end:] = edges[n_wedges:]
+    if absorption_db_per_m > 0.0:
+        # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
+        amplitudes *= np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+    if receiver_gain is not None:
+        amplitudes *= receiver_gain.gain(safe)
+
+    valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold)
+    facing = tables.solid_side * signed_distance <= 0.0  # not on a segment's solid side
+    valid[:n_segments] &= (along > 0.0) & (along < 1.0) & facing
+    # A T-junction yields one echo: from its concave side if it has one, else from its first vertex.
+    twin_concave = concave[tables.twin]
+    valid[n_specular:wedge_end] &= ~np.where(
+        twin_concave == concave, tables.twin_comes_first, twin_concave
+    )
+
+    keep = np.flatnonzero(valid)
+    if footprint_center is not None and footprint_radius_m > 0.0:
+        fx, fy = float(footprint_center[0]), float(footprint_center[1])
+        if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
+            outside = (
+                np.hypot(rel[keep, 0] + (px - fx), rel[keep, 1] + (py - fy)) >= footprint_radius_m
+            )
+            keep = keep[outside]
+    occluders = facing & ~tables.encloses
+    keep = keep[_unoccluded(tables, px, py, rel[keep], ranges[keep], centre_distance, occluders)]
+    keep = keep[np.argsort(ranges[keep], kind="stable")]
+    path_lengths = ranges[keep]
+    return EchoCandidates(
+        position=np.array([px, py]),
+        directions=rel[keep, :2] / path_lengths[:, None],
+        path_lengths=path_lengths,
+        amplitudes=amplitudes[keep],
+        _primitive_indices=keep,
+        _concave=concave,
+        _tables=tables,
+    )
+
+
+def _unoccluded(
+    tables: EchoTables,
+    px: float,
+    py: float,
+    rel: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """Which paths ``p -> p + rel`` cross no occluding segment and enter no circle before their end.
+
+    Segments: ``p + u rel = a + v d`` gives ``u = ((a - p) x d) / (rel x d)`` and
+    ``v = ((a - p) x rel) / (rel x d)``; a crossing with ``0 <= u <= 1 - tol`` and
+    ``0 <= v <= 1`` blocks (a segment that may not occlude gets ``rel x d = 0``: no crossing).
+    Circles: the point of the path's line nearest the centre, ``u* = (c - p).rel / |rel|^2``,
+    blocks if it lies on the path (``0 <= u* <= 1 - tol``) and inside the circle. (Beyond the
+    path's end the nearest point of the path is its end, an echo point on another surface,
+    never inside a circle; the reflecting cylinder itself has ``u* > 1``.)
+
+    Args:
+        rel: ``(K, 3)`` rows ``(rel_x, rel_y, 1)``.
+        ranges: ``(K,)`` path lengths ``|rel|``.
+        centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
+        occluders: ``(S,)`` which segments may occlude.
+    """
+    n_segments = tables.n_segments
+    blocked = np.zeros(len(rel), dtype=bool)
+    if len(rel) == 0:
+        return blocked
+    matrix = (tables.occlusion_map @ np.array((px, py, 1.0))).reshape(-1, 3)
+    matrix[:n_segments] *= occluders[:, None]
+    products = matrix @ rel.T  # (3 S + C, K)
+    if n_segments:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = (
+                products[n_segments : 3 * n_segments].reshape(2, n_segments, len(rel))
+                / products[:n_segments]
+            )
+        inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
+        blocked |= (inside[0] & inside[1]).any(axis=0)
+    if tables.n_circles:
+        dots = products[3 * n_segments :]
+        nearest = dots / (ranges * ranges)
+        on_path = np.abs(nearest - _UV_CENTRE[0, 0]) <= _UV_HALF_WIDTH[0, 0]
+        gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
+        blocked |= (on_path & (gap_sq < tables.radius_sq[:, None])).any(axis=0)
+    return ~blocked

@@ -1,0 +1,294 @@
+"""The pulse-echo ping engine shared by the rotating, swept and side sonars.
+
+A ping fired along a unit direction from a sensor position hears every echo candidate of that
+position (:mod:`sonar_gym.sonar.echoes`) with amplitude ``A = A_axis D^2(off-axis angle)``
+(:class:`~sonar_gym.sonar.acoustics.PistonBeam`, with the transducer's side-lobe switch and
+leakage; ``A_axis`` includes the receiver's time-varying gain, if the transducer has one, so
+``A`` is what the comparator sees); it detects those with ``A >= threshold`` and
+reports the first of them (smallest time of flight). Many pings from one position are one
+``(pings x candidates)`` array computation, with no loop over pings.
+
+The reading of a detected echo (the order the electronics apply):
+
+1. true round-trip time ``t = 2 r / c_true``, ``c_true`` from the world's temperature;
+2. threshold-crossing delay ``+ rise_time * threshold / A`` (the envelope rises linearly to
+   ``A`` over the rise time, so the comparator fires later on weak echoes);
+3. timing jitter, Gaussian with standard deviation ``2 sigma_r / c_true`` (``sigma_r`` is the
+   transducer's range noise in metres);
+4. the counter: ``t -> floor(t / T0) T0`` (it counts whole periods);
+5. conversion with the sensor's *assumed* speed: ``range = c_assumed t / 2`` (Beom & Cho eq. (1)).
+
+A ping without a detection, or whose reading exceeds the transducer's maximum range (it stopped
+listening), is a dropout: its range is NaN (never a stand-in maximum range) and its amplitude 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Protocol, TypeVar
+
+import numpy as np
+
+from sonar_gym.geometry import StaticGeometry
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.scenario import Scenario
+from sonar_gym.sonar.acoustics import (
+    REFERENCE_TEMPERATURE_C,
+    PistonBeam,
+    speed_of_sound_mps,
+    wavenumber_per_m,
+)
+from sonar_gym.sonar.echoes import EDGE_LAWS, EchoCandidates, echo_candidates
+from sonar_gym.sonar.presets import Transducer
+
+
+class WorldLike(Protocol):
+    """What the sonars read from a world: static geometry, air temperature, the scenario."""
+
+    @property
+    def geometry(self) -> StaticGeometry: ...
+
+    @property
+    def temperature_c(self) -> float: ...
+
+    @property
+    def scenario(self) -> Scenario: ...
+
+
+@dataclass(frozen=True)
+class Readout:
+    """Switches for the non-ideal parts of a reading (all on by default).
+
+    Attributes:
+        range_noise: add Gaussian timing jitter (the transducer's ``range_noise_std_m``).
+        crossing_delay: delay weak echoes by the threshold-crossing model.
+        quantisation: floor the time of flight to the transducer's timer period.
+    """
+
+    range_noise: bool = True
+    crossing_delay: bool = True
+    quantisation: bool = True
+
+
+IDEAL_READOUT = Readout(range_noise=False, crossing_delay=False, quantisation=False)
+"""A readout that returns the exact geometric range (converted with the assumed speed)."""
+
+
+@dataclass(frozen=True)
+class FirstEchoes:
+    """The first detected echo of each ping (before the electronics turn it into a range).
+
+    Attributes:
+        detected: ``(n,)`` whether any echo reached the threshold.
+        path_lengths: ``(n,)`` one-way path length of the first detected echo, metres
+            (meaningless where not detected).
+        amplitudes: ``(n,)`` its amplitude after the receiver's gain (1/m, the units of the
+            threshold), 0 where not detected.
+    """
+
+    detected: np.ndarray
+    path_lengths: FloatArray
+    amplitudes: FloatArray
+
+
+def first_echoes(
+    candidates: EchoCandidates,
+    beam_directions: FloatArray,
+    beam: PistonBeam,
+    threshold: float,
+    frame_heading_rad: float = 0.0,
+) -> FirstEchoes:
+    """Detect, for each ping along ``beam_directions``, its first echo.
+
+    Args:
+        candidates: the echo candidates of the sensor position.
+        beam_directions: ``(n, 2)`` unit vectors of the pings, in a frame turned by
+            ``frame_heading_rad`` from {W} (the robot frame {R} when it is the robot heading).
+        beam: the two-way beam pattern.
+        threshold: the detection threshold (1/m).
+        frame_heading_rad: heading of the frame of ``beam_directions`` in {W}, radians.
+    """
+    n = len(beam_directions)
+    if len(candidates) == 0:
+        return FirstEchoes(np.zeros(n, dtype=bool), np.zeros(n), np.zeros(n))
+    c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
+    in_frame = np.array(((c, s), (-s, c))) @ candidates.directions.T  # (2, candidates)
+    cosines = beam_directions @ in_frame  # (pings, candidates)
+    rows = np.arange(n)
+    if beam.side_lobes:
+        amplitude = beam.two_way_from_cos(cosines) * candidates.amplitudes
+        detected = amplitude >= threshold
+        first = detected.argmax(axis=1)  # candidates are sorted nearest first
+        hit = detected[rows, first]
+        first_amplitude = amplitude[rows, first]
+    else:
+        detected = cosines >= beam.main_lobe_cos_limits(threshold / candidates.amplitudes)
+        first = detected.argmax(axis=1)
+        hit = detected[rows, first]
+        first_amplitude = beam.two_way_from_cos(cosines[rows, first]) * candidates.amplitudes[first]
+    return FirstEchoes(
+        detected=hit,
+        path_lengths=candidates.path_lengths[first],
+        amplitudes=np.where(hit, first_amplitude, 0.0),
+    )
+
+
+def measured_times(
+    echoes: FirstEchoes,
+    transducer: Transducer,
+    true_speed_mps: float,
+    readout: Readout,
+    rng: np.random.Generator | None,
+) -> FloatArray:
+    """Round-trip times the counter reads for the first echoes, seconds (steps 1-4 above)."""
+    tof = echoes.path_lengths * (2.0 / true_speed_mps)
+    if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
+        safe = np.where(echoes.detected, echoes.amplitudes, transducer.detection_threshold)
+        tof += (transducer.echo_rise_time_s * transducer.detection_threshold) / safe
+    if readout.range_noise and transducer.range_noise_std_m > 0.0:
+        if rng is None:
+            raise ValueError("argument 'rng' is needed: the readout adds range noise")
+        tof += rng.standard_normal(len(tof)) * (2.0 * transducer.range_noise_std_m / true_speed_mps)
+    if readout.quantisation and transducer.timer_period_s > 0.0:
+        period = transducer.timer_period_s
+        tof = np.floor(tof * (1.0 / period)) * period
+    return tof
+
+
+def echo_readings(
+    echoes: FirstEchoes,
+    transducer: Transducer,
+    true_speed_mps: float,
+    assumed_speed_mps: float,
+    readout: Readout,
+    rng: np.random.Generator | None,
+) -> tuple[FloatArray, FloatArray]:
+    """Turn first echoes into ``(ranges, amplitudes)`` (metres, 1/m): the steps listed above."""
+    ranges = measured_times(echoes, transducer, true_speed_mps, readout, rng) * (
+        assumed_speed_mps / 2.0
+    )
+    valid = echoes.detected & (ranges <= transducer.max_range_m)
+    return np.where(valid, ranges, np.nan), np.where(valid, echoes.amplitudes, 0.0)
+
+
+_Sonar = TypeVar("_Sonar", bound="PulseEchoSonar")
+
+
+@dataclass(frozen=True)
+class PulseEchoSonar:
+    """Common part of every pulse-echo sonar: a transducer, an assumed speed, a readout.
+
+    Attributes:
+        transducer: the transducer and its electronics.
+        assumed_speed_of_sound_mps: the speed the sensor converts times of flight with, m/s
+            (default: the speed at 20 deg C, 343.2 m/s).
+        readout: which non-ideal parts of a reading are simulated.
+        edge_law: the echo law of convex edges, ``"weak"`` or ``"gtd"``
+            (:mod:`sonar_gym.sonar.echoes`).
+    """
+
+    transducer: Transducer
+    assumed_speed_of_sound_mps: float = speed_of_sound_mps(REFERENCE_TEMPERATURE_C)
+    readout: Readout = Readout()
+    edge_law: str = "weak"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.transducer, Transducer):
+            raise ValueError(
+                f"argument 'transducer' must be a Transducer; got {type(self.transducer).__name__}"
+            )
+        if self.edge_law not in EDGE_LAWS:
+            raise ValueError(
+                f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {self.edge_law!r}"
+            )
+        speed = self.assumed_speed_of_sound_mps
+        if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
+            raise ValueError(
+                f"argument 'assumed_speed_of_sound_mps' must be positive (m/s); got {speed!r}"
+            )
+
+    def with_assumed_speed(self: _Sonar, speed_mps: float) -> _Sonar:
+        """The same sonar converting with ``speed_mps`` (m/s), e.g. after a calibration."""
+        return dataclasses.replace(self, assumed_speed_of_sound_mps=float(speed_mps))
+
+    def with_readout(self: _Sonar, **switches: Any) -> _Sonar:
+        """The same sonar with some :class:`Readout` switches changed."""
+        return dataclasses.replace(self, readout=dataclasses.replace(self.readout, **switches))
+
+    def candidates(
+        self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
+    ) -> EchoCandidates:
+        """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``."""
+        speed = speed_of_sound_mps(world.temperature_c)
+        transducer = self.transducer
+        return echo_candidates(
+            world.geometry,
+            sensor_xy,
+            wavenumber=wavenumber_per_m(transducer.frequency_hz, speed),
+            absorption_db_per_m=transducer.absorption_db_per_m,
+            min_range_m=transducer.min_range_m,
+            detection_threshold=transducer.detection_threshold,
+            footprint_center=(robot_pose.x, robot_pose.y),
+            footprint_radius_m=world.scenario.robot.radius,
+            edge_law=self.edge_law,
+            receiver_gain=transducer.time_varying_gain,
+        )
+
+    def first_echoes_at(
+        self,
+        world: WorldLike,
+        robot_pose: Pose,
+        sensor_xy: FloatArray,
+        beam_directions: FloatArray,
+    ) -> FirstEchoes:
+        """First echoes of pings from ``sensor_xy`` ({W}) along ``beam_directions`` (``(n, 2)``
+        unit vectors in the robot frame {R}), before the electronics read them."""
+        true_speed = speed_of_sound_mps(world.temperature_c)
+        candidates = self.candidates(world, robot_pose, sensor_xy)
+        transducer = self.transducer
+        beam = PistonBeam.for_ka(
+            transducer.wavenumber_ka(true_speed),
+            transducer.side_lobes,
+            transducer.side_lobe_leakage,
+        )
+        return first_echoes(
+            candidates, beam_directions, beam, transducer.detection_threshold, robot_pose.theta
+        )
+
+    def readings(
+        self, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
+    ) -> tuple[FloatArray, FloatArray]:
+        """``(ranges, amplitudes)`` the electronics report for ``echoes`` (metres, 1/m)."""
+        return echo_readings(
+            echoes,
+            self.transducer,
+            speed_of_sound_mps(world.temperature_c),
+            self.assumed_speed_of_sound_mps,
+            self.readout,
+            rng,
+        )
+
+    def ping(
+        self,
+        world: WorldLike,
+        robot_pose: Pose,
+        sensor_xy: FloatArray,
+        beam_directions: FloatArray,
+        rng: np.random.Generator | None,
+    ) -> tuple[FloatArray, FloatArray]:
+        """Fire pings from ``sensor_xy`` ({W}) along ``beam_directions`` (``(n, 2)`` unit vectors
+        in the robot frame {R}): ``(ranges, amplitudes)`` in metres and 1/m."""
+        return self.readings(
+            world, self.first_echoes_at(world, robot_pose, sensor_xy, beam_directions), rng
+        )
+
+
+def concatenate_echoes(parts: list[FirstEchoes]) -> FirstEchoes:
+    """The pings of several :class:`FirstEchoes`, one after the other."""
+    return FirstEchoes(
+        detected=np.concatenate([part.detected for part in parts]),
+        path_lengths=np.concatenate([part.path_lengths for part in parts]),
+        amplitudes=np.concatenate([part.amplitudes for part in parts]),
+    )

@@ -1,0 +1,200 @@
+"""One-way ultrasonic ranging from fixed emitters to receivers on the robot (Wu & Tsai, Roh et al.).
+
+Wu & Tsai sec. 3: an RF link starts the counter and fires transmitter ``i``; receiver ``j``
+stops it, so ``TOF_ij = d_ij / V_E + d_ij / V_U`` (eq. (10)), ``= d_ij / V_U`` since radio is
+about a million times faster (eq. (11)). Their 8051 counts at 50 kHz: a 20 us period, a 6.9 mm
+range step. Here, for every emitter of the scenario (``scenario.emitters``, 3D points in {W})
+and every receiver on the robot:
+
+1. the 3D distance ``d`` from the emitter to the receiver, the receiver at ``(x, y)`` in {R}
+   and ``height_m`` above the floor;
+2. ``TOF = d / c_true`` (``c_true`` from the world's temperature), plus Gaussian jitter of
+   standard deviation ``sigma / c_true``;
+3. the counter: ``floor(TOF / T0) T0``;
+4. ``distance = c_assumed * TOF``.
+
+Dropouts (NaN): the true distance exceeds ``max_range_m``, or the path is blocked. Occlusion
+rule (the scenario has no heights): room walls and free walls are full height and block when
+the path's projection on the floor crosses them; boxes and cylinders are furniture below the
+receivers and block nothing.
+
+Timing: the emitters fire one after another, ``firing_interval_s`` apart, in the order asked
+for; every receiver listens to every firing. ``timestamps_s[j, i]`` is the time since the call
+started at which measurement ``(j, i)`` completed: ``i * interval + the measured TOF``, or the
+end of the firing's interval for a dropout. The pose is taken as fixed during the call.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.sonar.acoustics import REFERENCE_TEMPERATURE_C, speed_of_sound_mps
+from sonar_gym.sonar.echoes import PATH_END_TOLERANCE
+from sonar_gym.sonar.pulse_echo import WorldLike
+
+WU_TSAI_TIMER_PERIOD_S = 1.0 / 50e3
+"""Wu & Tsai sec. 4: "the counting rate of the 8051 chip is 50 kHz"."""
+WU_TSAI_RECEIVERS_XY = ((0.0, 0.2), (0.0, -0.2))
+"""Wu & Tsai sec. 4: receivers at [0, 20, 0] and [0, -20, 0] cm in the robot frame."""
+
+
+@dataclass(frozen=True)
+class RangeMeasurement:
+    """One round of one-way ranging.
+
+    Attributes:
+        distances: ``(n_receivers, n_emitters)`` measured distances, metres; NaN = dropout.
+        timestamps_s: same shape; when each measurement completed, seconds since the call.
+        duration_s: time the round took, seconds.
+        emitter_names: the emitters, in column order.
+    """
+
+    distances: FloatArray
+    timestamps_s: FloatArray
+    duration_s: float
+    emitter_names: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class BeaconRanger:
+    """Receivers on the robot timing pulses from fixed emitters (see the module docstring).
+
+    Attributes:
+        receivers_xy: receiver positions ``(x, y)`` in the robot frame {R}, metres.
+        height_m: receiver height above the floor, metres; None takes
+            ``scenario.robot.sensor_height``.
+        timer_period_s: period of the time-of-flight counter, seconds (0 = exact).
+        range_noise_std_m: standard deviation of the timing jitter as a distance, metres.
+        max_range_m: emitters farther than this are not heard, metres.
+        assumed_speed_of_sound_mps: the speed the receiver converts with, m/s.
+        firing_interval_s: time between two emitters' firings, seconds.
+        noise: add the jitter.
+        quantisation: apply the counter.
+    """
+
+    receivers_xy: tuple[tuple[float, float], ...] = ((0.0, 0.0),)
+    height_m: float | None = None
+    timer_period_s: float = WU_TSAI_TIMER_PERIOD_S
+    range_noise_std_m: float = 0.002
+    max_range_m: float = 10.0
+    assumed_speed_of_sound_mps: float = speed_of_sound_mps(REFERENCE_TEMPERATURE_C)
+    firing_interval_s: float = 0.05
+    noise: bool = True
+    quantisation: bool = True
+
+    def __post_init__(self) -> None:
+        receivers = np.asarray(self.receivers_xy, dtype=np.float64)
+        if (
+            receivers.ndim != 2
+            or receivers.shape[1] != 2
+            or len(receivers) == 0
+            or not np.isfinite(receivers).all()
+        ):
+            raise ValueError(
+                "argument 'receivers_xy' must be one or more finite (x, y) pairs in metres; "
+                f"got {self.receivers_xy!r}"
+            )
+        object.__setattr__(self, "receivers_xy", tuple((float(x), float(y)) for x, y in receivers))
+        if self.height_m is not None and not math.isfinite(self.height_m):
+            raise ValueError(
+                f"argument 'height_m' must be finite (metres) or None; got {self.height_m!r}"
+            )
+        for name in ("max_range_m", "assumed_speed_of_sound_mps", "firing_interval_s"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"argument '{name}' must be positive; got {value!r}")
+        for name in ("timer_period_s", "range_noise_std_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"argument '{name}' must be >= 0; got {value!r}")
+
+    @classmethod
+    def wu_tsai(cls, **options: object) -> BeaconRanger:
+        """Wu & Tsai's two receivers at (0, +-0.2) m in {R}, with their 50 kHz counter."""
+        return cls(receivers_xy=WU_TSAI_RECEIVERS_XY, **options)  # type: ignore[arg-type]
+
+    def with_assumed_speed(self, speed_mps: float) -> BeaconRanger:
+        """The same ranger converting with ``speed_mps`` (m/s)."""
+        return dataclasses.replace(self, assumed_speed_of_sound_mps=float(speed_mps))
+
+    @property
+    def range_quantum_m(self) -> float:
+        """Distance step of one timer count, ``c_assumed T0`` metres."""
+        return self.assumed_speed_of_sound_mps * self.timer_period_s
+
+    def measure(
+        self,
+        world: WorldLike,
+        pose: Pose,
+        rng: np.random.Generator | None,
+        emitter_names: Sequence[str] | None = None,
+    ) -> RangeMeasurement:
+        """Range every receiver to every emitter (``emitter_names``, default all, in order).
+
+        Args:
+            world: the world (its scenario's emitters, walls and temperature are read).
+            pose: the robot pose in {W}.
+            rng: the random generator for the jitter (None only when the noise is off).
+            emitter_names: which emitters fire, in firing order.
+        """
+        scenario = world.scenario
+        if emitter_names is None:
+            emitters = scenario.emitters
+        else:
+            if isinstance(emitter_names, str):
+                raise ValueError(
+                    "argument 'emitter_names' must be a sequence of names, not one string"
+                )
+            emitters = tuple(scenario.emitter(name) for name in emitter_names)
+        n_emitters = len(emitters)
+        height = scenario.robot.sensor_height if self.height_m is None else self.height_m
+        receivers = np.array([pose.transform_point(xy) for xy in self.receivers_xy]).reshape(-1, 2)
+        emitter_xyz = np.array([e.position for e in emitters], dtype=np.float64).reshape(-1, 3)
+
+        horizontal = emitter_xyz[None, :, :2] - receivers[:, None, :]  # (receivers, emitters, 2)
+        distance = np.sqrt((horizontal**2).sum(axis=2) + (emitter_xyz[None, :, 2] - height) ** 2)
+        heard = (distance <= self.max_range_m) & ~_blocked_by_walls(
+            world, receivers, emitter_xyz[:, :2]
+        )
+
+        true_speed = speed_of_sound_mps(world.temperature_c)
+        tof = distance / true_speed
+        if self.noise and self.range_noise_std_m > 0.0:
+            if rng is None:
+                raise ValueError("argument 'rng' is needed: the ranger adds noise")
+            tof = tof + rng.standard_normal(tof.shape) * (self.range_noise_std_m / true_speed)
+        if self.quantisation and self.timer_period_s > 0.0:
+            tof = np.floor(tof / self.timer_period_s) * self.timer_period_s
+        start = self.firing_interval_s * np.arange(n_emitters, dtype=np.float64)[None, :]
+        return RangeMeasurement(
+            distances=np.where(heard, tof * self.assumed_speed_of_sound_mps, np.nan),
+            timestamps_s=np.where(heard, start + tof, start + self.firing_interval_s),
+            duration_s=n_emitters * self.firing_interval_s,
+            emitter_names=tuple(e.name for e in emitters),
+        )
+
+
+def _blocked_by_walls(world: WorldLike, receivers: FloatArray, emitters: FloatArray) -> np.ndarray:
+    """``(receivers, emitters)``: whether each path's floor projection crosses a room/free wall."""
+    scenario = world.scenario
+    # StaticGeometry lists the room's four walls first, then the free walls, then the boxes.
+    n_walls = (4 if scenario.room is not None else 0) + len(scenario.walls)
+    geometry = world.geometry
+    a = geometry.segment_starts[:n_walls]
+    d = geometry.segment_ends[:n_walls] - a
+    p = receivers[:, None, None, :]  # (R, 1, 1, 2)
+    path = emitters[None, :, None, :] - p  # (R, E, 1, 2)
+    w = a[None, None, :, :] - p  # (R, 1, S, 2)
+    denominator = path[..., 0] * d[:, 1] - path[..., 1] * d[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = (w[..., 0] * d[:, 1] - w[..., 1] * d[:, 0]) / denominator
+        v = (w[..., 0] * path[..., 1] - w[..., 1] * path[..., 0]) / denominator
+    limit = 1.0 - PATH_END_TOLERANCE
+    crossing = (u > PATH_END_TOLERANCE) & (u < limit) & (v >= 0.0) & (v <= 1.0)
+    return np.asarray(crossing.any(axis=2))

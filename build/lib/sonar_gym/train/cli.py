@@ -1,0 +1,359 @@
+"""The ``sonar-gym`` command line: ``evaluate``, ``train``, ``benchmark``, ``reproduce``.
+
+Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`, :mod:`sonar_gym.train.training`,
+:mod:`sonar_gym.train.benchmark` and :mod:`sonar_gym.train.report`. A request the user can fix (unknown env or
+agent, bad ``--env-arg``, an algorithm the action space does not allow) prints one line naming
+the allowed values and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import json
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from rich.console import Console
+
+from sonar_gym.train import UsageError
+
+PROGRAM = "sonar-gym"
+DEFAULT_EPISODES = 50
+DEFAULT_EVALUATE_JSON = Path("results/evaluate.json")
+DEFAULT_EVALUATE_PLOT = Path("results/evaluate.png")
+DEFAULT_BENCHMARK_JSON = Path("results/benchmark.json")
+DEFAULT_BENCHMARK_STEPS = 500
+DEFAULT_REPRODUCE_DIR = Path("results/reproduce")
+REPRODUCIBLE_PAPERS = ("beom-cho", "beom-cho-map", "kim", "wu-tsai", "roh", "apcs")
+PIPED_WIDTH = 160
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``sonar-gym`` and its subcommands."""
+    parser = argparse.ArgumentParser(
+        prog=PROGRAM,
+        description="Sonar localization environments: evaluate agents, train policies, "
+        "benchmark the simulation, reproduce the papers.",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
+    commands.required = True
+
+    evaluate = commands.add_parser(
+        "evaluate",
+        help="run agents on envs over seeds; table, JSON/CSV and plot",
+        description="Evaluate agents on envs over seeds (episode i uses seed S + i for every "
+        "agent, so comparisons are paired).",
+    )
+    evaluate.add_argument(
+        "--env",
+        nargs="+",
+        metavar="ID",
+        help="env ids, or 'all' for every SonarGym/ env (default: SonarGym/BeaconScan-v0)",
+    )
+    evaluate.add_argument(
+        "--agent",
+        nargs="+",
+        metavar="NAME|PATH",
+        help="agent names or saved models (.zip / run dir); default: every agent of the env",
+    )
+    evaluate.add_argument("--episodes", type=_positive_int, default=DEFAULT_EPISODES,
+                          metavar="N",
+                          help=f"episodes per agent and env (default {DEFAULT_EPISODES})")
+    evaluate.add_argument("--seed", type=int, default=0, metavar="S",
+                          help="episode i uses seed S + i (default 0)")
+    evaluate.add_argument("--json", type=Path, default=DEFAULT_EVALUATE_JSON, metavar="PATH",
+                          help=f"summaries and every episode (default {DEFAULT_EVALUATE_JSON})")
+    evaluate.add_argument("--csv", type=Path, default=None, metavar="PATH",
+                          help="one row per episode (default: none)")
+    evaluate.add_argument("--plot", type=Path, default=DEFAULT_EVALUATE_PLOT, metavar="PATH",
+                          help=f"bar charts per env (default {DEFAULT_EVALUATE_PLOT})")
+    _add_env_arg(evaluate)
+    evaluate.set_defaults(handler=_evaluate)
+
+    train = commands.add_parser(
+        "train",
+        help="train a stable-baselines3 policy",
+        description="Train PPO, SAC, DQN or A2C on an env with tuned hyper-parameters.",
+    )
+    train.add_argument("--env", metavar="ID", help="env id (optional with --resume)")
+    train.add_argument("--algo", metavar="ALGO", help="ppo | sac | dqn | a2c")
+    train.add_argument("--timesteps", type=_positive_int, required=True, metavar="N",
+                       help="env steps to train (more steps with --resume)")
+    train.add_argument("--out", type=Path, metavar="DIR",
+                       help="run directory (default runs/<env-short>-<algo>-<seed>)")
+    train.add_argument("--seed", type=int, default=0, metavar="S", help="default 0")
+    train.add_argument("--n-envs", type=_positive_int, metavar="K",
+                       help="vector-env workers (default from the config)")
+    train.add_argument("--config", type=Path, metavar="PATH",
+                       help="hyper-parameter TOML (default train/configs/<env>.<algo>.toml)")
+    train.add_argument("--resume", type=Path, metavar="CHECKPOINT",
+                       help="model or checkpoint .zip to continue (its VecNormalize stats too)")
+    train.add_argument("--subproc", action="store_true", help="SubprocVecEnv workers")
+    train.add_argument("--eval-episodes", type=_non_negative_int, metavar="N",
+                       help="episodes of the evaluation after training (0: none)")
+    train.add_argument("--overwrite", action="store_true",
+                       help="start afresh in a run directory that holds a model")
+    train.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_env_arg(train)
+    train.set_defaults(handler=_train)
+
+    benchmark = commands.add_parser(
+        "benchmark",
+        help="pan throughput and env steps per second",
+        description="Measure sonar pan throughput and env steps per second (paper agent).",
+    )
+    benchmark.add_argument("--env", nargs="+", default=["all"], metavar="ID",
+                           help="env ids or 'all' (default)")
+    benchmark.add_argument("--steps", type=_positive_int, default=DEFAULT_BENCHMARK_STEPS,
+                           metavar="N",
+                           help=f"env steps per env (default {DEFAULT_BENCHMARK_STEPS})")
+    benchmark.add_argument("--json", type=Path, default=DEFAULT_BENCHMARK_JSON, metavar="PATH",
+                           help=f"default {DEFAULT_BENCHMARK_JSON}")
+    _add_env_arg(benchmark)
+    benchmark.set_defaults(handler=_benchmark)
+
+    reproduce = commands.add_parser(
+        "reproduce",
+        help="reproduce a paper's tables and figures",
+        description=f"Reproduce a paper: one of {', '.join(REPRODUCIBLE_PAPERS)}, or all.",
+    )
+    reproduce.add_argument("names", nargs="+", metavar="NAME", help="paper name or 'all'")
+    reproduce.add_argument("--out", type=Path, default=DEFAULT_REPRODUCE_DIR, metavar="DIR",
+                           help="output directory (one subdirectory per paper)")
+    reproduce.set_defaults(handler=_reproduce)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``sonar-gym``; returns the exit status (2 for a request the user can fix)."""
+    parser = build_parser()
+    arguments = parser.parse_args(argv)
+    arguments.command_line = [PROGRAM, *(sys.argv[1:] if argv is None else argv)]
+    console = make_console()
+    try:
+        arguments.handler(arguments, console)
+    except UsageError as error:
+        make_console(stderr=True).print(
+            f"{PROGRAM} {arguments.command}: error: {error}", style="red", markup=False,
+            highlight=False, soft_wrap=True,
+        )
+        return 2
+    except KeyboardInterrupt:
+        make_console(stderr=True).print(f"{PROGRAM} {arguments.command}: interrupted")
+        return 130
+    return 0
+
+
+def make_console(stderr: bool = False) -> Console:
+    """A rich console; 160 columns wide when writing to a file or pipe (unless COLUMNS is set),
+    so the tables do not wrap in logs."""
+    stream = sys.stderr if stderr else sys.stdout
+    interactive = hasattr(stream, "isatty") and stream.isatty()
+    width = None if interactive or "COLUMNS" in os.environ else PIPED_WIDTH
+    return Console(stderr=stderr, width=width)
+
+
+# --------------------------------------------------------------------------------------------
+# argument types
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _non_negative_int(text: str) -> int:
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be zero or more, got {text}")
+    return value
+
+
+def _add_env_arg(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--env-arg",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="keyword argument for gym.make (numbers, true/false, none, JSON lists, strings); "
+        "repeatable",
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# handlers
+
+
+def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
+    from sonar_gym.train import evaluation, report
+    from sonar_gym.train.progress import episode_progress
+
+    env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    env_ids = evaluation.resolve_env_ids(arguments.env or [evaluation.DEFAULT_ENV_ID])
+    plan = evaluation.resolve_agent_names(env_ids, arguments.agent)
+    evaluation.validate_plan(plan, env_kwargs)  # report mistakes before anything runs
+    total = evaluation.count_episodes(plan, arguments.episodes)
+    last_seed = arguments.seed + arguments.episodes - 1
+    console.print(
+        f"Evaluating {total} episodes (seeds {arguments.seed}..{last_seed} for every agent) "
+        f"on {', '.join(env_ids)}",
+        markup=False,
+    )
+    started = time.perf_counter()
+    with episode_progress(console, total) as advance:
+        results = evaluation.evaluate_agents(
+            env_ids, plan, arguments.episodes, arguments.seed, env_kwargs, on_episode=advance
+        )
+    elapsed_s = time.perf_counter() - started
+    report.print_summary(results, console)
+    meta = {
+        "command": arguments.command_line,
+        "env_ids": env_ids,
+        "agents": plan,
+        "episodes": arguments.episodes,
+        "seed": arguments.seed,
+        "env_kwargs": env_kwargs,
+        "elapsed_s": round(elapsed_s, 3),
+        "versions": evaluation.software_versions(),
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    written = [report.write_json(results, arguments.json, meta)]
+    if arguments.csv is not None:
+        written.append(report.write_csv(results, arguments.csv))
+    written.append(report.plot_results(results, arguments.plot))
+    console.print(
+        f"{total} episodes in {elapsed_s:.1f} s. Wrote " + ", ".join(map(str, written)),
+        markup=False,
+    )
+
+
+def _train(arguments: argparse.Namespace, console: Console) -> None:
+    from sonar_gym.train import evaluation
+    from sonar_gym.train.training import evaluate_command, train
+
+    env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    result = train(
+        env_id=arguments.env,
+        algo=arguments.algo.lower() if arguments.algo else None,
+        timesteps=arguments.timesteps,
+        out_dir=arguments.out,
+        seed=arguments.seed,
+        n_envs=arguments.n_envs,
+        config_path=arguments.config,
+        resume=arguments.resume,
+        env_kwargs=env_kwargs,
+        subproc=arguments.subproc,
+        progress_bar=not arguments.no_progress,
+        eval_episodes=arguments.eval_episodes,
+        overwrite=arguments.overwrite,
+    )
+    console.print(
+        f"Trained {result.algo.upper()} on {result.env_id}: {result.total_timesteps} timesteps "
+        f"in total. Run directory {result.out_dir}:"
+    )
+    for label, path in (
+        ("model", result.model_path),
+        ("VecNormalize statistics", result.vecnormalize_path),
+        ("run info", result.run_file),
+        ("learning curve", result.learning_curve_path),
+        ("TensorBoard", result.out_dir / "tb"),
+    ):
+        console.print(f"  {label}: {path}", highlight=False, markup=False)
+    if result.eval_mean_reward is not None:
+        console.print(
+            f"Evaluation (evaluate_policy, {result.eval_episodes} episodes, deterministic): "
+            f"episode reward {result.eval_mean_reward:.3f} ± {result.eval_std_reward:.3f} (std)"
+        )
+    console.print("Evaluate it against the baselines with:")
+    console.print(f"  {evaluate_command(result)}", highlight=False, markup=False, soft_wrap=True)
+
+
+def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
+    from sonar_gym.train import benchmark, evaluation, report
+
+    env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    env_ids = evaluation.resolve_env_ids(arguments.env)
+    with console.status("measuring pan throughput") as status:
+        results = benchmark.run_benchmark(
+            env_ids,
+            arguments.steps,
+            env_kwargs,
+            on_env_start=lambda env_id, agent: status.update(
+                f"{env_id}: {arguments.steps} steps with agent {agent!r}"
+            ),
+        )
+    for note in results.notes:
+        console.print(note, style="yellow", markup=False)
+    if results.pan_rows:
+        console.print(report.pan_table(results.pan_rows))
+    if results.envs:
+        console.print(report.throughput_table(results.envs))
+    for env_id, failure in results.failures.items():
+        console.print(f"{env_id} could not run: {failure}", style="red", markup=False)
+    meta = {"env_kwargs": env_kwargs, "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
+    arguments.json.parent.mkdir(parents=True, exist_ok=True)
+    arguments.json.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
+    console.print(f"Wrote {arguments.json}", markup=False)
+
+
+def reproduce_module_name(name: str) -> str:
+    """``"beom-cho"`` -> ``"sonar_gym.train.reproduce.beom_cho"``."""
+    return f"sonar_gym.train.reproduce.{name.replace('-', '_')}"
+
+
+def available_reproductions() -> list[str]:
+    """Papers (command-line names) whose ``sonar_gym.train.reproduce`` module exists."""
+    available = []
+    for name in REPRODUCIBLE_PAPERS:
+        try:
+            found = importlib.util.find_spec(reproduce_module_name(name)) is not None
+        except ModuleNotFoundError:
+            found = False
+        if found:
+            available.append(name)
+    return available
+
+
+def _reproduce(arguments: argparse.Namespace, console: Console) -> None:
+    available = available_reproductions()
+    requested: list[str] = []
+    for name in arguments.names:
+        name = name.lower().replace("_", "-")
+        if name == "all":
+            requested.extend(available)
+            missing = [paper for paper in REPRODUCIBLE_PAPERS if paper not in available]
+            if missing:
+                console.print(f"not available yet, skipped: {', '.join(missing)}", style="yellow")
+        elif name not in REPRODUCIBLE_PAPERS:
+            raise UsageError(
+                f"unknown paper {name!r}; choose one of {list(REPRODUCIBLE_PAPERS)} or 'all' "
+                f"(available now: {available or 'none'})"
+            )
+        elif name not in available:
+            raise UsageError(
+                f"the reproduction of {name!r} is not available yet "
+                f"(available now: {available or 'none'})"
+            )
+        else:
+            requested.append(name)
+    if not requested:
+        raise UsageError(
+            f"no reproduction is available yet; the papers are {list(REPRODUCIBLE_PAPERS)}"
+        )
+    for name in dict.fromkeys(requested):
+        module = importlib.import_module(reproduce_module_name(name))
+        out_dir = arguments.out / name.replace("-", "_")
+        out_dir.mkdir(parents=True, exist_ok=True)
+        console.rule(f"reproduce {name} -> {out_dir}")
+        module.run(out_dir, console)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,317 @@
+"""Reports of evaluations, trainings and benchmarks: rich tables, JSON/CSV files and plots.
+
+Inside, results keep SI units (metres, radians, seconds); tables and plots show E_xy in
+centimetres and E_theta in degrees, the units the papers print (Beom & Cho eq. (16)).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from sonar_gym.train.benchmark import EnvThroughput
+from sonar_gym.train.evaluation import AgentResult, AgentSummary
+
+MISSING = "–"
+CSV_FIELDS = (
+    "env_id",
+    "agent",
+    "seed",
+    "reward",
+    "position_error_m",
+    "heading_error_rad",
+    "sensing_time_s",
+    "status",
+    "steps",
+)
+
+
+# --------------------------------------------------------------------------------------------
+# evaluation
+
+
+def _format(value: float | None, scale: float = 1.0, digits: int = 1) -> str:
+    return MISSING if value is None else f"{value * scale:.{digits}f}"
+
+
+def _format_reward(summary: AgentSummary) -> str:
+    reward = summary.reward
+    if reward.half_width is None:
+        return f"{reward.mean:.3f}"
+    return f"{reward.mean:.3f} ± {reward.half_width:.3f}"
+
+
+def summary_table(env_id: str, results: Sequence[AgentResult]) -> Table:
+    """One row per agent of ``env_id``: success, E_xy [cm], E_theta [deg], time, reward CI."""
+    confidence = results[0].summary.reward.confidence if results else 0.95
+    table = Table(title=env_id, title_justify="left", header_style="bold")
+    table.add_column("agent", no_wrap=True)
+    for header in (
+        "episodes",
+        "success [%]",
+        "E_xy median [cm]",
+        "E_xy p95 [cm]",
+        "E_θ median [deg]",
+        "E_θ p95 [deg]",
+        "sensing time [s]",
+        f"reward (mean ± {confidence:.0%} CI)",
+    ):
+        table.add_column(Text(header), justify="right")
+    for result in results:
+        summary = result.summary
+        table.add_row(
+            Text(result.agent),
+            str(summary.episodes),
+            f"{100.0 * summary.success_rate:.1f}",
+            _format(summary.position_error_median_m, 100.0),
+            _format(summary.position_error_p95_m, 100.0),
+            _format(summary.heading_error_median_rad, 180.0 / math.pi, 2),
+            _format(summary.heading_error_p95_rad, 180.0 / math.pi, 2),
+            _format(summary.sensing_time_mean_s, 1.0, 2),
+            _format_reward(summary),
+        )
+    return table
+
+
+def group_by_env(results: Sequence[AgentResult]) -> dict[str, list[AgentResult]]:
+    """Results grouped per env id, in order of first appearance."""
+    grouped: dict[str, list[AgentResult]] = {}
+    for result in results:
+        grouped.setdefault(result.env_id, []).append(result)
+    return grouped
+
+
+def print_summary(results: Sequence[AgentResult], console: Console) -> None:
+    """Print one table per env (see :func:`summary_table`)."""
+    for env_id, env_results in group_by_env(results).items():
+        console.print(summary_table(env_id, env_results))
+    console.print(
+        "E_xy, E_θ: over successful episodes (status \"ok\"); sensing time and reward: over all "
+        "episodes; CI: Student-t interval of the mean.",
+        style="dim",
+    )
+
+
+def summary_to_dict(summary: AgentSummary) -> dict[str, Any]:
+    """A JSON-ready dict of ``summary`` (SI units in the key names)."""
+    data = asdict(summary)
+    reward = data.pop("reward")
+    data.update(
+        reward_mean=reward["mean"],
+        reward_ci_half_width=reward["half_width"],
+        reward_ci_low=summary.reward.low,
+        reward_ci_high=summary.reward.high,
+        confidence=reward["confidence"],
+    )
+    return data
+
+
+def results_to_dict(
+    results: Sequence[AgentResult], meta: Mapping[str, Any] | None = None
+) -> dict[str, Any]:
+    """Everything of an evaluation as a JSON-ready dict: ``meta`` and per (env, agent) the
+    summary and every episode record."""
+    return {
+        "meta": dict(meta or {}),
+        "results": [
+            {
+                "env_id": result.env_id,
+                "agent": result.agent,
+                "summary": summary_to_dict(result.summary),
+                "episodes": [asdict(record) for record in result.records],
+            }
+            for result in results
+        ],
+    }
+
+
+def write_json(
+    results: Sequence[AgentResult], path: str | Path, meta: Mapping[str, Any] | None = None
+) -> Path:
+    """Write :func:`results_to_dict` to ``path`` (parent directories created)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_text(json.dumps(results_to_dict(results, meta), indent=2) + "\n")
+    return target
+
+
+def write_csv(results: Sequence[AgentResult], path: str | Path) -> Path:
+    """Write one row per episode (columns :data:`CSV_FIELDS`; empty cell = not reported)."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with target.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=CSV_FIELDS)
+        writer.writeheader()
+        for result in results:
+            for record in result.records:
+                row = {"env_id": result.env_id, "agent": result.agent, **asdict(record)}
+                writer.writerow({k: "" if v is None else v for k, v in row.items()})
+    return target
+
+
+def _value_or_nan(value: float | None, scale: float = 1.0) -> float:
+    return math.nan if value is None else value * scale
+
+
+def short_agent_label(agent: str) -> str:
+    """An agent name short enough for a plot axis: saved models by their last two path parts."""
+    parts = Path(agent).parts
+    return str(Path(*parts[-2:])) if len(parts) > 2 else agent
+
+
+def _use_log_scale_for_wide_ranges(axis: Any, values: Sequence[float]) -> None:
+    """A log axis when the positive values span more than two decades (errors often do)."""
+    positive = [v for v in values if v > 0 and math.isfinite(v)]
+    if len(positive) >= 2 and max(positive) / min(positive) > 100.0:
+        axis.set_yscale("log")
+
+
+def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
+    """One figure, one row of bar charts per env: E_xy median and p95 [cm], E_theta median and
+    p95 [deg] (log axes when they span more than two decades), mean sensing time [s]; one group
+    per agent, labelled with its success rate. Missing values leave no bar."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    grouped = group_by_env(results)
+    figure, axes = plt.subplots(
+        len(grouped), 3, figsize=(13, 3.4 * len(grouped)), squeeze=False, layout="constrained"
+    )
+    width = 0.38
+    for row, (env_id, env_results) in enumerate(grouped.items()):
+        summaries = [result.summary for result in env_results]
+        names = [
+            f"{short_agent_label(result.agent)}\n{100 * result.summary.success_rate:.0f}% ok"
+            for result in env_results
+        ]
+        positions = np.arange(len(names))
+        panels = (
+            ("E_xy [cm]", 100.0, "position_error_median_m", "position_error_p95_m"),
+            ("E_θ [deg]", 180.0 / math.pi, "heading_error_median_rad", "heading_error_p95_rad"),
+        )
+        for column, (label, scale, median_key, p95_key) in enumerate(panels):
+            axis = axes[row][column]
+            medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
+            p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
+            for offset, values, name in ((-width / 2, medians, "median"),
+                                         (width / 2, p95s, "95th percentile")):
+                bars = axis.bar(positions + offset, values, width, label=name)
+                axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
+            _use_log_scale_for_wide_ranges(axis, medians + p95s)
+            axis.set_ylabel(label)
+            axis.legend(fontsize="small")
+        axis = axes[row][2]
+        bars = axis.bar(
+            positions, [_value_or_nan(s.sensing_time_mean_s) for s in summaries], 0.6
+        )
+        axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
+        axis.set_ylabel("mean sensing time [s]")
+        for column in range(3):
+            axes[row][column].set_xticks(positions, names, rotation=20, ha="right")
+            axes[row][column].set_title(env_id if column == 0 else "", loc="left")
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(target, dpi=110)
+    plt.close(figure)
+    return target
+
+
+# --------------------------------------------------------------------------------------------
+# training
+
+
+def moving_average(values: Sequence[float], window: int) -> np.ndarray:
+    """Trailing moving average; the first ``window - 1`` points average what exists so far."""
+    data = np.asarray(values, dtype=float)
+    if data.size == 0:
+        return data
+    window = max(1, min(window, data.size))
+    cumulative = np.concatenate(([0.0], np.cumsum(data)))
+    ends = np.arange(1, data.size + 1)
+    counts = np.minimum(ends, window)
+    return (cumulative[ends] - cumulative[ends - counts]) / counts
+
+
+def plot_learning_curve(
+    timesteps: Sequence[float], rewards: Sequence[float], path: str | Path, title: str
+) -> Path:
+    """Episode reward against training timesteps: raw points and a moving average."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(7, 4), layout="constrained")
+    if len(rewards):
+        window = max(1, len(rewards) // 20)
+        axis.plot(timesteps, rewards, ".", alpha=0.25, markersize=3, label="episode")
+        axis.plot(timesteps, moving_average(rewards, window), label=f"moving average ({window})")
+        axis.legend()
+    else:
+        axis.text(0.5, 0.5, "no finished episode", ha="center", transform=axis.transAxes)
+    axis.set_xlabel("timesteps")
+    axis.set_ylabel("episode reward")
+    axis.set_title(title)
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(target, dpi=110)
+    plt.close(figure)
+    return target
+
+
+# --------------------------------------------------------------------------------------------
+# benchmark
+
+
+def _format_cell(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.4g}" if abs(value) < 1e4 else f"{value:,.0f}"
+    return MISSING if value is None else str(value)
+
+
+def pan_table(rows: Sequence[Mapping[str, Any]]) -> Table:
+    """The rows of the pan-throughput benchmark, one column per key."""
+    table = Table(title="sonar pan throughput", title_justify="left", header_style="bold")
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    for index, column in enumerate(columns):
+        table.add_column(Text(column), justify="left" if index == 0 else "right")
+    for row in rows:
+        table.add_row(*(Text(_format_cell(row.get(column))) for column in columns))
+    return table
+
+
+def throughput_table(results: Sequence[EnvThroughput]) -> Table:
+    """Steps per second per env: env time only, whole loop, and the time share per phase."""
+    table = Table(title="env steps per second", title_justify="left", header_style="bold")
+    table.add_column("env", no_wrap=True)
+    table.add_column("agent")
+    for column in ("steps", "episodes", "env steps/s", "loop steps/s", "ms/step (env)"):
+        table.add_column(column, justify="right")
+    table.add_column("env time share per phase")
+    for result in results:
+        shares = " · ".join(
+            f"{phase} {100 * share:.0f}%" for phase, share in result.phase_shares.items()
+        )
+        table.add_row(
+            result.env_id,
+            result.agent,
+            str(result.steps),
+            str(result.episodes),
+            f"{result.env_steps_per_s:.1f}",
+            f"{result.loop_steps_per_s:.1f}",
+            f"{1e3 * result.env_seconds / result.steps:.2f}",
+            shares or MISSING,
+        )
+    return table

@@ -1,0 +1,1 @@
+"""Reproductions of the papers' experiments in simulation: ``sonar-gym reproduce <paper>``."""
