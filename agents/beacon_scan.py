@@ -99,7 +99,9 @@ class SectorAgent(_ScriptedBeaconAgent):
             centre = round(bearing / centre_step) * centre_step
             # the centre snaps to the grid: widen when the snap eats into the margin
             sector = width
-            while sector < 360 and abs(_signed_angle(bearing - centre)) + needed / 2.0 > sector / 2.0:
+            while (
+                sector < 360 and abs(_signed_angle(bearing - centre)) + needed / 2.0 > sector / 2.0
+            ):
                 sector = min((w for w in config.sector_widths_deg if w > sector), default=360)
             plan.append(self._env.encode_action("pan", centre, sector, increment))
             covered.append((centre, sector))

@@ -94,7 +94,7 @@ def detect_algorithm(model_path: Path) -> str:
         return "ppo" if "clip_range" in data else "a2c"
     raise ValueError(
         f"cannot tell the algorithm of {model_path} (policy module {policy_module!r}); "
-        f"write {RUN_FILE} beside it with \"algo\" one of {list(ALGORITHMS)}"
+        f'write {RUN_FILE} beside it with "algo" one of {list(ALGORITHMS)}'
     )
 
 

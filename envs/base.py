@@ -87,7 +87,13 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
             raise RuntimeError(f"{type(self).__name__}: non-finite reward {reward!r}")
         if outcome.terminated or outcome.truncated:
             self._episode_started = False
-        return self._checked_observation(), reward, outcome.terminated, outcome.truncated, outcome.info
+        return (
+            self._checked_observation(),
+            reward,
+            outcome.terminated,
+            outcome.truncated,
+            outcome.info,
+        )
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         if self.render_mode == "rgb_array":

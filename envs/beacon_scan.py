@@ -127,7 +127,9 @@ def _check_degree_set(name: str, values: object, allowed: tuple[int, ...] | None
         or (allowed is not None and any(v not in allowed for v in values))
     ):
         choices = f" from {allowed}" if allowed else ""
-        raise ValueError(f"argument {name!r} must be distinct positive whole degrees{choices}; got {values!r}")
+        raise ValueError(
+            f"argument {name!r} must be distinct positive whole degrees{choices}; got {values!r}"
+        )
 
 
 def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
@@ -309,11 +311,20 @@ class BeaconScanEnv(SonarEnv):
                 f"argument 'scenario': {self._fixed_scenario.name!r} needs exactly one "
                 "'small_beacon' and one 'large_beacon' cylinder"
             )
-        self._centres_deg = [k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)]
-        n_pans = config.n_sector_centres * len(config.sector_widths_deg) * len(config.increments_deg)
+        self._centres_deg = [
+            k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)
+        ]
+        n_pans = (
+            config.n_sector_centres * len(config.sector_widths_deg) * len(config.increments_deg)
+        )
         if config.action_type == "multi_discrete":
             self.action_space = gym.spaces.MultiDiscrete(
-                [3, config.n_sector_centres, len(config.sector_widths_deg), len(config.increments_deg)]
+                [
+                    3,
+                    config.n_sector_centres,
+                    len(config.sector_widths_deg),
+                    len(config.increments_deg),
+                ]
             )
         else:
             self.action_space = gym.spaces.Discrete(2 + n_pans)
@@ -401,7 +412,9 @@ class BeaconScanEnv(SonarEnv):
         self._episode = _Episode(world, true_pose, prior, sonar, ScanMemory(math.radians(1.0)))
         return self._info("sensing")
 
-    def _sample_start_pose(self, world: World, sonar: RotatingSonar, rng: np.random.Generator) -> Pose:
+    def _sample_start_pose(
+        self, world: World, sonar: RotatingSonar, rng: np.random.Generator
+    ) -> Pose:
         clearance = 0.05
         for _ in range(2000):
             pose = world.sample_free_pose(rng, clearance=clearance)
@@ -523,7 +536,9 @@ class BeaconScanEnv(SonarEnv):
                 math.sin(bearing),
                 min(math.hypot(dx, dy) / max_range, 1.0),
             ]
-        observation[layout["sensing_time"]] = min(episode.sensing_time_s / config.time_budget_s, 1.0)
+        observation[layout["sensing_time"]] = min(
+            episode.sensing_time_s / config.time_budget_s, 1.0
+        )
         observation[layout["calibrated"]] = float(episode.calibrated)
         observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
         observation[layout["calibration_allowed"]] = float(config.allow_calibration)

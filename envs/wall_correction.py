@@ -123,11 +123,17 @@ class WallCorrectionConfig:
                 "argument 'sample_spacings_cm' must hold multiples of motion_step_cm "
                 f"({self.motion_step_cm}); got {self.sample_spacings_cm!r}"
             )
-        check_number("reaim_interval_m", self.reaim_interval_m, low=0.0, low_inclusive=False, high=100.0)
-        check_number("n_unmapped_obstacles", self.n_unmapped_obstacles, low=0, high=20, integer=True)
+        check_number(
+            "reaim_interval_m", self.reaim_interval_m, low=0.0, low_inclusive=False, high=100.0
+        )
+        check_number(
+            "n_unmapped_obstacles", self.n_unmapped_obstacles, low=0, high=20, integer=True
+        )
         _check_range("obstacle_length_range_m", self.obstacle_length_range_m, low=0.05, high=5.0)
         _check_range("obstacle_depth_range_m", self.obstacle_depth_range_m, low=0.01, high=1.0)
-        check_number("encoder_noise_m_per_sqrt_m", self.encoder_noise_m_per_sqrt_m, low=0.0, high=0.1)
+        check_number(
+            "encoder_noise_m_per_sqrt_m", self.encoder_noise_m_per_sqrt_m, low=0.0, high=0.1
+        )
         check_number("wheel_scale_error_std", self.wheel_scale_error_std, low=0.0, high=0.05)
         check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
         check_number("slip_fraction_max", self.slip_fraction_max, low=0.0, high=1.0)
@@ -135,14 +141,26 @@ class WallCorrectionConfig:
         check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=30.0)
         if self.odometry_variance_per_m is not None:
             check_number(
-                "odometry_variance_per_m", self.odometry_variance_per_m, low=0.0, low_inclusive=False, high=1.0
+                "odometry_variance_per_m",
+                self.odometry_variance_per_m,
+                low=0.0,
+                low_inclusive=False,
+                high=1.0,
             )
-        check_number("range_variance_m2", self.range_variance_m2, low=0.0, low_inclusive=False, high=1.0)
-        check_number("bearing_std_deg", self.bearing_std_deg, low=0.0, low_inclusive=False, high=45.0)
+        check_number(
+            "range_variance_m2", self.range_variance_m2, low=0.0, low_inclusive=False, high=1.0
+        )
+        check_number(
+            "bearing_std_deg", self.bearing_std_deg, low=0.0, low_inclusive=False, high=45.0
+        )
         check_choice("measurement_variances", self.measurement_variances, ("fixed", "fit"))
         check_choice("correction_method", self.correction_method, ("paper", "linear"))
-        check_number("position_scale_m", self.position_scale_m, low=0.0, low_inclusive=False, high=10.0)
-        check_number("heading_scale_deg", self.heading_scale_deg, low=0.0, low_inclusive=False, high=180.0)
+        check_number(
+            "position_scale_m", self.position_scale_m, low=0.0, low_inclusive=False, high=10.0
+        )
+        check_number(
+            "heading_scale_deg", self.heading_scale_deg, low=0.0, low_inclusive=False, high=180.0
+        )
         check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
         check_number("collision_penalty", self.collision_penalty, low=0.0, high=1e4)
         check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
@@ -739,7 +757,9 @@ class WallCorrectionEnv(SonarEnv):
         return features
 
     # --- actions ----------------------------------------------------------------------------
-    def encode_action(self, side: str, spacing_cm: int = 3, standoff_m: float = 0.0) -> np.ndarray | int:
+    def encode_action(
+        self, side: str, spacing_cm: int = 3, standoff_m: float = 0.0
+    ) -> np.ndarray | int:
         """The action for a command; the stand-off snaps to the nearest offered one."""
         check_choice("side", side, SIDES)
         check_choice("spacing_cm", spacing_cm, self.config.sample_spacings_cm)
@@ -775,8 +795,12 @@ class WallCorrectionEnv(SonarEnv):
         world = World(scenario, temperature_c=config.temperature_c, robot_pose=start)
         noise = OdometryNoise(
             encoder_std_m_per_sqrt_m=config.encoder_noise_m_per_sqrt_m,
-            scale_error_left=float(np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4)),
-            scale_error_right=float(np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4)),
+            scale_error_left=float(
+                np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4)
+            ),
+            scale_error_right=float(
+                np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4)
+            ),
             slip_probability_per_m=config.slip_probability_per_m,
             slip_fraction_max=config.slip_fraction_max,
         )
@@ -835,7 +859,9 @@ class WallCorrectionEnv(SonarEnv):
                 continue
             taken[side].append(span)
             y_centre = room.max[1] - depth / 2.0 if side == "left" else room.min[1] + depth / 2.0
-            boxes.append(Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False))
+            boxes.append(
+                Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False)
+            )
         return dataclasses.replace(self.scenario, boxes=self.scenario.boxes + tuple(boxes))
 
     def _apply_action(self, action: Any) -> StepOutcome:
@@ -860,7 +886,9 @@ class WallCorrectionEnv(SonarEnv):
         episode.collisions += int(summary.collided)
 
         truth = episode.true_pose
-        pose_loss = position_error_m(episode.estimate, truth) / self.config.position_scale_m + heading_error_rad(
+        pose_loss = position_error_m(
+            episode.estimate, truth
+        ) / self.config.position_scale_m + heading_error_rad(
             episode.estimate, truth
         ) / math.radians(self.config.heading_scale_deg)
         reward = -pose_loss - self.config.sensing_cost_per_s * summary.sensing_time_s
@@ -868,7 +896,9 @@ class WallCorrectionEnv(SonarEnv):
             reward -= self.config.collision_penalty
         return StepOutcome(reward, terminated=done, info=self._info("ok" if done else "running"))
 
-    def _drive_to(self, episode: _Episode, target: FloatArray, command: LegCommand, summary: LegSummary) -> None:
+    def _drive_to(
+        self, episode: _Episode, target: FloatArray, command: LegCommand, summary: LegSummary
+    ) -> None:
         """Drive to ``target`` ({W}) in straight commands, steering from the estimate."""
         step_m = self.config.motion_step_m
         steps_per_sample = command.spacing_cm // self.config.motion_step_cm
@@ -883,7 +913,11 @@ class WallCorrectionEnv(SonarEnv):
                     return
                 turn = angle_difference(math.atan2(offset[1], offset[0]), episode.estimate.theta)
                 if abs(turn) > REAIM_TOLERANCE_RAD:
-                    self._move(episode, episode.robot.turn(episode.world, turn, episode.motion_rng), summary)
+                    self._move(
+                        episode,
+                        episode.robot.turn(episode.world, turn, episode.motion_rng),
+                        summary,
+                    )
                 since_aim = 0
             if remaining_steps == 0:
                 return
@@ -927,7 +961,9 @@ class WallCorrectionEnv(SonarEnv):
         readings = {"left": left_m, "right": right_m}
         for side in command.active_sides:
             estimate = episode.estimate
-            sensor_xy = estimate.transform_point((0.0, _side_sign(side) * episode.sonars.lateral_offset_m))
+            sensor_xy = estimate.transform_point(
+                (0.0, _side_sign(side) * episode.sonars.lateral_offset_m)
+            )
             with self._timed("localization"):
                 erp, fits = episode.streams[side].add(sensor_xy, estimate.theta, readings[side])
             if erp is not None:
@@ -1027,7 +1063,9 @@ class WallCorrectionEnv(SonarEnv):
         trace.true_path.append(episode.true_pose.as_array())
         trace.estimated_path.append(episode.estimate.as_array())
         odometry = episode.robot.odometry_pose
-        trace.odometry_path.append((odometry if odometry is not None else episode.estimate).as_array())
+        trace.odometry_path.append(
+            (odometry if odometry is not None else episode.estimate).as_array()
+        )
 
     # --- observation and info ---------------------------------------------------------------
     def _observe(self) -> np.ndarray:
@@ -1047,20 +1085,31 @@ class WallCorrectionEnv(SonarEnv):
             -1.0,
             1.0,
         )
-        observation[layout["estimate_heading"]] = [math.cos(estimate.theta), math.sin(estimate.theta)]
+        observation[layout["estimate_heading"]] = [
+            math.cos(estimate.theta),
+            math.sin(estimate.theta),
+        ]
         variances = np.maximum(np.diag(episode.covariance), 0.0)
-        observation[layout["position_std"]] = np.minimum(np.sqrt(variances[:2]) / POSITION_STD_SCALE_M, 1.0)
-        observation[layout["heading_std"]] = min(math.sqrt(variances[2]) / HEADING_STD_SCALE_RAD, 1.0)
+        observation[layout["position_std"]] = np.minimum(
+            np.sqrt(variances[:2]) / POSITION_STD_SCALE_M, 1.0
+        )
+        observation[layout["heading_std"]] = min(
+            math.sqrt(variances[2]) / HEADING_STD_SCALE_RAD, 1.0
+        )
         if episode.leg < config.n_legs:
             observation[layout["map_ahead"]] = self._map_ahead[episode.leg]
         last = episode.last_leg
         counts = [
-            count[side] for side in SIDE_NAMES for count in (last.detected, last.matched, last.rejected)
+            count[side]
+            for side in SIDE_NAMES
+            for count in (last.detected, last.matched, last.rejected)
         ]
         observation[layout["last_leg_walls"]] = np.minimum(np.asarray(counts) / COUNT_SCALE, 1.0)
         observation[layout["last_leg_dropped"]] = min(last.dropped_groups / COUNT_SCALE, 1.0)
         observation[layout["collided"]] = float(last.collided)
-        observation[layout["sensing_time"]] = min(episode.sensing_time_s / self._max_sensing_time_s, 1.0)
+        observation[layout["sensing_time"]] = min(
+            episode.sensing_time_s / self._max_sensing_time_s, 1.0
+        )
         observation[layout["samples"]] = min(last.samples / self._max_samples_per_leg, 1.0)
         return observation
 
@@ -1123,9 +1172,13 @@ class WallCorrectionEnv(SonarEnv):
                 "position error m": position_error_m(episode.estimate, episode.true_pose),
             },
         )
-        _draw_path(image, episode.world.scenario, np.array(trace.odometry_path), (150, 150, 150), 900)
+        _draw_path(
+            image, episode.world.scenario, np.array(trace.odometry_path), (150, 150, 150), 900
+        )
         _draw_path(image, episode.world.scenario, np.array(trace.true_path), (20, 120, 20), 900)
-        _draw_path(image, episode.world.scenario, np.array(trace.estimated_path), (216, 27, 156), 900)
+        _draw_path(
+            image, episode.world.scenario, np.array(trace.estimated_path), (216, 27, 156), 900
+        )
         return image
 
     def _require_episode(self) -> _Episode:
@@ -1193,14 +1246,20 @@ def _longest_run(ids: Sequence[int]) -> int:
     longest = current = 0
     previous = -1
     for wall_id in ids:
-        current = current + 1 if wall_id == previous and wall_id >= 0 else (1 if wall_id >= 0 else 0)
+        current = (
+            current + 1 if wall_id == previous and wall_id >= 0 else (1 if wall_id >= 0 else 0)
+        )
         previous = wall_id
         longest = max(longest, current)
     return longest
 
 
 def _draw_path(
-    image: np.ndarray, scenario: Scenario, path: FloatArray, colour: tuple[int, int, int], width_px: int
+    image: np.ndarray,
+    scenario: Scenario,
+    path: FloatArray,
+    colour: tuple[int, int, int],
+    width_px: int,
 ) -> None:
     """Mark the ``(x, y)`` of each row of ``path`` on ``image`` with a 2x2 dot (in place)."""
     from sonar_gym.render import world_to_pixel

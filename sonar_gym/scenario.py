@@ -236,7 +236,15 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
 
 
 _TOP_LEVEL_KEYS = {
-    "meta", "room", "walls", "boxes", "cylinders", "emitters", "robot", "sensor", "reflector",
+    "meta",
+    "room",
+    "walls",
+    "boxes",
+    "cylinders",
+    "emitters",
+    "robot",
+    "sensor",
+    "reflector",
 }
 
 
@@ -252,9 +260,13 @@ def scenario_from_dict(
     room_data = reader.table(data, "room", {"min", "max"}, required=("min", "max"))
     room = None
     if room_data:
-        room = Room(reader.vec2("room.min", room_data["min"]), reader.vec2("room.max", room_data["max"]))
+        room = Room(
+            reader.vec2("room.min", room_data["min"]), reader.vec2("room.max", room_data["max"])
+        )
         if not (room.min[0] < room.max[0] and room.min[1] < room.max[1]):
-            raise reader.error("room", "min < max in both x and y", f"min={room.min}, max={room.max}")
+            raise reader.error(
+                "room", "min < max in both x and y", f"min={room.min}, max={room.max}"
+            )
 
     walls = []
     for i, item in enumerate(reader.array(data, "walls", {"a", "b", "mapped"}, ("a", "b"))):
@@ -283,7 +295,9 @@ def scenario_from_dict(
 
     cylinders = []
     for i, item in enumerate(
-        reader.array(data, "cylinders", {"center", "radius", "role", "mapped"}, ("center", "radius"))
+        reader.array(
+            data, "cylinders", {"center", "radius", "role", "mapped"}, ("center", "radius")
+        )
     ):
         where = f"cylinders[{i}]"
         radius = reader.positive(f"{where}.radius", item["radius"])
@@ -303,7 +317,9 @@ def scenario_from_dict(
             raise reader.error("cylinders", f"at most one cylinder with role {role!r}", "several")
 
     emitters = []
-    for i, item in enumerate(reader.array(data, "emitters", {"name", "position"}, ("name", "position"))):
+    for i, item in enumerate(
+        reader.array(data, "emitters", {"name", "position"}, ("name", "position"))
+    ):
         where = f"emitters[{i}]"
         if not isinstance(item["name"], str) or not item["name"]:
             raise reader.error(f"{where}.name", "a non-empty string", item["name"])
@@ -312,23 +328,35 @@ def scenario_from_dict(
     if len(set(names)) != len(names):
         raise reader.error("emitters", "unique names", names)
 
-    robot_data = reader.table(data, "robot", {"radius", "sensor_offset", "wheel_base", "sensor_height"})
+    robot_data = reader.table(
+        data, "robot", {"radius", "sensor_offset", "wheel_base", "sensor_height"}
+    )
     defaults = RobotSpec()
     robot = RobotSpec(
         radius=reader.positive("robot.radius", robot_data.get("radius", defaults.radius)),
-        sensor_offset=reader.vec2("robot.sensor_offset", robot_data.get("sensor_offset", defaults.sensor_offset)),
-        wheel_base=reader.positive("robot.wheel_base", robot_data.get("wheel_base", defaults.wheel_base)),
-        sensor_height=reader.number("robot.sensor_height", robot_data.get("sensor_height", defaults.sensor_height)),
+        sensor_offset=reader.vec2(
+            "robot.sensor_offset", robot_data.get("sensor_offset", defaults.sensor_offset)
+        ),
+        wheel_base=reader.positive(
+            "robot.wheel_base", robot_data.get("wheel_base", defaults.wheel_base)
+        ),
+        sensor_height=reader.number(
+            "robot.sensor_height", robot_data.get("sensor_height", defaults.sensor_height)
+        ),
     )
     sensor_data = reader.table(data, "sensor", {"preset"})
     preset = sensor_data.get("preset", SensorSpec().preset)
     if preset not in SENSOR_PRESETS:
         raise reader.error("sensor.preset", f"one of {list(SENSOR_PRESETS)}", preset)
     reflector_data = reader.table(data, "reflector", {"distance"})
-    reflector = Reflector(reader.positive("reflector.distance", reflector_data.get("distance", Reflector().distance)))
+    reflector = Reflector(
+        reader.positive("reflector.distance", reflector_data.get("distance", Reflector().distance))
+    )
 
     if room is None and not walls and not boxes and not cylinders and not emitters:
-        raise reader.error("<top level>", "at least one of room, walls, boxes, cylinders, emitters", "nothing")
+        raise reader.error(
+            "<top level>", "at least one of room, walls, boxes, cylinders, emitters", "nothing"
+        )
     name = meta.get("name", default_name)
     if not isinstance(name, str):
         raise reader.error("meta.name", "a string", name)
@@ -392,7 +420,11 @@ class _Reader:
         return value
 
     def number(self, where: str, value: object) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or not math.isfinite(value)
+        ):
             raise self.error(where, "a finite number", value)
         return float(value)
 
@@ -415,4 +447,8 @@ class _Reader:
     def vec3(self, where: str, value: object) -> Vec3:
         if not isinstance(value, (list, tuple)) or len(value) != 3:
             raise self.error(where, "a triple [x, y, z] of numbers in metres", value)
-        return (self.number(where, value[0]), self.number(where, value[1]), self.number(where, value[2]))
+        return (
+            self.number(where, value[0]),
+            self.number(where, value[1]),
+            self.number(where, value[2]),
+        )

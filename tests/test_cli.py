@@ -49,8 +49,18 @@ def test_evaluate_defaults_are_the_main_job():
 
 def test_repeatable_options_collect_every_value():
     arguments = cli.build_parser().parse_args(
-        ["evaluate", "--env", "all", "--agent", "paper", "runs/x/model.zip",
-         "--env-arg", "a=1", "--env-arg", "b=x"]
+        [
+            "evaluate",
+            "--env",
+            "all",
+            "--agent",
+            "paper",
+            "runs/x/model.zip",
+            "--env-arg",
+            "a=1",
+            "--env-arg",
+            "b=x",
+        ]
     )
     assert arguments.env == ["all"]
     assert arguments.agent == ["paper", "runs/x/model.zip"]
@@ -81,15 +91,33 @@ def test_malformed_command_lines_exit_with_status_2(argv, capsys):
 
 def test_evaluate_prints_a_table_and_writes_json_csv_and_plot(tmp_path, capsys):
     code, out, err = run_cli(
-        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "scripted", "coin",
-        "--episodes", "4", "--seed", "7",
-        "--json", str(tmp_path / "e.json"), "--csv", str(tmp_path / "e.csv"),
-        "--plot", str(tmp_path / "e.png"),
+        capsys,
+        "evaluate",
+        "--env",
+        DISCRETE_ID,
+        "--agent",
+        "scripted",
+        "coin",
+        "--episodes",
+        "4",
+        "--seed",
+        "7",
+        "--json",
+        str(tmp_path / "e.json"),
+        "--csv",
+        str(tmp_path / "e.csv"),
+        "--plot",
+        str(tmp_path / "e.png"),
     )
     assert code == 0, err
     assert DISCRETE_ID in out and "scripted" in out and "coin" in out
-    for header in ("success [%]", "E_xy median [cm]", "E_θ p95 [deg]", "sensing time [s]",
-                   "95% CI"):
+    for header in (
+        "success [%]",
+        "E_xy median [cm]",
+        "E_θ p95 [deg]",
+        "sensing time [s]",
+        "95% CI",
+    ):
         assert header in out
     assert str(tmp_path / "e.json") in out and str(tmp_path / "e.png") in out
     data = json.loads((tmp_path / "e.json").read_text())
@@ -114,9 +142,22 @@ def test_evaluate_writes_to_results_by_default(tmp_path, capsys, monkeypatch):
 
 def test_evaluate_passes_env_args(tmp_path, capsys):
     code, _, err = run_cli(
-        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "scripted", "--episodes", "2",
-        "--env-arg", "report_heading=false", "--env-arg", "noise_std_m=0",
-        "--json", str(tmp_path / "e.json"), "--plot", str(tmp_path / "e.png"),
+        capsys,
+        "evaluate",
+        "--env",
+        DISCRETE_ID,
+        "--agent",
+        "scripted",
+        "--episodes",
+        "2",
+        "--env-arg",
+        "report_heading=false",
+        "--env-arg",
+        "noise_std_m=0",
+        "--json",
+        str(tmp_path / "e.json"),
+        "--plot",
+        str(tmp_path / "e.png"),
     )
     assert code == 0, err
     data = json.loads((tmp_path / "e.json").read_text())
@@ -135,8 +176,14 @@ def test_unknown_env_exits_2_naming_the_allowed_ids(capsys):
 
 def test_unknown_agent_exits_2_naming_the_agents_of_the_env(capsys, tmp_path):
     code, out, err = run_cli(
-        capsys, "evaluate", "--env", DISCRETE_ID, "--agent", "wizard",
-        "--json", str(tmp_path / "e.json"),
+        capsys,
+        "evaluate",
+        "--env",
+        DISCRETE_ID,
+        "--agent",
+        "wizard",
+        "--json",
+        str(tmp_path / "e.json"),
     )
     assert code == 2
     assert "unknown agent 'wizard'" in err
@@ -167,9 +214,21 @@ def test_train_prints_the_evaluation_and_the_command_to_evaluate(tmp_path, capsy
     )
     out_dir = tmp_path / "run"
     code, out, err = run_cli(
-        capsys, "train", "--env", DISCRETE_ID, "--algo", "PPO", "--timesteps", "64",
-        "--out", str(out_dir), "--config", str(config), "--no-progress",
-        "--env-arg", "noise_std_m=0.02",
+        capsys,
+        "train",
+        "--env",
+        DISCRETE_ID,
+        "--algo",
+        "PPO",
+        "--timesteps",
+        "64",
+        "--out",
+        str(out_dir),
+        "--config",
+        str(config),
+        "--no-progress",
+        "--env-arg",
+        "noise_std_m=0.02",
     )
     assert code == 0, err
     assert "64 timesteps" in out and "evaluate_policy, 2 episodes" in out
@@ -191,8 +250,16 @@ def test_train_prints_the_evaluation_and_the_command_to_evaluate(tmp_path, capsy
 )
 def test_train_refuses_what_cannot_work(capsys, tmp_path, env_id, algo, fragment):
     code, _, err = run_cli(
-        capsys, "train", "--env", env_id, "--algo", algo, "--timesteps", "10",
-        "--out", str(tmp_path / "run"),
+        capsys,
+        "train",
+        "--env",
+        env_id,
+        "--algo",
+        algo,
+        "--timesteps",
+        "10",
+        "--out",
+        str(tmp_path / "run"),
     )
     assert code == 2 and fragment in err
     assert not (tmp_path / "run").exists()
@@ -232,20 +299,31 @@ def test_benchmark_reports_steps_per_second_and_phase_shares(tmp_path, capsys, m
 def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys, monkeypatch):
     install_fake_bench_sonar(monkeypatch, [{"name": "polaroid 360 pings", "pans_per_s": 123.0}])
     code, out, _ = run_cli(
-        capsys, "benchmark", "--env", DISCRETE_ID, "--steps", "10",
-        "--json", str(tmp_path / "b.json"),
+        capsys,
+        "benchmark",
+        "--env",
+        DISCRETE_ID,
+        "--steps",
+        "10",
+        "--json",
+        str(tmp_path / "b.json"),
     )
     assert code == 0
     assert "sonar pan throughput" in out and "polaroid 360 pings" in out
     assert json.loads((tmp_path / "b.json").read_text())["pan"][0]["pans_per_s"] == 123.0
 
 
-def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, capsys,
-                                                                     monkeypatch):
+def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, capsys, monkeypatch):
     install_fake_bench_sonar(monkeypatch)
     code, out, _ = run_cli(
-        capsys, "benchmark", "--env", DISCRETE_ID, "--steps", "10",
-        "--json", str(tmp_path / "b.json"),
+        capsys,
+        "benchmark",
+        "--env",
+        DISCRETE_ID,
+        "--steps",
+        "10",
+        "--json",
+        str(tmp_path / "b.json"),
     )
     assert code == 0 and "pan throughput skipped" in out
 
@@ -309,7 +387,10 @@ def test_console_script_is_installed_and_reports_errors_without_traceback():
         assert command in help_run.stdout
     bad = subprocess.run(
         [str(SCRIPT), "evaluate", "--env", "Nope-v0"],
-        capture_output=True, text=True, cwd=REPOSITORY, timeout=60,
+        capture_output=True,
+        text=True,
+        cwd=REPOSITORY,
+        timeout=60,
     )
     assert bad.returncode == 2 and "unknown env" in bad.stderr
     assert "Traceback" not in bad.stderr
@@ -321,8 +402,9 @@ def test_console_script_is_installed_and_reports_errors_without_traceback():
 BEACON_SCAN = "SonarGym/BeaconScan-v0"
 
 
-def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(tmp_path, capsys,
-                                                                         monkeypatch):
+def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(
+    tmp_path, capsys, monkeypatch
+):
     monkeypatch.chdir(tmp_path)
     arguments = cli.build_parser().parse_args(["evaluate"])
     code, out, err = run_cli(capsys, "evaluate", "--episodes", "3")  # all other defaults
@@ -345,8 +427,19 @@ def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
 
     out_dir = tmp_path / "run"
     code, out, err = run_cli(
-        capsys, "train", "--env", BEACON_SCAN, "--algo", "ppo", "--timesteps", "512",
-        "--out", str(out_dir), "--eval-episodes", "2", "--no-progress",
+        capsys,
+        "train",
+        "--env",
+        BEACON_SCAN,
+        "--algo",
+        "ppo",
+        "--timesteps",
+        "512",
+        "--out",
+        str(out_dir),
+        "--eval-episodes",
+        "2",
+        "--no-progress",
     )
     assert code == 0, err
     assert "512 timesteps" in out
@@ -360,8 +453,15 @@ def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
     assert isinstance(agent, PolicyAgent) and agent.normalizer is not None
 
     code, out, err = run_cli(
-        capsys, *command.split()[1:], "paper", "--episodes", "2",
-        "--json", str(tmp_path / "e.json"), "--plot", str(tmp_path / "e.png"),
+        capsys,
+        *command.split()[1:],
+        "paper",
+        "--episodes",
+        "2",
+        "--json",
+        str(tmp_path / "e.json"),
+        "--plot",
+        str(tmp_path / "e.png"),
     )
     assert code == 0, err
     data = json.loads((tmp_path / "e.json").read_text())

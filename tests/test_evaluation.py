@@ -87,10 +87,14 @@ def test_t_interval_rejects_empty_values_and_bad_confidence():
 
 
 def test_summary_percentiles_use_successful_episodes_only():
-    successes = [record(i, position_error_m=0.01 * (i + 1), heading_error_rad=0.1 * (i + 1))
-                 for i in range(10)]
-    failures = [record(10 + i, position_error_m=9.0, heading_error_rad=3.0, status="no_pair")
-                for i in range(5)]
+    successes = [
+        record(i, position_error_m=0.01 * (i + 1), heading_error_rad=0.1 * (i + 1))
+        for i in range(10)
+    ]
+    failures = [
+        record(10 + i, position_error_m=9.0, heading_error_rad=3.0, status="no_pair")
+        for i in range(5)
+    ]
     summary = summarize(successes + failures)
     assert summary.episodes == 15
     assert summary.successes == 10
@@ -169,7 +173,13 @@ def test_env_args_parse_numbers_bools_none_lists_and_strings():
         ["a=3", "b=0.25", "c=true", "d=False", "e=none", "f=[1, 2]", "g=beom_cho_lab", "h=-1e-3"]
     )
     assert parsed == {
-        "a": 3, "b": 0.25, "c": True, "d": False, "e": None, "f": [1, 2], "g": "beom_cho_lab",
+        "a": 3,
+        "b": 0.25,
+        "c": True,
+        "d": False,
+        "e": None,
+        "f": [1, 2],
+        "g": "beom_cho_lab",
         "h": -1e-3,
     }
     assert isinstance(parsed["a"], int)
@@ -212,7 +222,10 @@ def test_same_seed_gives_identical_records():
 def test_episodes_are_paired_across_agents_and_action_encodings():
     results = evaluate_agents([DISCRETE_ID, BOX_ID], ["scripted", "coin"], episodes=5, seed=3)
     assert [(r.env_id, r.agent) for r in results] == [
-        (DISCRETE_ID, "scripted"), (DISCRETE_ID, "coin"), (BOX_ID, "scripted"), (BOX_ID, "coin")
+        (DISCRETE_ID, "scripted"),
+        (DISCRETE_ID, "coin"),
+        (BOX_ID, "scripted"),
+        (BOX_ID, "coin"),
     ]
     for result in results:
         assert [r.seed for r in result.records] == [3, 4, 5, 6, 7]
@@ -248,7 +261,10 @@ def test_episode_cut_by_the_time_limit_is_marked_truncated():
 
 def test_env_kwargs_reach_the_env():
     result = evaluate_agents(
-        DISCRETE_ID, ["scripted"], episodes=3, seed=0,
+        DISCRETE_ID,
+        ["scripted"],
+        episodes=3,
+        seed=0,
         env_kwargs={"report_heading": False, "noise_std_m": 0.0},
     )[0]
     for episode in result.records:
@@ -268,7 +284,10 @@ def test_evaluate_agents_checks_the_selection_before_running():
 def test_progress_callback_sees_every_episode():
     seen = []
     evaluate_agents(
-        DISCRETE_ID, ["scripted", "coin"], episodes=3, seed=0,
+        DISCRETE_ID,
+        ["scripted", "coin"],
+        episodes=3,
+        seed=0,
         on_episode=lambda env_id, agent, rec: seen.append((env_id, agent, rec.seed)),
     )
     assert seen == [(DISCRETE_ID, a, s) for a in ("scripted", "coin") for s in (0, 1, 2)]
@@ -284,13 +303,19 @@ def test_json_report_holds_summaries_and_every_episode(tmp_path):
     data = json.loads(path.read_text())
     assert data["meta"] == {"seed": 0}
     assert [(r["env_id"], r["agent"]) for r in data["results"]] == [
-        (DISCRETE_ID, "scripted"), (DISCRETE_ID, "coin")
+        (DISCRETE_ID, "scripted"),
+        (DISCRETE_ID, "coin"),
     ]
     scripted = data["results"][0]
     assert len(scripted["episodes"]) == 5
     assert scripted["episodes"][0]["seed"] == 0
     assert set(scripted["episodes"][0]) == {
-        "seed", "reward", "position_error_m", "heading_error_rad", "sensing_time_s", "status",
+        "seed",
+        "reward",
+        "position_error_m",
+        "heading_error_rad",
+        "sensing_time_s",
+        "status",
         "steps",
     }
     summary = results[0].summary

@@ -125,7 +125,10 @@ def test_arms_are_unit_vectors(name: str) -> None:
 
 def test_box_corner_against_a_wall_is_a_concave_dihedral_not_an_edge() -> None:
     scenario = scenario_from_dict(
-        {"room": {"min": [-3, -2], "max": [3, 2]}, "boxes": [{"center": [0, 1.7], "size": [1.0, 0.6]}]}
+        {
+            "room": {"min": [-3, -2], "max": [3, 2]},
+            "boxes": [{"center": [0, 1.7], "size": [1.0, 0.6]}],
+        }
     )
     geometry = build_static_geometry(scenario)
     flush_right = int(np.flatnonzero(np.all(np.isclose(geometry.vertices, [0.5, 2.0]), axis=1))[-1])

@@ -11,7 +11,6 @@ from rich.console import Console
 from sonar_gym.train.reproduce import apcs
 
 
-
 def test_reproduction_writes_plots_and_numbers_of_the_paper_order(tmp_path: Path) -> None:
     buffer = io.StringIO()
     apcs.run(tmp_path, Console(file=buffer, width=220), n_runs=3)

@@ -46,7 +46,6 @@ def _heading_error(estimate: list[float], truth: list[float]) -> float:
     return abs(angle_difference(estimate[2], truth[2]))
 
 
-
 def test_the_equal_distance_point_is_as_far_from_both_beacons() -> None:
     x = beom_cho.equal_distance_x_m(load_scenario("beom_cho_lab"))
     assert math.dist((x, 0.0), SMALL_BEACON_XY) == pytest.approx(
@@ -152,9 +151,7 @@ def test_the_slip_turns_the_robot_by_f_d_over_l_unseen_by_dead_reckoning(
     _, _, numbers = reproduction
     no_slip, slip = numbers["path"]["no_slip"], numbers["path"]["slip"]
     segment = numbers["slip_segment"]
-    expected_turn = (
-        numbers["slip_fraction"] * numbers["stop_spacing_m"] / numbers["wheel_base_m"]
-    )
+    expected_turn = numbers["slip_fraction"] * numbers["stop_spacing_m"] / numbers["wheel_base_m"]
     assert expected_turn == pytest.approx(0.2 * 0.2 / 0.5, rel=1e-12)
     assert slip["true_poses"][:segment] == no_slip["true_poses"][:segment]
     turn = angle_difference(slip["true_poses"][segment][2], no_slip["true_poses"][segment][2])

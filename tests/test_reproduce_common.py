@@ -21,5 +21,7 @@ def test_ratio_flag_marks_only_factors_beyond_two() -> None:
 
 def test_parameters_table_keeps_bracketed_units_in_cells() -> None:
     buffer = io.StringIO()
-    Console(file=buffer, width=120).print(parameters_table([("range noise [mm]", "2", "presets.py")]))
+    Console(file=buffer, width=120).print(
+        parameters_table([("range noise [mm]", "2", "presets.py")])
+    )
     assert "range noise [mm]" in buffer.getvalue()

@@ -16,7 +16,6 @@ from sonar_gym.train.reproduce import kim
 TABLE_1_ERRORS_M = np.linalg.norm(TABLE_1_ESTIMATED_POSITIONS_M - TABLE_1_TRUE_POSITIONS_M, axis=1)
 
 
-
 def test_reproduction_writes_plots_and_numbers_of_the_paper_order(tmp_path: Path) -> None:
     buffer = io.StringIO()
     kim.run(tmp_path, Console(file=buffer, width=200), table1_seeds=4, sweep_seeds=3)

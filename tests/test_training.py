@@ -137,7 +137,7 @@ def test_config_with_an_unknown_hyperparameter_names_the_allowed_ones(tmp_path):
     [
         ("n_env = 2\n", "unknown keys"),
         ("n_envs = 0\n", "n_envs"),
-        ("[policy_kwargs]\nactivation_fn = \"swish\"\n", "activation_fn"),
+        ('[policy_kwargs]\nactivation_fn = "swish"\n', "activation_fn"),
         ("[vec_normalize]\nnorm_ob = true\n", "norm_ob"),
         ("[hyperparameters\n", "bad.toml"),
     ],
@@ -168,14 +168,26 @@ def test_algorithms_are_matched_to_action_spaces():
 def test_ppo_training_saves_a_run_that_loads_and_evaluates(tmp_path):
     out = tmp_path / "run"
     result = train(
-        DISCRETE_ID, "ppo", 384, out_dir=out, seed=1,
-        config_path=tiny_config(tmp_path, "ppo"), progress_bar=False,
+        DISCRETE_ID,
+        "ppo",
+        384,
+        out_dir=out,
+        seed=1,
+        config_path=tiny_config(tmp_path, "ppo"),
+        progress_bar=False,
     )
     assert result.total_timesteps == 384
-    for name in ("model.zip", "vecnormalize.pkl", "run.json", "learning_curve.png",
-                 "episodes.csv", "monitor/0.monitor.csv", "monitor/1.monitor.csv",
-                 "checkpoints/rl_model_256_steps.zip",
-                 "checkpoints/rl_model_vecnormalize_256_steps.pkl"):
+    for name in (
+        "model.zip",
+        "vecnormalize.pkl",
+        "run.json",
+        "learning_curve.png",
+        "episodes.csv",
+        "monitor/0.monitor.csv",
+        "monitor/1.monitor.csv",
+        "checkpoints/rl_model_256_steps.zip",
+        "checkpoints/rl_model_vecnormalize_256_steps.pkl",
+    ):
         assert (out / name).is_file(), name
     assert any((out / "tb").rglob("events.out.tfevents*"))
     run_info = json.loads((out / "run.json").read_text())
@@ -198,8 +210,15 @@ def test_ppo_training_saves_a_run_that_loads_and_evaluates(tmp_path):
 
 def test_policy_agent_normalises_like_vecnormalize(tmp_path):
     out = tmp_path / "run"
-    train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=tiny_config(tmp_path, "ppo"),
-          progress_bar=False, eval_episodes=0)
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=tiny_config(tmp_path, "ppo"),
+        progress_bar=False,
+        eval_episodes=0,
+    )
     env = gym.make(DISCRETE_ID)
     agent = load_policy_agent(out / "model.zip", env)
     reference = VecNormalize.load(str(out / "vecnormalize.pkl"), DummyVecEnv([lambda: env]))
@@ -218,8 +237,9 @@ def test_policy_agent_normalises_like_vecnormalize(tmp_path):
 )
 def test_other_algorithms_train_and_load_on_their_action_spaces(tmp_path, algo, env_id):
     out = tmp_path / algo
-    result = train(env_id, algo, 64, out_dir=out, config_path=tiny_config(tmp_path, algo),
-                   progress_bar=False)
+    result = train(
+        env_id, algo, 64, out_dir=out, config_path=tiny_config(tmp_path, algo), progress_bar=False
+    )
     assert result.total_timesteps >= 64
     run_info = json.loads((out / "run.json").read_text())
     assert run_info["vec_normalize"]["norm_reward"] is False  # reward normalisation: PPO only
@@ -241,8 +261,15 @@ def test_ppo_and_a2c_zips_are_told_apart_without_run_json(tmp_path):
 
 def test_loader_refuses_a_model_whose_normalisation_statistics_are_missing(tmp_path):
     out = tmp_path / "run"
-    train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=tiny_config(tmp_path, "ppo"),
-          progress_bar=False, eval_episodes=0)
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=tiny_config(tmp_path, "ppo"),
+        progress_bar=False,
+        eval_episodes=0,
+    )
     (out / "vecnormalize.pkl").unlink()
     with pytest.raises(ValueError, match="vecnormalize.pkl is missing"):
         load_policy_agent(out / "model.zip", gym.make(DISCRETE_ID))
@@ -250,8 +277,16 @@ def test_loader_refuses_a_model_whose_normalisation_statistics_are_missing(tmp_p
 
 def test_loader_refuses_an_env_with_other_spaces(tmp_path):
     out = tmp_path / "run"
-    train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=tiny_config(tmp_path, "ppo"),
-          progress_bar=False, eval_episodes=0, env_kwargs={"noise_std_m": 0.02})
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=tiny_config(tmp_path, "ppo"),
+        progress_bar=False,
+        eval_episodes=0,
+        env_kwargs={"noise_std_m": 0.02},
+    )
     with pytest.raises(ValueError, match="action space.*env arguments {'noise_std_m': 0.02}"):
         load_policy_agent(out, gym.make(BOX_ID))
     with pytest.raises(UsageError, match="cannot act in CliFake/LocateBox-v0"):
@@ -269,13 +304,27 @@ def test_checkpoint_statistics_sit_beside_the_checkpoint():
 def test_resume_adds_the_new_timesteps_to_the_counter(tmp_path):
     out = tmp_path / "run"
     config = tiny_config(tmp_path, "ppo")
-    first = train(DISCRETE_ID, "ppo", 256, out_dir=out, config_path=config,
-                  progress_bar=False, eval_episodes=0)
+    first = train(
+        DISCRETE_ID,
+        "ppo",
+        256,
+        out_dir=out,
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     assert first.total_timesteps == 256
     with (out / "vecnormalize.pkl").open("rb") as handle:
         count_before = pickle.load(handle).obs_rms.count
-    resumed = train(None, None, 128, resume=out / "model.zip", config_path=config,
-                    progress_bar=False, eval_episodes=0)
+    resumed = train(
+        None,
+        None,
+        128,
+        resume=out / "model.zip",
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     assert resumed.out_dir == out and resumed.algo == "ppo" and resumed.env_id == DISCRETE_ID
     assert resumed.total_timesteps == 384
     assert algorithm_class("ppo").load(out / "model.zip").num_timesteps == 384
@@ -290,11 +339,25 @@ def test_resume_adds_the_new_timesteps_to_the_counter(tmp_path):
 def test_resume_from_a_checkpoint_uses_its_statistics(tmp_path):
     out = tmp_path / "run"
     config = tiny_config(tmp_path, "ppo")
-    train(DISCRETE_ID, "ppo", 256, out_dir=out, config_path=config, progress_bar=False,
-          eval_episodes=0)
-    resumed = train(DISCRETE_ID, "ppo", 128, out_dir=tmp_path / "branch",
-                    resume=out / "checkpoints" / "rl_model_128_steps.zip",
-                    config_path=config, progress_bar=False, eval_episodes=0)
+    train(
+        DISCRETE_ID,
+        "ppo",
+        256,
+        out_dir=out,
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
+    resumed = train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=tmp_path / "branch",
+        resume=out / "checkpoints" / "rl_model_128_steps.zip",
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     assert resumed.total_timesteps == 256
     assert (tmp_path / "branch" / "model.zip").is_file()
 
@@ -302,8 +365,15 @@ def test_resume_from_a_checkpoint_uses_its_statistics(tmp_path):
 def test_resume_refuses_another_algorithm_or_env(tmp_path):
     out = tmp_path / "run"
     config = tiny_config(tmp_path, "ppo")
-    train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=config, progress_bar=False,
-          eval_episodes=0)
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     with pytest.raises(UsageError, match="trained with ppo, not a2c"):
         train(None, "a2c", 128, resume=out / "model.zip")
     with pytest.raises(UsageError, match="trained on CliFake/Locate-v0"):
@@ -316,12 +386,27 @@ def test_resume_refuses_another_algorithm_or_env(tmp_path):
 def test_an_existing_run_is_not_overwritten_by_accident(tmp_path):
     out = tmp_path / "run"
     config = tiny_config(tmp_path, "ppo")
-    train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=config, progress_bar=False,
-          eval_episodes=0)
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     with pytest.raises(UsageError, match="already holds a trained model"):
         train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=config, progress_bar=False)
-    again = train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=config, progress_bar=False,
-                  eval_episodes=0, overwrite=True)
+    again = train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=config,
+        progress_bar=False,
+        eval_episodes=0,
+        overwrite=True,
+    )
     assert again.total_timesteps == 128
     assert not (out / "checkpoints" / "rl_model_256_steps.zip").exists()
 
@@ -334,7 +419,15 @@ def test_training_refuses_an_algorithm_the_action_space_does_not_allow(tmp_path)
 
 def test_subprocess_workers_train_too(tmp_path):
     out = tmp_path / "run"
-    result = train(DISCRETE_ID, "ppo", 128, out_dir=out, config_path=tiny_config(tmp_path, "ppo"),
-                   subproc=True, progress_bar=False, eval_episodes=0)
+    result = train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=tiny_config(tmp_path, "ppo"),
+        subproc=True,
+        progress_bar=False,
+        eval_episodes=0,
+    )
     assert result.total_timesteps == 128
     assert json.loads((out / "run.json").read_text())["segments"][0]["subproc"] is True

@@ -34,8 +34,13 @@ TIMESTEPS = {
 @pytest.mark.parametrize("env_id", sorted(ENVIRONMENTS))
 def test_ppo_trains_saves_loads_and_beats_random(env_id: str, tmp_path: Path) -> None:
     result = train(
-        env_id, "ppo", timesteps=TIMESTEPS[env_id], out_dir=tmp_path / "run", seed=0,
-        progress_bar=False, eval_episodes=0,
+        env_id,
+        "ppo",
+        timesteps=TIMESTEPS[env_id],
+        out_dir=tmp_path / "run",
+        seed=0,
+        progress_bar=False,
+        eval_episodes=0,
     )
     assert result.model_path.exists() and result.vecnormalize_path.exists()
     assert result.learning_curve_path.exists()

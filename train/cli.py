@@ -61,17 +61,33 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME|PATH",
         help="agent names or saved models (.zip / run dir); default: every agent of the env",
     )
-    evaluate.add_argument("--episodes", type=_positive_int, default=DEFAULT_EPISODES,
-                          metavar="N",
-                          help=f"episodes per agent and env (default {DEFAULT_EPISODES})")
-    evaluate.add_argument("--seed", type=int, default=0, metavar="S",
-                          help="episode i uses seed S + i (default 0)")
-    evaluate.add_argument("--json", type=Path, default=DEFAULT_EVALUATE_JSON, metavar="PATH",
-                          help=f"summaries and every episode (default {DEFAULT_EVALUATE_JSON})")
-    evaluate.add_argument("--csv", type=Path, default=None, metavar="PATH",
-                          help="one row per episode (default: none)")
-    evaluate.add_argument("--plot", type=Path, default=DEFAULT_EVALUATE_PLOT, metavar="PATH",
-                          help=f"bar charts per env (default {DEFAULT_EVALUATE_PLOT})")
+    evaluate.add_argument(
+        "--episodes",
+        type=_positive_int,
+        default=DEFAULT_EPISODES,
+        metavar="N",
+        help=f"episodes per agent and env (default {DEFAULT_EPISODES})",
+    )
+    evaluate.add_argument(
+        "--seed", type=int, default=0, metavar="S", help="episode i uses seed S + i (default 0)"
+    )
+    evaluate.add_argument(
+        "--json",
+        type=Path,
+        default=DEFAULT_EVALUATE_JSON,
+        metavar="PATH",
+        help=f"summaries and every episode (default {DEFAULT_EVALUATE_JSON})",
+    )
+    evaluate.add_argument(
+        "--csv", type=Path, default=None, metavar="PATH", help="one row per episode (default: none)"
+    )
+    evaluate.add_argument(
+        "--plot",
+        type=Path,
+        default=DEFAULT_EVALUATE_PLOT,
+        metavar="PATH",
+        help=f"bar charts per env (default {DEFAULT_EVALUATE_PLOT})",
+    )
     _add_env_arg(evaluate)
     evaluate.set_defaults(handler=_evaluate)
 
@@ -82,22 +98,50 @@ def build_parser() -> argparse.ArgumentParser:
     )
     train.add_argument("--env", metavar="ID", help="env id (optional with --resume)")
     train.add_argument("--algo", metavar="ALGO", help="ppo | sac | dqn | a2c")
-    train.add_argument("--timesteps", type=_positive_int, required=True, metavar="N",
-                       help="env steps to train (more steps with --resume)")
-    train.add_argument("--out", type=Path, metavar="DIR",
-                       help="run directory (default runs/<env-short>-<algo>-<seed>)")
+    train.add_argument(
+        "--timesteps",
+        type=_positive_int,
+        required=True,
+        metavar="N",
+        help="env steps to train (more steps with --resume)",
+    )
+    train.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="run directory (default runs/<env-short>-<algo>-<seed>)",
+    )
     train.add_argument("--seed", type=int, default=0, metavar="S", help="default 0")
-    train.add_argument("--n-envs", type=_positive_int, metavar="K",
-                       help="vector-env workers (default from the config)")
-    train.add_argument("--config", type=Path, metavar="PATH",
-                       help="hyper-parameter TOML (default train/configs/<env>.<algo>.toml)")
-    train.add_argument("--resume", type=Path, metavar="CHECKPOINT",
-                       help="model or checkpoint .zip to continue (its VecNormalize stats too)")
+    train.add_argument(
+        "--n-envs",
+        type=_positive_int,
+        metavar="K",
+        help="vector-env workers (default from the config)",
+    )
+    train.add_argument(
+        "--config",
+        type=Path,
+        metavar="PATH",
+        help="hyper-parameter TOML (default train/configs/<env>.<algo>.toml)",
+    )
+    train.add_argument(
+        "--resume",
+        type=Path,
+        metavar="CHECKPOINT",
+        help="model or checkpoint .zip to continue (its VecNormalize stats too)",
+    )
     train.add_argument("--subproc", action="store_true", help="SubprocVecEnv workers")
-    train.add_argument("--eval-episodes", type=_non_negative_int, metavar="N",
-                       help="episodes of the evaluation after training (0: none)")
-    train.add_argument("--overwrite", action="store_true",
-                       help="start afresh in a run directory that holds a model")
+    train.add_argument(
+        "--eval-episodes",
+        type=_non_negative_int,
+        metavar="N",
+        help="episodes of the evaluation after training (0: none)",
+    )
+    train.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start afresh in a run directory that holds a model",
+    )
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_env_arg(train)
     train.set_defaults(handler=_train)
@@ -107,13 +151,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="pan throughput and env steps per second",
         description="Measure sonar pan throughput and env steps per second (paper agent).",
     )
-    benchmark.add_argument("--env", nargs="+", default=["all"], metavar="ID",
-                           help="env ids or 'all' (default)")
-    benchmark.add_argument("--steps", type=_positive_int, default=DEFAULT_BENCHMARK_STEPS,
-                           metavar="N",
-                           help=f"env steps per env (default {DEFAULT_BENCHMARK_STEPS})")
-    benchmark.add_argument("--json", type=Path, default=DEFAULT_BENCHMARK_JSON, metavar="PATH",
-                           help=f"default {DEFAULT_BENCHMARK_JSON}")
+    benchmark.add_argument(
+        "--env", nargs="+", default=["all"], metavar="ID", help="env ids or 'all' (default)"
+    )
+    benchmark.add_argument(
+        "--steps",
+        type=_positive_int,
+        default=DEFAULT_BENCHMARK_STEPS,
+        metavar="N",
+        help=f"env steps per env (default {DEFAULT_BENCHMARK_STEPS})",
+    )
+    benchmark.add_argument(
+        "--json",
+        type=Path,
+        default=DEFAULT_BENCHMARK_JSON,
+        metavar="PATH",
+        help=f"default {DEFAULT_BENCHMARK_JSON}",
+    )
     _add_env_arg(benchmark)
     benchmark.set_defaults(handler=_benchmark)
 
@@ -123,8 +177,13 @@ def build_parser() -> argparse.ArgumentParser:
         description=f"Reproduce a paper: one of {', '.join(REPRODUCIBLE_PAPERS)}, or all.",
     )
     reproduce.add_argument("names", nargs="+", metavar="NAME", help="paper name or 'all'")
-    reproduce.add_argument("--out", type=Path, default=DEFAULT_REPRODUCE_DIR, metavar="DIR",
-                           help="output directory (one subdirectory per paper)")
+    reproduce.add_argument(
+        "--out",
+        type=Path,
+        default=DEFAULT_REPRODUCE_DIR,
+        metavar="DIR",
+        help="output directory (one subdirectory per paper)",
+    )
     reproduce.set_defaults(handler=_reproduce)
     return parser
 
@@ -139,8 +198,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         arguments.handler(arguments, console)
     except UsageError as error:
         make_console(stderr=True).print(
-            f"{PROGRAM} {arguments.command}: error: {error}", style="red", markup=False,
-            highlight=False, soft_wrap=True,
+            f"{PROGRAM} {arguments.command}: error: {error}",
+            style="red",
+            markup=False,
+            highlight=False,
+            soft_wrap=True,
         )
         return 2
     except KeyboardInterrupt:

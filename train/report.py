@@ -96,7 +96,7 @@ def print_summary(results: Sequence[AgentResult], console: Console) -> None:
     for env_id, env_results in group_by_env(results).items():
         console.print(summary_table(env_id, env_results))
     console.print(
-        "E_xy, E_θ: over successful episodes (status \"ok\"); sensing time and reward: over all "
+        'E_xy, E_θ: over successful episodes (status "ok"); sensing time and reward: over all '
         "episodes; CI: Student-t interval of the mean.",
         style="dim",
     )
@@ -205,17 +205,17 @@ def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
             axis = axes[row][column]
             medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
             p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
-            for offset, values, name in ((-width / 2, medians, "median"),
-                                         (width / 2, p95s, "95th percentile")):
+            for offset, values, name in (
+                (-width / 2, medians, "median"),
+                (width / 2, p95s, "95th percentile"),
+            ):
                 bars = axis.bar(positions + offset, values, width, label=name)
                 axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
             _use_log_scale_for_wide_ranges(axis, medians + p95s)
             axis.set_ylabel(label)
             axis.legend(fontsize="small")
         axis = axes[row][2]
-        bars = axis.bar(
-            positions, [_value_or_nan(s.sensing_time_mean_s) for s in summaries], 0.6
-        )
+        bars = axis.bar(positions, [_value_or_nan(s.sensing_time_mean_s) for s in summaries], 0.6)
         axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
         axis.set_ylabel("mean sensing time [s]")
         for column in range(3):

@@ -442,7 +442,11 @@ def _build_model(request: _Request, seed: int, subproc: bool) -> tuple[Any, VecN
         settings = {"norm_obs": True, "norm_reward": request.algo == "ppo"}
         venv = VecNormalize(
             make_training_vec_env(
-                request.env_id, request.n_envs, seed, request.env_kwargs, run_dir / "monitor",
+                request.env_id,
+                request.n_envs,
+                seed,
+                request.env_kwargs,
+                run_dir / "monitor",
                 subproc,
             ),
             gamma=float(hyperparameters.get("gamma", 0.99)),
@@ -593,7 +597,11 @@ def train(
     finally:
         venv.close()
     run_info = _run_info(
-        request, model, venv, seed, subproc,
+        request,
+        model,
+        venv,
+        seed,
+        subproc,
         trained_timesteps=int(model.num_timesteps) - initial_timesteps,
         wall_time_s=time.time() - started,
     )

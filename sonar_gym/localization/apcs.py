@@ -146,18 +146,28 @@ def correct_with_detected_wall(
     if not match.matched or match.wall is None:
         reasons = ", ".join(f"{index}: {reason}" for index, reason in match.rejections.items())
         message = (
-            "more than one map wall matches" if match.status == AMBIGUOUS
+            "more than one map wall matches"
+            if match.status == AMBIGUOUS
             else f"no map wall matches ({reasons})"
         )
         return match, CorrectionResult(match.status, None, message, covariance=prior, method=method)
     observation = observe_wall(detected, pose)
     if observation.r_m <= 0.0:
         return match, CorrectionResult(
-            PRIOR_ON_WALL_LINE, None, "the robot lies on the detected wall's line",
-            covariance=prior, method=method,
+            PRIOR_ON_WALL_LINE,
+            None,
+            "the robot lies on the detected wall's line",
+            covariance=prior,
+            method=method,
         )
     correction = correct_pose(
-        pose, covariance, match.wall, observation.r_m, observation.xi_rad, sigma_r, sigma_xi,
+        pose,
+        covariance,
+        match.wall,
+        observation.r_m,
+        observation.xi_rad,
+        sigma_r,
+        sigma_xi,
         method=method,
     )
     return match, correction

@@ -214,13 +214,19 @@ def _paper_step(
     a, b, c = wall.line_coefficients
     x, y, theta = prior
     if abs(a * x + b * y + c) / math.hypot(a, b) <= ZERO_LENGTH_M:
-        return PRIOR_ON_WALL_LINE, prior, covariance, (
-            "the prior position lies on the wall line: eq. (10) has no slope there"
+        return (
+            PRIOR_ON_WALL_LINE,
+            prior,
+            covariance,
+            ("the prior position lies on the wall line: eq. (10) has no slope there"),
         )
     u = theta + xi
     if abs(a * math.cos(u) + b * math.sin(u)) / math.hypot(a, b) < _MIN_NORMAL_ALIGNMENT:
-        return HEADING_DEGENERATE, prior, covariance, (
-            "theta_A + xi is parallel to the wall: eq. (9) has no slope there"
+        return (
+            HEADING_DEGENERATE,
+            prior,
+            covariance,
+            ("theta_A + xi is parallel to the wall: eq. (9) has no slope there"),
         )
     # Eqs (11)-(12) in gain form: with J = J_PA and W = Sigma_su^-1, the matrix inversion lemma
     # gives Sigma_f J^T W = Sigma_PA J^T (J Sigma_PA J^T + Sigma_su)^-1 = K and

@@ -631,9 +631,7 @@ def fit_wall_group(
     occupied_side = np.array([-along[1], along[0]])  # left of `along`
     if directions is not None:
         group_directions = directions[list(indices)]
-        towards_wall = np.array(
-            [np.cos(group_directions).sum(), np.sin(group_directions).sum()]
-        )
+        towards_wall = np.array([np.cos(group_directions).sum(), np.sin(group_directions).sum()])
         flip = float(occupied_side @ towards_wall) < 0.0
     else:
         flip = float((centred[-1] - centred[0]) @ along) < 0.0

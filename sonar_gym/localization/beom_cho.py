@@ -856,7 +856,12 @@ def localize_rcds(
         _require_positive("prior_gate_m", prior_gate_m)
         gated = _first_pair_near_prior(
             [pair for pair in pairs if pair[0] <= tolerance_m],
-            small_xy, small_radius, large_xy, large_radius, prior, prior_gate_m,
+            small_xy,
+            small_radius,
+            large_xy,
+            large_radius,
+            prior,
+            prior_gate_m,
         )
         if gated is None:
             return BeaconLocalization(
@@ -873,7 +878,12 @@ def localize_rcds(
         _require_positive("agreement_m", agreement_m)
         if not _pairs_agree(
             [pair for pair in pairs[1:] if pair[0] <= tolerance_m],
-            solution.position, small_xy, small_radius, large_xy, large_radius, agreement_m,
+            solution.position,
+            small_xy,
+            small_radius,
+            large_xy,
+            large_radius,
+            agreement_m,
         ):
             return BeaconLocalization(
                 "ambiguous_pair",
@@ -995,7 +1005,10 @@ def _first_pair_near_prior(
     """The first pair (in the given order) whose eqs (8)-(14) solution lies near ``prior``."""
     for pair in pairs:
         solution = _solve_pair(small_xy, small_radius, large_xy, large_radius, pair[1], pair[2])
-        if solution.position is not None and math.dist(solution.position, (prior.x, prior.y)) <= gate_m:
+        if (
+            solution.position is not None
+            and math.dist(solution.position, (prior.x, prior.y)) <= gate_m
+        ):
             return pair
     return None
 
@@ -1079,7 +1092,9 @@ def localize_scans(
         with np.errstate(invalid="ignore"):
             ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
         pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
-    rcds = [rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)]
+    rcds = [
+        rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
+    ]
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
 
@@ -1092,7 +1107,9 @@ def localize_scans(
             large_radius=large.radius,
             params=params,
             method=method,
-            prior=None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+            prior=None
+            if prior is None
+            else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
             prior_gate_m=prior_gate_m,
             agreement_m=agreement_m,
         )

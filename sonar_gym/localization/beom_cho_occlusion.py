@@ -116,7 +116,9 @@ def occlusion_aware_rcds(
     if count < 2:
         return []
     increment_rad = (angles_rad[-1] - angles_rad[0]) / (count - 1)
-    full_turn = abs(angles_rad[-1] - angles_rad[0] + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad
+    full_turn = (
+        abs(angles_rad[-1] - angles_rad[0] + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad
+    )
 
     def beyond(index: int, step: int) -> float | None:
         """The range beyond ``index`` (NaN = dropout), or None past the end of a partial pan."""
@@ -152,7 +154,9 @@ def occlusion_aware_rcds(
             first_angle = angles_rad[piece[0]]
             last_angle = first_angle + visible_rad
             delta = float(np.median(piece_ranges))
-            for role, extent_rad in zip((SMALL_BEACON_NAME, LARGE_BEACON_NAME), expected_extents_rad, strict=True):
+            for role, extent_rad in zip(
+                (SMALL_BEACON_NAME, LARGE_BEACON_NAME), expected_extents_rad, strict=True
+            ):
                 if not min_visible_extent_rad <= visible_rad <= extent_rad + 1e-9:
                     continue
                 if start is EndState.FREE:

@@ -239,8 +239,12 @@ def receiver_position_least_squares(
         return np.sqrt(np.sum(horizontal**2, axis=1) + point[2] ** 2) - distances
 
     fit = least_squares(
-        range_residuals, np.array([xy_guess[0], xy_guess[1], z_guess]), method="lm",
-        xtol=1e-15, ftol=1e-15, gtol=1e-15,
+        range_residuals,
+        np.array([xy_guess[0], xy_guess[1], z_guess]),
+        method="lm",
+        xtol=1e-15,
+        ftol=1e-15,
+        gtol=1e-15,
     )
     x, y, z = fit.x
     return np.array([x, y, z_sign * abs(z)])
@@ -477,8 +481,12 @@ def localize(
         )
 
     measured_spread = receivers_xyz[:, :2] - mean_receiver[:2]
-    cross = float(np.sum(offset_spread[:, 0] * measured_spread[:, 1]
-                         - offset_spread[:, 1] * measured_spread[:, 0]))
+    cross = float(
+        np.sum(
+            offset_spread[:, 0] * measured_spread[:, 1]
+            - offset_spread[:, 1] * measured_spread[:, 0]
+        )
+    )
     dot = float(np.sum(offset_spread * measured_spread))
     if math.hypot(cross, dot) < _MIN_BASELINE_M**2:
         return TransmitterLocalization(
@@ -491,12 +499,13 @@ def localize(
     x = mean_receiver[0] - (c * mean_offset[0] - s * mean_offset[1])
     y = mean_receiver[1] - (s * mean_offset[0] + c * mean_offset[1])
     fix = Fix(
-        x=float(x), y=float(y), z=float(mean_receiver[2]), heading=heading,
+        x=float(x),
+        y=float(y),
+        z=float(mean_receiver[2]),
+        heading=heading,
         receiver_positions=tuple(_as_triple(row) for row in receivers_xyz),
     )
-    return TransmitterLocalization(
-        OK, pose=fix.pose, position_3d=_as_triple(fix.position), fix=fix
-    )
+    return TransmitterLocalization(OK, pose=fix.pose, position_3d=_as_triple(fix.position), fix=fix)
 
 
 def average_fixes(fixes: Sequence[Fix]) -> Fix:
@@ -530,7 +539,10 @@ def average_fixes(fixes: Sequence[Fix]) -> Fix:
     heading = math.atan2(float(np.mean(np.sin(headings))), float(np.mean(np.cos(headings))))
     receivers = np.mean([fix.receiver_array for fix in fix_list], axis=0)
     return Fix(
-        x=float(x), y=float(y), z=float(z), heading=heading,
+        x=float(x),
+        y=float(y),
+        z=float(z),
+        heading=heading,
         receiver_positions=tuple(_as_triple(row) for row in receivers),
     )
 

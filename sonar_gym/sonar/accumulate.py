@@ -97,7 +97,9 @@ class ScanMemory:
         for block in np.split(np.arange(len(order)), breaks):
             slots = order[block]
             angles = -math.pi + self.resolution_rad * unwrapped[block]
-            scans.append(Scan(angles.astype(np.float64), ranges[slots], self.amplitudes[slots], 0.0))
+            scans.append(
+                Scan(angles.astype(np.float64), ranges[slots], self.amplitudes[slots], 0.0)
+            )
         return scans
 
     def _slots(self, angles_rad: FloatArray) -> np.ndarray:

@@ -53,8 +53,7 @@ class TimeVaryingGain:
                 raise ValueError(f"TimeVaryingGain.{name} must be a positive length; got {value!r}")
         if not math.isfinite(self.reference_range_m):
             raise ValueError(
-                "TimeVaryingGain.reference_range_m must be finite; "
-                f"got {self.reference_range_m!r}"
+                f"TimeVaryingGain.reference_range_m must be finite; got {self.reference_range_m!r}"
             )
         for name in ("spreading_exponent", "absorption_db_per_m"):
             value = getattr(self, name)

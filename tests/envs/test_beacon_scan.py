@@ -14,7 +14,6 @@ from tests.envs.episodes import run_episode
 ENV_ID = "SonarGym/BeaconScan-v0"
 
 
-
 @pytest.mark.parametrize(
     ("argument", "value"),
     [
@@ -49,11 +48,16 @@ def test_encode_and_decode_are_inverse(action_type: str) -> None:
         assert env.decode_action(env.encode_action(kind)).kind == kind
     command = env.decode_action(env.encode_action("pan", 130, 60, 2))
     assert (command.kind, command.centre_deg, command.width_deg, command.increment_deg) == (
-        "pan", 130, 60, 2,
+        "pan",
+        130,
+        60,
+        2,
     )
 
 
-def _paper_agent_errors(episodes: int, **env_kwargs: object) -> tuple[list[str], np.ndarray, np.ndarray]:
+def _paper_agent_errors(
+    episodes: int, **env_kwargs: object
+) -> tuple[list[str], np.ndarray, np.ndarray]:
     env = gym.make(ENV_ID, temperature_c=20.0, **env_kwargs)
     statuses, position_errors, heading_errors = [], [], []
     for seed in range(episodes):
@@ -95,7 +99,8 @@ def test_occlusion_aware_extraction_localizes_more_poses_and_keeps_the_papers_an
         if by_paper["status"] == "ok":
             np.testing.assert_array_equal(by_aware["estimated_pose"], by_paper["estimated_pose"])
     rebuilt_errors = [
-        a["position_error_m"] for p, a in zip(paper, aware, strict=True)
+        a["position_error_m"]
+        for p, a in zip(paper, aware, strict=True)
         if a["status"] == "ok" and p["status"] != "ok"
     ]
     assert np.median(rebuilt_errors) <= 0.03
@@ -106,8 +111,11 @@ def test_uncalibrated_sensor_is_biased_and_calibration_removes_the_bias() -> Non
     hot_calibrated = gym.make(ENV_ID, temperature_c=40.0, allow_calibration=True)
     biased = [run_episode(hot_no_calibration, "paper", s)[1] for s in range(20)]
     corrected = [run_episode(hot_calibrated, "paper", s)[1] for s in range(20)]
+
     def within_bounds(infos: list[dict]) -> float:
-        return float(np.mean([i["status"] == "ok" and i["position_error_m"] <= 0.03 for i in infos]))
+        return float(
+            np.mean([i["status"] == "ok" and i["position_error_m"] <= 0.03 for i in infos])
+        )
 
     assert all(i["calibrated"] for i in corrected)
     # c(40 C) / c(20 C) - 1 = 3.3 %: every range is 5-10 cm long, so eq. (7)'s 4 cm test

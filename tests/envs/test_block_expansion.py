@@ -355,7 +355,7 @@ def test_spread_agent_calibrates_both_beacons_over_three_areas() -> None:
 def test_spread_agent_respects_the_decreasing_ordering() -> None:
     env = gym.make(ENV_ID, ordering="decreasing")
     _, info, _ = run_episode(env, "spread", seed=0)
-    (d1, d2, d3), = info["distances_m"]
+    ((d1, d2, d3),) = info["distances_m"]
     assert d1 > d2 > d3 and info["status"] == "ok"
 
 

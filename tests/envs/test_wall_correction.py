@@ -38,7 +38,6 @@ ENV_ID = "SonarGym/WallCorrection-v0"
 LEFT_BEAM_RAD = math.pi / 2.0
 
 
-
 # --- arguments ------------------------------------------------------------------------------
 
 
@@ -219,7 +218,9 @@ def test_moving_the_frame_keeps_a_group_consistent_across_a_correction() -> None
     """After a rigid change of the estimate's frame, the old and new readings fit one wall."""
     before = Pose(0.12, 0.0, 0.0)
     after = Pose(0.15, -0.02, math.radians(0.3))  # the corrected estimate of the same pose
-    shift = after.compose(Pose(-before.x, -before.y, 0.0))  # frame change: p' = after + R(p - before)
+    shift = after.compose(
+        Pose(-before.x, -before.y, 0.0)
+    )  # frame change: p' = after + R(p - before)
 
     def in_new_frame(point: np.ndarray) -> np.ndarray:
         return shift.transform_point(point)
@@ -253,7 +254,9 @@ def test_encode_and_decode_are_inverse(action_type: str) -> None:
             for standoff in env.config.standoffs_m:
                 command = env.decode_action(env.encode_action(side, spacing, standoff))
                 assert (command.side, command.spacing_cm, command.standoff_m) == (
-                    side, spacing, standoff,
+                    side,
+                    spacing,
+                    standoff,
                 )
                 assert env.action_space.contains(env.encode_action(side, spacing, standoff))
 
@@ -290,9 +293,11 @@ def test_the_reward_is_the_pose_error_minus_sensing_cost_and_collisions() -> Non
         _, reward, _, _, info = env.step(env.unwrapped.encode_action(side, spacing, 0.0))
         leg_sensing = info["sensing_time_s"] - sensing_before
         sensing_before = info["sensing_time_s"]
-        expected = -(
-            info["position_error_m"] / 0.05 + info["heading_error_rad"] / math.radians(2.0)
-        ) - 0.3 * leg_sensing - 7.0 * (info["collisions"] > 0)
+        expected = (
+            -(info["position_error_m"] / 0.05 + info["heading_error_rad"] / math.radians(2.0))
+            - 0.3 * leg_sensing
+            - 7.0 * (info["collisions"] > 0)
+        )
         assert reward == pytest.approx(expected, rel=1e-12)
         if side == "none":
             assert leg_sensing == 0.0 and info["n_detected_walls"] == 0

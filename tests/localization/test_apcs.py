@@ -578,16 +578,25 @@ def test_section_6_drift_is_corrected_across_the_wall_but_not_along_it() -> None
     truth = Pose(*positions_true[last], 0.0)
     estimate = Pose(*positions_odometry[last], heading_odometry)
     match, correction = correct_with_detected_wall(
-        estimate, np.diag([0.05**2, 0.05**2, math.radians(2.0) ** 2]), detected, CORRIDOR_MAP,
-        1e-8, 1e-10, method="linear",
+        estimate,
+        np.diag([0.05**2, 0.05**2, math.radians(2.0) ** 2]),
+        detected,
+        CORRIDOR_MAP,
+        1e-8,
+        1e-10,
+        method="linear",
     )
     assert match.status == MATCHED and correction.ok and correction.pose is not None
     assert abs(correction.pose.y - truth.y) < 1e-3 * abs(estimate.y - truth.y)
     assert abs(correction.pose.theta - truth.theta) < 1e-3 * abs(estimate.theta - truth.theta)
     assert correction.pose.x == pytest.approx(estimate.x, abs=1e-6)  # along the wall: unchanged
     _, paper = correct_with_detected_wall(
-        estimate, np.diag([0.05**2, 0.05**2, math.radians(2.0) ** 2]), detected, CORRIDOR_MAP,
-        1e-8, 1e-10,
+        estimate,
+        np.diag([0.05**2, 0.05**2, math.radians(2.0) ** 2]),
+        detected,
+        CORRIDOR_MAP,
+        1e-8,
+        1e-10,
     )
     assert paper.pose is not None
     assert abs(paper.pose.y - truth.y) < 0.05 * abs(estimate.y - truth.y)

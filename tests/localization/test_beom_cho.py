@@ -69,7 +69,7 @@ def _circle_intersections(
 
 
 def test_paper_beacon_distance_is_2_704_m() -> None:
-    assert BEACON_DISTANCE == pytest.approx(2.704, abs=5e-4)
+    assert pytest.approx(2.704, abs=5e-4) == BEACON_DISTANCE
 
 
 def test_table_ii_symmetry_filter_removes_the_third_rcd() -> None:
@@ -658,9 +658,7 @@ def test_bad_arguments_raise_value_error_naming_the_argument(call, name: str) ->
 
 def _rcd_of_beacon(sensor: Pose, center: tuple[float, float], radius: float, eta_deg: float) -> RCD:
     delta = math.dist(center, (sensor.x, sensor.y)) - radius
-    bearing = math.degrees(
-        math.atan2(center[1] - sensor.y, center[0] - sensor.x) - sensor.theta
-    )
+    bearing = math.degrees(math.atan2(center[1] - sensor.y, center[0] - sensor.x) - sensor.theta)
     return RCD.from_degrees(delta, bearing, eta_deg, 0.001)
 
 
@@ -694,7 +692,10 @@ def test_prior_gate_rejects_a_coincidental_pair_that_matches_eq_7_better() -> No
     decoy_large = RCD.from_degrees(
         decoy_large_range, 10.0 - math.degrees(math.acos(cos_angle)), 24.0, 0.001
     )
-    assert pair_distance_error(decoy_small, decoy_large, SMALL_RADIUS, LARGE_RADIUS, BEACON_DISTANCE) < true_error + 1e-12
+    assert (
+        pair_distance_error(decoy_small, decoy_large, SMALL_RADIUS, LARGE_RADIUS, BEACON_DISTANCE)
+        < true_error + 1e-12
+    )
     rcds = [small, large, decoy_small, decoy_large]
     args = (SMALL_CENTER, SMALL_RADIUS, LARGE_CENTER, LARGE_RADIUS)
     ungated = localize_rcds(rcds, *args)
@@ -704,7 +705,9 @@ def test_prior_gate_rejects_a_coincidental_pair_that_matches_eq_7_better() -> No
     assert gated.ok and gated.small_rcd == small
     assert position_error_m(gated.pose, sensor) < 0.02
     far_prior = Pose(sensor.x + 3.0, sensor.y, sensor.theta)
-    assert localize_rcds(rcds, *args, prior=far_prior, prior_gate_m=0.4).status == "no_pair_near_prior"
+    assert (
+        localize_rcds(rcds, *args, prior=far_prior, prior_gate_m=0.4).status == "no_pair_near_prior"
+    )
 
 
 def test_bad_assignment_name_is_rejected() -> None:

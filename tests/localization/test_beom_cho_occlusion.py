@@ -30,7 +30,7 @@ def _pan(segments: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.nda
     """A full 1-deg pan: NaN everywhere but ``(first_deg, last_deg, range_m)`` segments, later ones on top."""
     ranges = np.full(len(FULL_PAN_DEG), np.nan)
     for first, last, range_m in segments:
-        ranges[(FULL_PAN_DEG >= first) & (FULL_PAN_DEG <= last)] = range_m
+        ranges[(first <= FULL_PAN_DEG) & (last >= FULL_PAN_DEG)] = range_m
     return np.radians(FULL_PAN_DEG), ranges
 
 
@@ -42,7 +42,8 @@ def test_a_beacon_cut_by_a_nearer_wall_fails_the_papers_filter_but_is_rebuilt() 
     # small beacon at 2.205 m from -11 to +11 deg; a wall 2.2 cm nearer takes over from +7 deg
     angles, ranges = _pan([(-11.0, 11.0, 2.205), (7.0, 35.0, 2.183)])
     assert not [
-        rcd for rcd in filter_beacon_candidates(extract_rcds(angles, ranges, EPS_M))
+        rcd
+        for rcd in filter_beacon_candidates(extract_rcds(angles, ranges, EPS_M))
         if abs(rcd.delta - 2.205) < 0.01
     ]
     rebuilt = {rcd.role: rcd for rcd in _rebuild(angles, ranges) if rcd.role is not None}
@@ -173,8 +174,12 @@ def test_the_fallback_leaves_the_papers_answer_alone_when_it_has_one() -> None:
 
 def test_pairs_that_disagree_on_the_place_give_no_pose_when_agreement_is_asked() -> None:
     small_c, large_c, r_s, r_l = (2.85, -0.6), (0.3, -1.5), 0.0191, 0.07
-    small = RCD(math.dist((0, 0), small_c) - r_s, math.atan2(small_c[1], small_c[0]), math.radians(22))
-    large = RCD(math.dist((0, 0), large_c) - r_l, math.atan2(large_c[1], large_c[0]), math.radians(24))
+    small = RCD(
+        math.dist((0, 0), small_c) - r_s, math.atan2(small_c[1], small_c[0]), math.radians(22)
+    )
+    large = RCD(
+        math.dist((0, 0), large_c) - r_l, math.atan2(large_c[1], large_c[0]), math.radians(24)
+    )
     # both assignments tried and a loose tolerance: the swapped pair also passes eq. (7)
     loose = {"distance_tolerance": 0.1, "params": BeomChoParameters(assignment="best_fit")}
     chosen = localize_rcds([small, large], small_c, r_s, large_c, r_l, **loose)

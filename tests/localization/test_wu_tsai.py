@@ -542,8 +542,11 @@ def test_least_squares_recovers_exact_pose_with_extra_transmitters() -> None:
     transmitters = np.vstack([transmitter_positions(0.3), np.column_stack([extra, [0, 0]])])
     receivers = _receivers_xyz(0.4, -0.9, -2.1, 2.9, OFFSETS_PAPER)
     result = localize(
-        _distances(receivers, transmitters), 0.3, OFFSETS_PAPER,
-        solver="least_squares", extra_transmitter_xy=extra,
+        _distances(receivers, transmitters),
+        0.3,
+        OFFSETS_PAPER,
+        solver="least_squares",
+        extra_transmitter_xy=extra,
     )
     assert result.fix is not None
     np.testing.assert_allclose(result.fix.position, [0.4, -0.9, -2.1], atol=1e-9)

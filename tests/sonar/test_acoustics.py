@@ -72,7 +72,7 @@ def test_bad_acoustic_arguments_raise_naming_the_argument(call, name: str) -> No
 
 def test_worked_check_ka_17_6_and_first_null_at_12_6_degrees() -> None:
     # DESIGN sec. 3: 50 kHz, a = 19.2 mm, c = 343.2 m/s.
-    assert POLAROID_KA == pytest.approx(17.6, abs=0.03)
+    assert pytest.approx(17.6, abs=0.03) == POLAROID_KA
     assert math.degrees(first_null_rad(POLAROID_KA)) == pytest.approx(12.6, abs=0.03)
     assert abs(piston_directivity(first_null_rad(POLAROID_KA), POLAROID_KA)) < 1e-12
 

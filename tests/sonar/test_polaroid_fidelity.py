@@ -34,10 +34,9 @@ def extent_deg(scan, echo_range: float, bearing: float) -> float | None:
     """``eta`` in degrees of the RCD at ``echo_range`` (within 3 cm) and ``bearing`` (within
     2 deg, {R}); None if the pan has no such RCD."""
     for rcd in extract_rcds(scan.angles, scan.ranges, eps=0.02):
-        if (
-            abs(rcd.delta - echo_range) < 0.03
-            and abs(wrap_angle(rcd.beta - bearing)) < math.radians(2.0)
-        ):
+        if abs(rcd.delta - echo_range) < 0.03 and abs(
+            wrap_angle(rcd.beta - bearing)
+        ) < math.radians(2.0):
             return round(math.degrees(rcd.eta), 6)
     return None
 

@@ -124,9 +124,7 @@ def test_polaroid_threshold_is_the_same_with_and_without_gain_ramp_and_leakage()
     # G(r_ref) = 1 at the small beacon, and 11.5 deg lies on the main lobe for S < 0.10.
     ideal = polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0)
     for transducer in (polaroid_6500(), polaroid_6500(time_varying_gain=False)):
-        assert transducer.detection_threshold == pytest.approx(
-            ideal.detection_threshold, rel=1e-15
-        )
+        assert transducer.detection_threshold == pytest.approx(ideal.detection_threshold, rel=1e-15)
 
 
 @pytest.mark.parametrize("absorption", [True, False])
@@ -141,11 +139,13 @@ def test_small_beacon_window_is_23_degrees_with_gain_ramp_and_leakage(absorption
         * transducer.time_varying_gain.gain(echo_range)
     )
     edge = brentq(
-        lambda t: at_comparator
-        * two_way_pattern(
-            t, ka, side_lobes=False, side_lobe_leakage=transducer.side_lobe_leakage
-        )
-        - transducer.detection_threshold,
+        lambda t: (
+            at_comparator
+            * two_way_pattern(
+                t, ka, side_lobes=False, side_lobe_leakage=transducer.side_lobe_leakage
+            )
+            - transducer.detection_threshold
+        ),
         1e-6,
         math.pi / 2 - 1e-9,
     )

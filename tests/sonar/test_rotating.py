@@ -32,9 +32,7 @@ def polaroid(**options) -> RotatingSonar:
 
 def constant_gain_piston(**options) -> RotatingSonar:
     """The Polaroid as an ideal piston with constant receiver gain (same threshold)."""
-    return RotatingSonar(
-        polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0), **options
-    )
+    return RotatingSonar(polaroid_6500(time_varying_gain=False, side_lobe_leakage=0.0), **options)
 
 
 def rcd_extent_deg(scan, echo_range: float, tolerance: float = 0.03) -> float:

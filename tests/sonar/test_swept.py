@@ -74,7 +74,7 @@ def test_side_sonars_mounted_off_centre_measure_from_the_sensor() -> None:
 
 
 def test_sampling_along_a_path_every_3_cm_at_30_cm_per_second() -> None:
-    assert APCS_SAMPLE_SPACING_M / APCS_SPEED_MPS == pytest.approx(0.1)
+    assert pytest.approx(0.1) == APCS_SAMPLE_SPACING_M / APCS_SPEED_MPS
     sonars = SideSonars.apcs(readout=IDEAL_READOUT)
     test_world = corridor(walls=[{"a": [4.0, 0.8], "b": [5.0, 0.8]}])
     poses = [Pose(x, 0.0, 0.0) for x in np.arange(3.0, 6.0, APCS_SAMPLE_SPACING_M)]

@@ -75,8 +75,16 @@ UNSTATED_PARAMETERS: tuple[tuple[str, str, str], ...] = (
     ),
     ("variance threshold of a wall fit", "(2 cm)^2 of perpendicular residual", "APCSParameters"),
     ("line fit", "total least squares through the centroid", "fit_wall_group"),
-    ("sigma_r, sigma_xi of eqs (13)-(14)", "(1 cm)^2, (1 deg)^2", "env range_variance_m2, bearing_std_deg"),
-    ("odometry drift", "wheel radius errors N(0, 0.05 %), encoder 0.5 mm / sqrt(m), rare slips", "env"),
+    (
+        "sigma_r, sigma_xi of eqs (13)-(14)",
+        "(1 cm)^2, (1 deg)^2",
+        "env range_variance_m2, bearing_std_deg",
+    ),
+    (
+        "odometry drift",
+        "wheel radius errors N(0, 0.05 %), encoder 0.5 mm / sqrt(m), rare slips",
+        "env",
+    ),
     ("odometry covariance", "each wheel's variance grows 5e-7 m^2 per metre rolled", "env"),
     ("start uncertainty", "5 mm, 0.1 deg", "env"),
 )
@@ -101,10 +109,14 @@ def _on_wall(detection: WallDetection, y_m: float, x_range: tuple[float, float])
     (x0, y0), (x1, y1) = detection.wall.start, detection.wall.end
     near_line = abs(y0 - y_m) < ON_WALL_TOLERANCE_M and abs(y1 - y_m) < ON_WALL_TOLERANCE_M
     middle = 0.5 * (x0 + x1)
-    return near_line and x_range[0] - ON_WALL_TOLERANCE_M <= middle <= x_range[1] + ON_WALL_TOLERANCE_M
+    return (
+        near_line and x_range[0] - ON_WALL_TOLERANCE_M <= middle <= x_range[1] + ON_WALL_TOLERANCE_M
+    )
 
 
-def drive_corridor(seed: int, env_kwargs: dict[str, Any] | None = None) -> tuple[RunResult, WallCorrectionEnv]:
+def drive_corridor(
+    seed: int, env_kwargs: dict[str, Any] | None = None
+) -> tuple[RunResult, WallCorrectionEnv]:
     """Drive the corridor once with the paper agent; return what APCS did."""
     env = gym.make(ENV_ID, **(ENV_KWARGS if env_kwargs is None else env_kwargs))
     unwrapped: WallCorrectionEnv = env.unwrapped  # type: ignore[assignment]
@@ -150,7 +162,9 @@ class Study:
         return float(np.mean([r.vectors_on_long_wall for r in self.runs]))
 
     def matched_share_on_mapped_walls(self) -> float:
-        on_map = [d for r in self.runs for d in r.detections if not _on_wall(d, WALL_B_Y_M, WALL_B_X_M)]
+        on_map = [
+            d for r in self.runs for d in r.detections if not _on_wall(d, WALL_B_Y_M, WALL_B_X_M)
+        ]
         return float(np.mean([d.matched for d in on_map])) if on_map else math.nan
 
     def reasons(self) -> Counter[str]:
@@ -182,7 +196,6 @@ class Study:
         )
 
 
-
 def statements_table(study: Study, preset: Study) -> Table:
     """The paper's statements (sec. 6, Figs 13-15) beside ours."""
     table = Table(title=f"APCS sec. 6 beside ours ({len(study.runs)} runs of the corridor)")
@@ -190,18 +203,36 @@ def statements_table(study: Study, preset: Study) -> Table:
         table.add_column(header)
     params = DEFAULT_PARAMETERS
     table.add_row(
-        "ERP grouping threshold", "100 cm^2", f"{params.grouping_distance_squared_m2 * 1e4:.0f} cm^2", "same", "same"
+        "ERP grouping threshold",
+        "100 cm^2",
+        f"{params.grouping_distance_squared_m2 * 1e4:.0f} cm^2",
+        "same",
+        "same",
     )
     table.add_row(
-        "group size", "ignore < 4, at most 8", f"ignore < {params.min_group_size}, at most {params.max_group_size}", "same", "same"
+        "group size",
+        "ignore < 4, at most 8",
+        f"ignore < {params.min_group_size}, at most {params.max_group_size}",
+        "same",
+        "same",
     )
     table.add_row(
-        "orientation threshold", "+-0.5 deg", f"+-{math.degrees(params.orientation_tolerance_rad):.1f} deg", "same", "same"
+        "orientation threshold",
+        "+-0.5 deg",
+        f"+-{math.degrees(params.orientation_tolerance_rad):.1f} deg",
+        "same",
+        "same",
     )
     table.add_row(
-        "map matching d1^2 + d2^2", "200 cm^2", f"{params.endpoint_distance_squared_m2 * 1e4:.0f} cm^2", "same", "same"
+        "map matching d1^2 + d2^2",
+        "200 cm^2",
+        f"{params.endpoint_distance_squared_m2 * 1e4:.0f} cm^2",
+        "same",
+        "same",
     )
-    table.add_row("sampling", "every 3 cm at 30 cm/s, left side", "every 3 cm, left side", "same", "same")
+    table.add_row(
+        "sampling", "every 3 cm at 30 cm/s, left side", "every 3 cm, left side", "same", "same"
+    )
     ours_long, preset_long = study.vectors_on_long_wall(), preset.vectors_on_long_wall()
     table.add_row(
         "vectors on a long flat wall (Fig. 13)",
@@ -255,13 +286,14 @@ def statements_table(study: Study, preset: Study) -> Table:
 
 def reasons_table(study: Study) -> Table:
     """How every detected vector fared in the matching (sec. 4.3)."""
-    table = Table(title="Detected vectors by outcome (first failed condition of the nearest map wall)")
+    table = Table(
+        title="Detected vectors by outcome (first failed condition of the nearest map wall)"
+    )
     table.add_column("outcome")
     table.add_column("vectors per run", justify="right")
     for reason, count in study.reasons().most_common():
         table.add_row(reason, f"{count / len(study.runs):.1f}")
     return table
-
 
 
 def plot_walls(run: RunResult, env: WallCorrectionEnv, out_dir: Path) -> Path:
@@ -282,14 +314,19 @@ def plot_walls(run: RunResult, env: WallCorrectionEnv, out_dir: Path) -> Path:
     for axis in (whole, strip):
         _draw_corridor(axis, env)
         axis.plot(erps[:, 0], erps[:, 1], ".", color="#ff7f0e", markersize=2.5, label="ERP")
-        for label, matched, colour in (("matched", True, "#2ca02c"), ("rejected", False, "#d62728")):
+        for label, matched, colour in (
+            ("matched", True, "#2ca02c"),
+            ("rejected", False, "#d62728"),
+        ):
             axis.plot([], [], color=colour, label=f"detected vector, {label}")
             for detection in run.detections:
                 if detection.matched != matched:
                     continue
                 (x0, y0), (x1, y1) = detection.wall.start, detection.wall.end
                 axis.annotate(
-                    "", xy=(x1, y1), xytext=(x0, y0),
+                    "",
+                    xy=(x1, y1),
+                    xytext=(x0, y0),
                     arrowprops={"arrowstyle": "->", "color": colour, "lw": 1.6},
                 )
     whole.plot(true_path[:, 0], true_path[:, 1], color="#145214", lw=1.0, label="trajectory A")
@@ -297,8 +334,14 @@ def plot_walls(run: RunResult, env: WallCorrectionEnv, out_dir: Path) -> Path:
     whole.set_title("APCS corridor: ERPs and detected wall vectors (cf. Figs 12-14)")
     whole.legend(loc="lower right", fontsize=7, ncol=4)
     reasons = ", ".join(f"{k} x{v}" for k, v in run.wall_b_reasons.most_common())
-    strip.text(0.5 * sum(WALL_B_X_M), WALL_B_Y_M - 0.06, f"B: {reasons}", color="#d62728",
-               ha="center", fontsize=8)
+    strip.text(
+        0.5 * sum(WALL_B_X_M),
+        WALL_B_Y_M - 0.06,
+        f"B: {reasons}",
+        color="#d62728",
+        ha="center",
+        fontsize=8,
+    )
     strip.set_ylim(0.6, 1.05)
     strip.set_title("Strip along the left wall (stretched)", fontsize=9)
     path = out_dir / "apcs_walls.png"
@@ -324,14 +367,25 @@ def plot_paths(env: WallCorrectionEnv, out_dir: Path) -> Path:
         return np.degrees(np.angle(np.exp(1j * (path[:, 2] - true_path[:, 2]))))
 
     figure, (lateral, heading) = plt.subplots(2, 1, figsize=(13, 5.5), sharex=True)
-    lateral.plot(true_path[:, 0], 100 * (odometry[:, 1] - true_path[:, 1]), color="#7f7f7f",
-                 ls="--", label="odometry")
-    lateral.plot(true_path[:, 0], 100 * (estimate[:, 1] - true_path[:, 1]), color="#d81b9c",
-                 label="APCS estimate")
-    heading.plot(true_path[:, 0], heading_error_deg(odometry), color="#7f7f7f", ls="--",
-                 label="odometry")
-    heading.plot(true_path[:, 0], heading_error_deg(estimate), color="#d81b9c",
-                 label="APCS estimate")
+    lateral.plot(
+        true_path[:, 0],
+        100 * (odometry[:, 1] - true_path[:, 1]),
+        color="#7f7f7f",
+        ls="--",
+        label="odometry",
+    )
+    lateral.plot(
+        true_path[:, 0],
+        100 * (estimate[:, 1] - true_path[:, 1]),
+        color="#d81b9c",
+        label="APCS estimate",
+    )
+    heading.plot(
+        true_path[:, 0], heading_error_deg(odometry), color="#7f7f7f", ls="--", label="odometry"
+    )
+    heading.plot(
+        true_path[:, 0], heading_error_deg(estimate), color="#d81b9c", label="APCS estimate"
+    )
     for true_pose, _, _ in trace.corrections:
         for axis in (lateral, heading):
             axis.axvline(true_pose.x, color="#2ca02c", lw=0.4, alpha=0.6)
@@ -356,9 +410,17 @@ def _draw_corridor(axis: Any, env: WallCorrectionEnv) -> None:
         axis.plot([x0, x1], [y0, y1], color="#222222", lw=1.5)
     for wall in scenario.walls:
         if not wall.mapped:
-            axis.plot([wall.a[0], wall.b[0]], [wall.a[1], wall.b[1]], color="#b5651d", lw=2.0, ls="--")
-            axis.text(0.5 * (wall.a[0] + wall.b[0]), wall.a[1] - 0.045, "B (not in map)", color="#b5651d",
-                      ha="center", fontsize=8)
+            axis.plot(
+                [wall.a[0], wall.b[0]], [wall.a[1], wall.b[1]], color="#b5651d", lw=2.0, ls="--"
+            )
+            axis.text(
+                0.5 * (wall.a[0] + wall.b[0]),
+                wall.a[1] - 0.045,
+                "B (not in map)",
+                color="#b5651d",
+                ha="center",
+                fontsize=8,
+            )
     axis.set_xlabel("x (m)")
     axis.set_ylabel("y (m)")
 

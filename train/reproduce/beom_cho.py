@@ -197,7 +197,6 @@ class Fix:
     wrong_pair_cause: str = ""
 
 
-
 def sensor_pose_of(robot_pose: Pose, scenario: Scenario) -> Pose:
     """The pan axis {P} in {W}: ``robot_pose`` moved by the scenario's sensor offset."""
     x, y = robot_pose.transform_point(scenario.robot.sensor_offset)
@@ -236,9 +235,7 @@ def calibrated_sonar(world: World, rng: np.random.Generator) -> RotatingSonar:
 
 def full_pan(sonar: RotatingSonar, world: World, rng: np.random.Generator) -> Scan:
     """A 360 deg pan at 1 deg from the robot's true pose."""
-    return sonar.pan(
-        world, world.robot_pose, PAN_START_RAD, PAN_STOP_RAD, PAN_INCREMENT_RAD, rng
-    )
+    return sonar.pan(world, world.robot_pose, PAN_START_RAD, PAN_STOP_RAD, PAN_INCREMENT_RAD, rng)
 
 
 def localize(
@@ -485,7 +482,8 @@ def table_ii_table(result: TableIIResult) -> Table:
                 if ratio_flag(ours, paper)
             ]
             comparison = f"{', '.join(flags)}: {FLAG}" if flags else "within 2x"
-        _add_row(table, 
+        _add_row(
+            table,
             *paper_cells,
             str(index + 1),
             f"{rcd.delta:.4f}",
@@ -498,9 +496,22 @@ def table_ii_table(result: TableIIResult) -> Table:
         )
     for row, (delta, beta, eta, gamma) in enumerate(TABLE_II_ROWS):
         if row not in shown_paper_rows:
-            _add_row(table, 
-                str(row + 1), f"{delta:.4f}", f"{beta:.1f}", f"{eta:.1f}", f"{gamma:.4f}",
-                TABLE_II_FATES[row], "", "", "", "", "", "", "", "no RCD of ours at this bearing",
+            _add_row(
+                table,
+                str(row + 1),
+                f"{delta:.4f}",
+                f"{beta:.1f}",
+                f"{eta:.1f}",
+                f"{gamma:.4f}",
+                TABLE_II_FATES[row],
+                "",
+                "",
+                "",
+                "",
+                "",
+                "",
+                "",
+                "no RCD of ours at this bearing",
             )
     table.caption = (
         f"{len(result.rcds)} RCDs in our pan, {len(result.window)} in the extent window "
@@ -529,14 +540,21 @@ def pair_table(result: TableIIResult, scenario: Scenario) -> Table:
         ours_a, ours_b = matches[a - 1], matches[b - 1]
         ours = (
             pair_distance_error(
-                result.window[ours_a], result.window[ours_b], small.radius, large.radius,
+                result.window[ours_a],
+                result.window[ours_b],
+                small.radius,
+                large.radius,
                 beacon_distance,
             )
             if ours_a is not None and ours_b is not None
             else math.nan
         )
-        _add_row(table, 
-            f"({a}, {b})", f"{printed:.3f}", f"{recomputed:.3f}", _fmt(ours, 3),
+        _add_row(
+            table,
+            f"({a}, {b})",
+            f"{printed:.3f}",
+            f"{recomputed:.3f}",
+            _fmt(ours, 3),
             ratio_flag(ours, printed),
         )
     table.caption = (
@@ -554,8 +572,16 @@ def pose_table(result: TableIIResult, scenario: Scenario) -> tuple[Table, dict[s
         header_style="bold",
     )
     for header in (
-        "source", "status", "x [cm]", "y [cm]", "θ [deg]", "E_xy [cm]", "E_θ [deg]",
-        "pair (small, large): β [deg]", "beacons?", "vs 3.0 cm / 2.0 deg",
+        "source",
+        "status",
+        "x [cm]",
+        "y [cm]",
+        "θ [deg]",
+        "E_xy [cm]",
+        "E_θ [deg]",
+        "pair (small, large): β [deg]",
+        "beacons?",
+        "vs 3.0 cm / 2.0 deg",
     ):
         numeric = header.startswith(("x ", "y ", "θ ", "E_"))
         table.add_column(escape(header), justify="right" if numeric else "left")
@@ -578,11 +604,13 @@ def pose_table(result: TableIIResult, scenario: Scenario) -> tuple[Table, dict[s
         flags = [
             name
             for name, ours, bound in (
-                ("E_xy", e_xy, PAPER_POSITION_BOUND_M), ("E_θ", e_theta, PAPER_HEADING_BOUND_RAD)
+                ("E_xy", e_xy, PAPER_POSITION_BOUND_M),
+                ("E_θ", e_theta, PAPER_HEADING_BOUND_RAD),
             )
             if ours > bound
         ]
-        _add_row(table, 
+        _add_row(
+            table,
             label,
             localization.status,
             _fmt(100 * pose.x, 2) if pose else "–",
@@ -665,7 +693,8 @@ def origin_repeats_table(repeats: OriginRepeats) -> Table:
         table.add_column(escape(header), justify="left" if header == "estimator" else "right")
     for name in ESTIMATORS:
         position, heading = repeats.position_errors_m[name], repeats.heading_errors_rad[name]
-        _add_row(table, 
+        _add_row(
+            table,
             ESTIMATOR_LABELS[name],
             f"{repeats.identified[name]} / {repeats.pans}",
             _fmt(100 * float(np.max(position)) if position.size else math.nan, 2),
@@ -705,8 +734,9 @@ class PathRun:
             if estimator == DEAD_RECKONING
             else tuple(fix.pose for fix in self.fixes[estimator])
         )
-        pairs = [_errors(estimate, truth) for estimate, truth in zip(
-            estimates, self.truth, strict=True)]
+        pairs = [
+            _errors(estimate, truth) for estimate, truth in zip(estimates, self.truth, strict=True)
+        ]
         return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 
 
@@ -879,7 +909,8 @@ def path_table(title: str, summaries: dict[str, ErrorSummary]) -> Table:
         )
     for name, summary in summaries.items():
         dead_reckoning = name == DEAD_RECKONING
-        _add_row(table, 
+        _add_row(
+            table,
             name,
             f"{summary.fixes} / {summary.stops}",
             "–" if dead_reckoning else str(summary.wrong_pair),
@@ -906,9 +937,10 @@ def equal_distance_x_m(scenario: Scenario) -> float:
     From ``(x - x_S)^2 + y_S^2 = (x - x_L)^2 + y_L^2``; beyond it (towards the small beacon)
     the small beacon is the nearer one.
     """
-    (x_s, y_s), (x_l, y_l) = scenario.beacon("small_beacon").center, scenario.beacon(
-        "large_beacon"
-    ).center
+    (x_s, y_s), (x_l, y_l) = (
+        scenario.beacon("small_beacon").center,
+        scenario.beacon("large_beacon").center,
+    )
     return (x_s**2 + y_s**2 - x_l**2 - y_l**2) / (2.0 * (x_s - x_l))
 
 
@@ -943,7 +975,6 @@ def causes_table(repeated: dict[bool, list[PathRun]]) -> Table:
     return table
 
 
-
 # --------------------------------------------------------------------------------------------
 # Plots
 # --------------------------------------------------------------------------------------------
@@ -956,15 +987,24 @@ def _draw_rcds(axis: Any, rcds: tuple[RCD, ...], colour: str, width: float, labe
         start = math.degrees(rcd.beta - rcd.eta / 2.0)
         axis.add_patch(
             Arc(
-                (0.0, 0.0), 2 * rcd.delta, 2 * rcd.delta, theta1=start,
-                theta2=start + math.degrees(rcd.eta), color=colour, linewidth=width,
+                (0.0, 0.0),
+                2 * rcd.delta,
+                2 * rcd.delta,
+                theta1=start,
+                theta2=start + math.degrees(rcd.eta),
+                color=colour,
+                linewidth=width,
             )
         )
         if label:
             r = rcd.delta + 0.25
             axis.annotate(
-                str(number), (r * math.cos(rcd.beta), r * math.sin(rcd.beta)), ha="center",
-                va="center", fontsize=8, color=colour,
+                str(number),
+                (r * math.cos(rcd.beta), r * math.sin(rcd.beta)),
+                ha="center",
+                va="center",
+                fontsize=8,
+                color=colour,
             )
 
 
@@ -996,8 +1036,14 @@ def plot_scan(result: TableIIResult, out_dir: Path) -> Path:
         axis.set_ylim(-extent, extent)
         axis.grid(True, color="#e6e6e6", linewidth=0.6)
         axis.add_patch(
-            RegularPolygon((0.0, 0.0), 8, radius=0.3, orientation=math.pi / 8,
-                           facecolor="none", edgecolor="#145214")
+            RegularPolygon(
+                (0.0, 0.0),
+                8,
+                radius=0.3,
+                orientation=math.pi / 8,
+                facecolor="none",
+                edgecolor="#145214",
+            )
         )
         axis.plot(xs, ys, ".", ms=2.5, color="#7f7f7f" if rcds else "#000000")
         _draw_rcds(axis, rcds, colour, 2.5, label=position >= 3)
@@ -1013,8 +1059,10 @@ def plot_scan(result: TableIIResult, out_dir: Path) -> Path:
 
 def _estimate_xy(run: PathRun, estimator: str) -> np.ndarray:
     return np.array(
-        [[f.pose.x, f.pose.y] if f.pose is not None else [np.nan, np.nan]
-         for f in run.fixes[estimator]]
+        [
+            [f.pose.x, f.pose.y] if f.pose is not None else [np.nan, np.nan]
+            for f in run.fixes[estimator]
+        ]
     )
 
 
@@ -1038,7 +1086,10 @@ def plot_path(runs: dict[bool, PathRun], out_dir: Path) -> Path:
     improved_last = slip_run.fixes[IMPROVED][-1].pose
     width_px = 1000
     image = render_topdown(
-        scenario, slip_run.truth[-1], improved_last, width_px=width_px,
+        scenario,
+        slip_run.truth[-1],
+        improved_last,
+        width_px=width_px,
         title="beom_cho_lab, path with slip (Fig. 9(a)/11)",
     )
     height, width = image_size(scenario, width_px)
@@ -1054,13 +1105,19 @@ def plot_path(runs: dict[bool, PathRun], out_dir: Path) -> Path:
     lab.imshow(image, extent=(left, left + width / scale, bottom, bottom + height / scale))
     for slip, run in runs.items():
         truth = np.array([[p.x, p.y] for p in run.truth])
-        lab.plot(*truth.T, "-s", color="#2ca02c" if slip else "#98df8a", ms=3,
-                 label=f"true stops ({'slip' if slip else 'no slip'})")
+        lab.plot(
+            *truth.T,
+            "-s",
+            color="#2ca02c" if slip else "#98df8a",
+            ms=3,
+            label=f"true stops ({'slip' if slip else 'no slip'})",
+        )
     dead_reckoning = np.array([[p.x, p.y] for p in slip_run.dead_reckoning])
     lab.plot(*dead_reckoning.T, label="dead reckoning (slip run)", **STYLES[DEAD_RECKONING])
     for name in ESTIMATORS:
-        lab.plot(*_estimate_xy(slip_run, name).T, label=f"{name} estimates (slip run)",
-                 **STYLES[name])
+        lab.plot(
+            *_estimate_xy(slip_run, name).T, label=f"{name} estimates (slip run)", **STYLES[name]
+        )
     lab.set_xlabel("x [m]")
     lab.set_ylabel("y [m]")
     lab.legend(loc="lower left", fontsize=8)
@@ -1097,18 +1154,29 @@ def plot_errors(runs: dict[bool, PathRun], out_dir: Path) -> Path:
     for column, (slip, run) in enumerate(sorted(runs.items())):
         x = np.array([p.x for p in run.truth])
         for row, (scale, bound, unit) in enumerate(
-            ((100.0, 100 * PAPER_POSITION_BOUND_M, "E_xy [cm]"),
-             (180.0 / math.pi, math.degrees(PAPER_HEADING_BOUND_RAD), "E_θ [deg]"))
+            (
+                (100.0, 100 * PAPER_POSITION_BOUND_M, "E_xy [cm]"),
+                (180.0 / math.pi, math.degrees(PAPER_HEADING_BOUND_RAD), "E_θ [deg]"),
+            )
         ):
             axis = figure.add_subplot(2, 2, 1 + column + 2 * row)
             for name in (*ESTIMATORS, DEAD_RECKONING):
                 values = scale * run.errors(name)[row]
                 off = values > limits[row]
-                axis.plot(x, np.where(off, np.nan, values), label=ESTIMATOR_LABELS[name],
-                          **{**STYLES[name], "linestyle": "-"})
+                axis.plot(
+                    x,
+                    np.where(off, np.nan, values),
+                    label=ESTIMATOR_LABELS[name],
+                    **{**STYLES[name], "linestyle": "-"},
+                )
                 if off.any():
-                    axis.plot(x[off], np.full(off.sum(), 0.97 * limits[row]), "^",
-                              color=STYLES[name]["color"], label=f"{name}: off scale (wrong pair)")
+                    axis.plot(
+                        x[off],
+                        np.full(off.sum(), 0.97 * limits[row]),
+                        "^",
+                        color=STYLES[name]["color"],
+                        label=f"{name}: off scale (wrong pair)",
+                    )
             axis.axhline(bound, color="grey", ls="--", lw=1, label="paper's bound")
             if slip:
                 axis.axvline(SLIP_END_X_M, color="#9467bd", ls=":", lw=1, label="slip")
@@ -1117,8 +1185,11 @@ def plot_errors(runs: dict[bool, PathRun], out_dir: Path) -> Path:
             axis.set_ylabel(unit)
             axis.grid(alpha=0.3)
             if row == 0:
-                axis.set_title("Fig. 11: left-wheel slip near (1.2, 0)" if slip
-                               else "Fig. 10: path without slip")
+                axis.set_title(
+                    "Fig. 11: left-wheel slip near (1.2, 0)"
+                    if slip
+                    else "Fig. 10: path without slip"
+                )
             axis.legend(fontsize=6)
     figure.tight_layout()
     path = out_dir / "beom_cho_errors.png"
@@ -1221,8 +1292,10 @@ def run(
             "true_poses": [p.as_array().tolist() for p in runs[slip].truth],
             "dead_reckoning_poses": [p.as_array().tolist() for p in runs[slip].dead_reckoning],
             "estimates": {
-                e: [None if f.pose is None else f.pose.as_array().tolist()
-                    for f in runs[slip].fixes[e]]
+                e: [
+                    None if f.pose is None else f.pose.as_array().tolist()
+                    for f in runs[slip].fixes[e]
+                ]
                 for e in ESTIMATORS
             },
             "run": {e: s.as_dict() for e, s in single.items()},

@@ -176,8 +176,10 @@ def plot_map(result: OutcomeMap, scenario: Scenario, path: Path) -> Path:
     colours = ListedColormap([OUTCOME_COLOURS[n] for n in names])
     spacing = float(result.xs[1] - result.xs[0]) if len(result.xs) > 1 else 1.0
     extent = (
-        result.xs[0] - spacing / 2, result.xs[-1] + spacing / 2,
-        result.ys[0] - spacing / 2, result.ys[-1] + spacing / 2,
+        result.xs[0] - spacing / 2,
+        result.xs[-1] + spacing / 2,
+        result.ys[0] - spacing / 2,
+        result.ys[-1] + spacing / 2,
     )
     figure, axes = plt.subplots(1, 2, figsize=(13, 5.4), constrained_layout=True)
     for axis, (name, label) in zip(axes, EXTRACTIONS.items(), strict=True):
@@ -185,8 +187,13 @@ def plot_map(result: OutcomeMap, scenario: Scenario, path: Path) -> Path:
             [[names.index(o) if o else np.nan for o in row] for row in result.outcomes[name]]
         )
         axis.imshow(
-            np.ma.masked_invalid(codes), origin="lower", extent=extent, cmap=colours,
-            vmin=-0.5, vmax=len(names) - 0.5, interpolation="nearest",
+            np.ma.masked_invalid(codes),
+            origin="lower",
+            extent=extent,
+            cmap=colours,
+            vmin=-0.5,
+            vmax=len(names) - 0.5,
+            interpolation="nearest",
         )
         for segment in scenario_segments(scenario):
             axis.plot(*segment.T, color="black", linewidth=1.0)
@@ -200,7 +207,8 @@ def plot_map(result: OutcomeMap, scenario: Scenario, path: Path) -> Path:
         axis.set_aspect("equal")
     figure.legend(
         handles=[Patch(color=OUTCOME_COLOURS[n], label=n) for n in names],
-        loc="outside lower center", ncols=len(names),
+        loc="outside lower center",
+        ncols=len(names),
     )
     figure.suptitle("Beom & Cho in beom_cho_lab: outcome by robot position (black dots: beacons)")
     figure.savefig(path, dpi=110)
@@ -224,7 +232,9 @@ def scenario_segments(scenario: Scenario) -> list[np.ndarray]:
     return segments
 
 
-def run(out_dir: Path, console: Console, *, seed: int = 0, spacing_m: float = 0.1) -> dict[str, Any]:
+def run(
+    out_dir: Path, console: Console, *, seed: int = 0, spacing_m: float = 0.1
+) -> dict[str, Any]:
     """Build the map, print the shares, write ``beom_cho_map.png`` and ``beom_cho_map.json``."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

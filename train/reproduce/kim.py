@@ -196,7 +196,6 @@ def sweep_count_study(n_sweeps: int, anchor: str, seeds: int) -> SweepCountResul
     )
 
 
-
 def _mean_ci(values: np.ndarray) -> tuple[float, float]:
     """Mean and the half-width of a normal 95 % interval."""
     finite = values[np.isfinite(values)]
@@ -340,7 +339,6 @@ def sweeps_table(results: list[SweepCountResult], paper_reference_m: float) -> T
             ratio_flag(mean, paper_reference_m) or "within 2x",
         )
     return table
-
 
 
 def plot_table1(result: Table1Result, out_dir: Path) -> Path:

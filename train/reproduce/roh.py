@@ -331,7 +331,6 @@ def average_row(rows: Sequence[RowResult]) -> dict[str, float]:
     }
 
 
-
 def _counts(counter: Counter[str]) -> str:
     return ", ".join(f"{key} x{count}" for key, count in counter.items())
 
@@ -491,9 +490,9 @@ def plot_path_errors(
         run = _representative(row, setup.path)
         if not len(run.estimated_xy):
             continue
-        travelled = np.concatenate(
-            [[0.0], np.cumsum(np.hypot(*np.diff(setup.path, axis=0).T))]
-        )[run.estimated_indices]
+        travelled = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(setup.path, axis=0).T))])[
+            run.estimated_indices
+        ]
         errors = distances_to_polyline(run.estimated_xy, setup.path)
         ax.plot(1000 * travelled, 1000 * errors, linewidth=1, label=f"{label}: {run.status}")
     ax.set_xlabel("distance driven [mm]")

@@ -298,7 +298,6 @@ def mean_errors(runs: Sequence[Sequence[Experiment]]) -> dict[str, tuple[float, 
     return summary
 
 
-
 # --------------------------------------------------------------------------------------------
 # Tables
 
@@ -392,7 +391,6 @@ def sensitivity_table(rows: list[dict[str, Any]]) -> Table:
             style="bold",
         )
     return table
-
 
 
 def differences(

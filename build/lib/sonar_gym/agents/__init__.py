@@ -1,9 +1,0 @@
-"""Agents: the papers' scripted procedures, random and heuristic baselines, learned policies.
-
-``make_agent(name, env)`` builds one by name (``agent_names(env_id)`` lists them) or loads a
-saved stable-baselines3 model from a path.
-"""
-
-from sonar_gym.agents.base import Agent, agent_names, make_agent, register_agent
-
-__all__ = ["Agent", "agent_names", "make_agent", "register_agent"]

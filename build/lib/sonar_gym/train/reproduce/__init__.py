@@ -1,1 +1,0 @@
-"""Reproductions of the papers' experiments in simulation: ``sonar-gym reproduce <paper>``."""
