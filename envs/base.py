@@ -4,14 +4,27 @@ A task subclasses :class:`SonarEnv` and fills four hooks: ``_reset_task`` (build
 from ``self.np_random``), ``_apply_action`` (one decision: sense, move or localize), ``_observe``
 (the float32 observation) and ``_render_frame``. The base owns what must be the same
 everywhere: seeding, action validation, the finite-value guard on observations and rewards,
-the ``info`` keys, and the wall-clock profile that ``sonar-gym benchmark`` reads.
+the episode record, the wall-clock profile that ``sonar-gym benchmark`` reads, and three
+opt-in services a task switches on when it is ready for them:
+
+* reward terms: ``_apply_action`` returns ``StepOutcome(reward_terms={...})`` and the base sums
+  them into the reward and copies them into ``info["rewards"]`` (HighwayEnv's ``_rewards``);
+* enforced info keys: a task that sets ``required_info_keys`` (for example :data:`INFO_KEYS`)
+  gets an error as soon as a step's ``info`` lacks one;
+* truncation: a task that sets ``max_decisions`` has its episodes truncated after that many
+  steps (``info["status"]`` then reads ``"truncated"`` unless the task set it).
+
+The agent API: scripted agents may read only what is declared here (the env's ``spec``,
+``config``, ``observation_layout``, ``episode_count``, ``episode``) and a task's own documented
+methods (``encode_action`` and the like), through :func:`unwrap_sonar_env`.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -20,22 +33,62 @@ import gymnasium as gym
 import numpy as np
 
 INFO_KEYS = ("position_error_m", "heading_error_rad", "sensing_time_s", "status")
+"""The ``info`` keys every task reports on every step (opt in with ``required_info_keys``)."""
+REWARDS_INFO_KEY = "rewards"
+"""Where the base copies a step's reward terms in ``info``."""
 
 
 @dataclass
 class StepOutcome:
-    """What a task's ``_apply_action`` returns; the base adds the observation and checks."""
+    """What a task's ``_apply_action`` returns; the base adds the observation and checks.
 
-    reward: float
+    Give either ``reward`` or ``reward_terms`` (named parts of the reward, e.g.
+    ``{"pose_error": -0.8, "sensing_time": -0.1}``): with terms, the reward is their sum and
+    ``info["rewards"]`` holds a copy of them.
+    """
+
+    reward: float = 0.0
     terminated: bool = False
     truncated: bool = False
     info: dict[str, Any] = field(default_factory=dict)
+    reward_terms: Mapping[str, float] | None = None
+
+
+@dataclass
+class EpisodeRecord:
+    """What the base counts over the current episode (read it as ``env.unwrapped.episode``).
+
+    Attributes:
+        index: episodes begun by ``reset`` so far, this one included (1 for the first).
+        steps: steps taken in this episode.
+        total_reward: sum of this episode's rewards.
+        reward_terms: per-term sums of this episode's reward terms (tasks that give terms).
+        done: the episode has terminated or been truncated.
+    """
+
+    index: int = 0
+    steps: int = 0
+    total_reward: float = 0.0
+    reward_terms: dict[str, float] = field(default_factory=dict)
+    done: bool = False
 
 
 class SonarEnv(gym.Env[np.ndarray, Any], ABC):
-    """Shared machinery of the sonar_gym tasks (not registered itself)."""
+    """Shared machinery of the sonar_gym tasks (not registered itself).
 
-    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array"], "render_fps": 4}
+    Attributes:
+        config: the task's frozen, validated configuration dataclass.
+        observation_layout: the name of each observation feature group -> its slice of the
+            observation vector.
+        required_info_keys: keys every step's ``info`` must hold (none unless a task opts in).
+        max_decisions: steps after which the base truncates an episode (None: never).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 4}
+    required_info_keys: ClassVar[tuple[str, ...]] = ()
+    max_decisions: int | None = None
+    config: Any
+    observation_layout: dict[str, slice]
 
     def __init__(self, render_mode: str | None = None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -46,6 +99,22 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         self.render_mode = render_mode
         self.timing: dict[str, float] = {"sensing": 0.0, "localization": 0.0}
         self._episode_started = False
+        self._record = EpisodeRecord()
+
+    # --- the agent API -----------------------------------------------------------------
+    @property
+    def episode_count(self) -> int:
+        """Episodes begun by ``reset`` so far; it changes exactly when a new episode starts, so
+        an agent can tell a fresh episode from the next decision of the same one."""
+        return self._record.index
+
+    @property
+    def episode(self) -> EpisodeRecord:
+        """A copy of the current episode's record."""
+        record = self._record
+        return EpisodeRecord(
+            record.index, record.steps, record.total_reward, dict(record.reward_terms), record.done
+        )
 
     # --- hooks -------------------------------------------------------------------------
     @abstractmethod
@@ -70,6 +139,7 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
     ) -> tuple[np.ndarray, dict[str, Any]]:
         super().reset(seed=seed)
         info = self._reset_task(options)
+        self._record = EpisodeRecord(index=self._record.index + 1)
         self._episode_started = True
         return self._checked_observation(), info
 
@@ -82,18 +152,29 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
                 f"{self.action_space}"
             )
         outcome = self._apply_action(action)
-        reward = float(outcome.reward)
-        if not np.isfinite(reward):
-            raise RuntimeError(f"{type(self).__name__}: non-finite reward {reward!r}")
-        if outcome.terminated or outcome.truncated:
+        reward = self._reward_of(outcome)
+        info = outcome.info
+        record = self._record
+        record.steps += 1
+        record.total_reward += reward
+        truncated = outcome.truncated
+        if (
+            self.max_decisions is not None
+            and record.steps >= self.max_decisions
+            and not outcome.terminated
+        ):
+            truncated = True
+            info.setdefault("status", "truncated")
+        missing = [key for key in self.required_info_keys if key not in info]
+        if missing:
+            raise RuntimeError(
+                f"{type(self).__name__}: step info lacks the required key(s) {missing}; "
+                f"it has {sorted(info)}"
+            )
+        if outcome.terminated or truncated:
             self._episode_started = False
-        return (
-            self._checked_observation(),
-            reward,
-            outcome.terminated,
-            outcome.truncated,
-            outcome.info,
-        )
+            record.done = True
+        return self._checked_observation(), reward, outcome.terminated, truncated, info
 
     def render(self) -> np.ndarray | None:  # type: ignore[override]
         if self.render_mode == "rgb_array":
@@ -101,6 +182,28 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         return None
 
     # --- helpers ---------------------------------------------------------------------
+    def _reward_of(self, outcome: StepOutcome) -> float:
+        """The step's reward: ``outcome.reward``, or the sum of its terms (copied into info)."""
+        name = type(self).__name__
+        if outcome.reward_terms is None:
+            reward = float(outcome.reward)
+            if not np.isfinite(reward):
+                raise RuntimeError(f"{name}: non-finite reward {reward!r}")
+            return reward
+        if outcome.reward != 0.0:
+            raise RuntimeError(
+                f"{name}: a StepOutcome gives either reward or reward_terms; got reward "
+                f"{outcome.reward!r} and terms {dict(outcome.reward_terms)}"
+            )
+        terms = {key: float(value) for key, value in outcome.reward_terms.items()}
+        bad = {key: value for key, value in terms.items() if not math.isfinite(value)}
+        if bad:
+            raise RuntimeError(f"{name}: non-finite reward term(s) {bad}")
+        for key, value in terms.items():
+            self._record.reward_terms[key] = self._record.reward_terms.get(key, 0.0) + value
+        outcome.info[REWARDS_INFO_KEY] = dict(terms)
+        return float(math.fsum(terms.values()))
+
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
         if not np.all(np.isfinite(observation)):
@@ -115,3 +218,19 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
             yield
         finally:
             self.timing[phase] = self.timing.get(phase, 0.0) + time.perf_counter() - start
+
+
+def unwrap_sonar_env(env: gym.Env[Any, Any]) -> SonarEnv:
+    """The :class:`SonarEnv` under ``env``'s wrappers, the object agents read the API from.
+
+    Raises:
+        ValueError: ``env`` is not a sonar_gym environment (the message names what it is).
+    """
+    unwrapped = env.unwrapped
+    if not isinstance(unwrapped, SonarEnv):
+        raise ValueError(
+            f"argument 'env' must be a sonar_gym environment (a SonarEnv under its wrappers); "
+            f"got {type(unwrapped).__name__}"
+            + (f" ({env.spec.id})" if env.spec is not None else "")
+        )
+    return unwrapped
