@@ -1,18 +1,28 @@
-"""The one protocol every agent follows, and the registry that builds agents by name.
+"""The one protocol every agent follows, the base of the scripted agents, and the registry
+that builds agents by name.
 
 An agent maps an observation to an action (``act``). Scripted agents may read the
-environment they are built for (its scenario, its action layout) when they are made, never
-the hidden state during an episode: everything they decide on comes through ``act``'s
-observation, exactly as for a learned policy.
+environment they are built for through its agent API (:mod:`sonar_gym.envs.base`: its
+configuration, observation layout, action encoding and episode counter) when they are made
+and to tell a new episode, never the hidden state during an episode: everything they decide
+on comes through ``act``'s observation, exactly as for a learned policy.
+
+Agents are registered as entry points, ``"module:attribute"`` strings (the built-in ones in
+:mod:`sonar_gym.agents.builtin`), imported only when that agent is made.
 """
 
 from __future__ import annotations
 
+import importlib
+from abc import ABC, abstractmethod
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Generic, Protocol, TypeVar, cast, runtime_checkable
 
 import gymnasium as gym
+
+from sonar_gym.agents.builtin import BUILTIN_AGENTS, GENERIC
+from sonar_gym.envs.base import SonarEnv, unwrap_sonar_env
 
 
 @runtime_checkable
@@ -28,34 +38,99 @@ class Agent(Protocol):
         """The action for this observation (an element of the env's action space)."""
 
 
-AgentFactory = Callable[[gym.Env], Agent]
-_REGISTRY: dict[str, dict[str, AgentFactory]] = {}
-GENERIC = "*"
+EnvT = TypeVar("EnvT", bound=SonarEnv)
 
 
-def register_agent(name: str, factory: AgentFactory, env_id: str = GENERIC) -> None:
-    """Register ``factory`` as agent ``name`` for ``env_id`` (or every env with ``"*"``)."""
+class ScriptedAgent(ABC, Generic[EnvT]):
+    """Base of the scripted agents: a fixed procedure over one sonar_gym environment.
+
+    Subclasses implement :meth:`decide` and, if they keep anything from one decision to the
+    next, :meth:`start_episode`. The agent notices a new episode itself: the env's
+    ``episode_count`` changes at every ``reset``, so a caller that only ever calls
+    ``act(observation)`` gets the same actions as one that also calls ``reset()`` before each
+    episode.
+
+    Args:
+        env: the environment (any wrappers around a :class:`SonarEnv`) the agent acts in.
+
+    Raises:
+        ValueError: ``env`` is not a sonar_gym environment.
+    """
+
+    name: str = "scripted"
+
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        self._env: EnvT = cast(EnvT, unwrap_sonar_env(env))
+        self._episode_seen: int | None = None
+
+    def reset(self, seed: int | None = None) -> None:
+        """Start a new episode (scripted agents draw nothing, so ``seed`` is unused)."""
+        self._episode_seen = None  # adopt the next episode without starting it twice
+        self.start_episode()
+
+    def act(self, observation: Any) -> Any:
+        """The action for ``observation``, after starting afresh if the env began a new episode."""
+        current = self._env.episode_count
+        if self._episode_seen is None:
+            self._episode_seen = current
+        elif current != self._episode_seen:
+            self._episode_seen = current
+            self.start_episode()
+        return self.decide(observation)
+
+    def start_episode(self) -> None:
+        """Forget the previous episode (nothing to forget by default)."""
+
+    @abstractmethod
+    def decide(self, observation: Any) -> Any:
+        """The procedure's action for ``observation`` within the current episode."""
+
+
+AgentFactory = Callable[..., Agent]
+"""Builds an agent from the env (and keyword options): an agent class or a function."""
+_REGISTRY: dict[str, dict[str, AgentFactory | str]] = {
+    env_id: dict(agents) for env_id, agents in BUILTIN_AGENTS.items()
+}
+
+
+def register_agent(name: str, factory: AgentFactory | str, env_id: str = GENERIC) -> None:
+    """Register agent ``name`` for ``env_id`` (every env with ``"*"``).
+
+    Args:
+        name: the agent's name (``sonar-gym evaluate --agent NAME``).
+        factory: a callable ``factory(env, **options) -> Agent``, or its entry point
+            ``"module:attribute"``, imported only when the agent is made.
+        env_id: the environment id the agent is for.
+
+    Raises:
+        ValueError: an entry point not of the form ``"module:attribute"``.
+    """
+    if isinstance(factory, str):
+        _split_entry_point(factory)
     _REGISTRY.setdefault(env_id, {})[name] = factory
 
 
 def agent_names(env_id: str) -> list[str]:
-    """Names of the agents available for ``env_id``."""
-    _load_builtin_agents()
+    """Names of the agents available for ``env_id`` (imports no agent module)."""
     return sorted(set(_REGISTRY.get(env_id, {})) | set(_REGISTRY.get(GENERIC, {})))
 
 
-def make_agent(name: str, env: gym.Env) -> Agent:
+def make_agent(name: str, env: gym.Env[Any, Any], **options: Any) -> Agent:
     """Build agent ``name`` for ``env``; a path to a saved model loads a learned policy.
+
+    Args:
+        name: a registered agent name, or the path of a saved model (``.zip`` or run dir).
+        env: the environment the agent will act in.
+        options: keyword arguments of the agent's constructor.
 
     Raises:
         ValueError: the name is neither a registered agent for this env nor an existing
             model file; the message lists what is allowed.
     """
-    _load_builtin_agents()
     env_id = env.spec.id if env.spec is not None else ""
     factory = _REGISTRY.get(env_id, {}).get(name) or _REGISTRY.get(GENERIC, {}).get(name)
     if factory is not None:
-        return factory(env)
+        return _resolve(factory)(env, **options)
     if name.endswith(".zip") or Path(name).exists():
         from sonar_gym.agents.learned import load_policy_agent
 
@@ -66,6 +141,19 @@ def make_agent(name: str, env: gym.Env) -> Agent:
     )
 
 
-def _load_builtin_agents() -> None:
-    """Import the modules that register the built-in agents (once)."""
-    import sonar_gym.agents.builtin  # noqa: F401  (registers on import)
+def _resolve(factory: AgentFactory | str) -> AgentFactory:
+    if not isinstance(factory, str):
+        return factory
+    module_name, attribute = _split_entry_point(factory)
+    resolved: AgentFactory = getattr(importlib.import_module(module_name), attribute)
+    return resolved
+
+
+def _split_entry_point(entry_point: str) -> tuple[str, str]:
+    module_name, _, attribute = entry_point.partition(":")
+    if not module_name or not attribute:
+        raise ValueError(
+            f"argument 'factory' must be a callable or an entry point 'module:attribute'; "
+            f"got {entry_point!r}"
+        )
+    return module_name, attribute

@@ -17,24 +17,23 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import register_agent
+from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.envs.beacon_scan import BeaconScanEnv
 
 
-class _ScriptedBeaconAgent:
+class _ScriptedBeaconAgent(ScriptedAgent[BeaconScanEnv]):
     """Plays a plan of commands built from the first observation of an episode."""
 
-    name = "scripted"
-
-    def __init__(self, env: gym.Env) -> None:
-        self._env = env.unwrapped
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        super().__init__(env)
         self._plan: deque[Any] = deque()
         self._started = False
 
-    def reset(self, seed: int | None = None) -> None:
+    def start_episode(self) -> None:
         self._plan.clear()
         self._started = False
 
-    def act(self, observation: np.ndarray) -> Any:
+    def decide(self, observation: np.ndarray) -> Any:
         if not self._started:
             self._plan.extend(self._make_plan(observation))
             self._started = True
@@ -76,7 +75,7 @@ class SectorAgent(_ScriptedBeaconAgent):
     name = "sector"
     rcd_half_width_deg = 13.0
 
-    def __init__(self, env: gym.Env, margin_deg: float = 15.0) -> None:
+    def __init__(self, env: gym.Env[Any, Any], margin_deg: float = 15.0) -> None:
         super().__init__(env)
         self.margin_deg = margin_deg
 
@@ -114,7 +113,3 @@ def _signed_angle(angle_deg: float) -> float:
 
 def _angle_within(angle_deg: float, centre_deg: float, half_width_deg: float) -> bool:
     return abs(_signed_angle(angle_deg - centre_deg)) <= half_width_deg
-
-
-register_agent("paper", PaperAgent, "SonarGym/BeaconScan-v0")
-register_agent("sector", SectorAgent, "SonarGym/BeaconScan-v0")

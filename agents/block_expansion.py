@@ -32,16 +32,16 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.agents.base import register_agent
+from sonar_gym.agents.base import ScriptedAgent
 from sonar_gym.envs.block_expansion import (
     CURVATURE_SCALE_PER_M,
-    ENV_ID,
     FRAME_CENTRE_M,
     FRAME_HALF_SPAN_M,
     PATH_STEP_M,
     PRIOR_ONLY,
     SURVEYED,
     UNUSED,
+    BlockExpansionEnv,
 )
 from sonar_gym.localization.roh import distance_to_segment, parabolic_path
 from sonar_gym.pose import FloatArray
@@ -76,21 +76,18 @@ def boundary_of(observation: np.ndarray, layout: dict[str, slice]) -> int:
     return int(np.argmax(one_hot)) if np.any(one_hot > 0.5) else 0
 
 
-class PaperAgent:
+class PaperAgent(ScriptedAgent[BlockExpansionEnv]):
     """Roh et al.'s d's: 450/250/50 mm, then 300/400/700 mm over a second boundary."""
 
     name = "paper"
 
-    def __init__(self, env: gym.Env) -> None:
-        self._env = env.unwrapped
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        super().__init__(env)
         self._triples = [PAPER_FIRST_TRIPLE_M, PAPER_SECOND_TRIPLE_M]
         if self._env.config.ordering == "decreasing":
             self._triples = [PAPER_FIRST_TRIPLE_M, PAPER_FIRST_TRIPLE_M]
 
-    def reset(self, seed: int | None = None) -> None:
-        """Nothing to reset: the choice is fixed."""
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def decide(self, observation: np.ndarray) -> np.ndarray:
         config = self._env.config
         if config.decisions == "all_at_once":
             chosen = [d for triple in self._triples[: config.n_boundaries] for d in triple]
@@ -99,7 +96,7 @@ class PaperAgent:
         return self._env.encode_distances(chosen)
 
 
-class SpreadAgent:
+class SpreadAgent(ScriptedAgent[BlockExpansionEnv]):
     """Best-placed calibration positions on the nominal path (see the module docstring).
 
     Args:
@@ -123,7 +120,7 @@ class SpreadAgent:
 
     def __init__(
         self,
-        env: gym.Env,
+        env: gym.Env[Any, Any],
         grid_step_m: float = 0.03,
         end_margin_m: float = 0.1,
         crossing_margin_m: float = 0.05,
@@ -131,7 +128,7 @@ class SpreadAgent:
         robust: bool | None = None,
         criterion: str = "gdop",
     ) -> None:
-        self._env = env.unwrapped
+        super().__init__(env)
         config = self._env.config
         low, high = config.distance_range_m
         count = max(int(round((high - low) / grid_step_m)) + 1, 3)
@@ -158,10 +155,7 @@ class SpreadAgent:
             triples = triples[(triples[:, 0] > triples[:, 1]) & (triples[:, 1] > triples[:, 2])]
         self._triples: IntArray = triples
 
-    def reset(self, seed: int | None = None) -> None:
-        """Nothing to reset: the agent is deterministic."""
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def decide(self, observation: np.ndarray) -> np.ndarray:
         env = self._env
         layout = env.observation_layout
         beacons = self._beacons(observation[layout["beacons"]])
@@ -462,7 +456,3 @@ def _side(points: Any, a: FloatArray, b: FloatArray) -> Any:
     direction = b - a
     offset = p - a
     return np.sign(direction[0] * offset[..., 1] - direction[1] * offset[..., 0])
-
-
-register_agent("paper", PaperAgent, ENV_ID)
-register_agent("spread", SpreadAgent, ENV_ID)

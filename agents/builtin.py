@@ -1,22 +1,34 @@
-"""Registers the built-in agents with :mod:`sonar_gym.agents.base` on import.
+"""The built-in agents: name -> entry point (``"module:attribute"``), per environment id.
 
-Each task's module registers its own agents with ``register_agent`` when imported; the random
-agent serves every environment.
+Plain data: nothing here imports an agent module. :mod:`sonar_gym.agents.base` resolves an
+entry point only when that agent is made, so listing the agents loads no task code.
 """
 
-import importlib
+from __future__ import annotations
 
-from sonar_gym.agents.base import GENERIC, register_agent
-from sonar_gym.agents.random_agent import RandomAgent
+GENERIC = "*"
+"""The key of the agents that serve every environment."""
 
-TASK_AGENT_MODULES = (
-    "sonar_gym.agents.beacon_scan",
-    "sonar_gym.agents.sweep_localization",
-    "sonar_gym.agents.trilateration",
-    "sonar_gym.agents.block_expansion",
-    "sonar_gym.agents.wall_correction",
-)
-
-register_agent("random", RandomAgent, GENERIC)
-for module_name in TASK_AGENT_MODULES:
-    importlib.import_module(module_name)
+BUILTIN_AGENTS: dict[str, dict[str, str]] = {
+    GENERIC: {"random": "sonar_gym.agents.random_agent:RandomAgent"},
+    "SonarGym/BeaconScan-v0": {
+        "paper": "sonar_gym.agents.beacon_scan:PaperAgent",
+        "sector": "sonar_gym.agents.beacon_scan:SectorAgent",
+    },
+    "SonarGym/SweepLocalization-v0": {
+        "paper": "sonar_gym.agents.sweep_localization:PaperAgent",
+        "covariance": "sonar_gym.agents.sweep_localization:CovarianceAgent",
+    },
+    "SonarGym/Trilateration-v0": {
+        "paper": "sonar_gym.agents.trilateration:PaperAgent",
+        "adaptive": "sonar_gym.agents.trilateration:AdaptiveAgent",
+    },
+    "SonarGym/BlockExpansion-v0": {
+        "paper": "sonar_gym.agents.block_expansion:PaperAgent",
+        "spread": "sonar_gym.agents.block_expansion:SpreadAgent",
+    },
+    "SonarGym/WallCorrection-v0": {
+        "paper": "sonar_gym.agents.wall_correction:PaperAgent",
+        "both_walls": "sonar_gym.agents.wall_correction:BothWallsAgent",
+    },
+}

@@ -24,11 +24,20 @@ farthest in total (a heading error ``d`` moves the end of a reading of range ``r
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import register_agent
+from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.envs.sweep_localization import (
+    HEADING_STD_SCALE_RAD,
+    HEADING_UNIT_RAD,
+    POSITION_STD_SCALE_M,
+    POSITION_UNIT_M,
+    SECTOR_CENTRES_RAD,
+    SweepLocalizationEnv,
+)
 from sonar_gym.localization.kim import Sweep, vote_localize
 from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.sonar.swept import SweptSonar
@@ -45,7 +54,7 @@ FAILED_PREDICTION_LOSS = 5.0
 """Loss charged to a predicted vote that returns no pose (in the env's error units)."""
 
 
-def _decode_estimate(env: gym.Env, observation: np.ndarray) -> Pose:
+def _decode_estimate(env: SweepLocalizationEnv, observation: np.ndarray) -> Pose:
     """The EKF estimate in {W} from the observation's normalised features."""
     layout = env.observation_layout
     (x_min, y_min), (x_max, y_max) = env.scenario.bounds
@@ -58,7 +67,7 @@ def _decode_estimate(env: gym.Env, observation: np.ndarray) -> Pose:
     )
 
 
-def _check_sweep_count(env: gym.Env, n_sweeps: object) -> int:
+def _check_sweep_count(env: SweepLocalizationEnv, n_sweeps: object) -> int:
     max_sweeps = env.config.max_sweeps
     if (
         isinstance(n_sweeps, bool)
@@ -71,7 +80,7 @@ def _check_sweep_count(env: gym.Env, n_sweeps: object) -> int:
     return n_sweeps
 
 
-class PaperAgent:
+class PaperAgent(ScriptedAgent[SweepLocalizationEnv]):
     """Kim et al.: ``n_sweeps`` forward sweeps at every decision point.
 
     Args:
@@ -81,18 +90,15 @@ class PaperAgent:
 
     name = "paper"
 
-    def __init__(self, env: gym.Env, n_sweeps: int = 3) -> None:
-        self._env = env.unwrapped
+    def __init__(self, env: gym.Env[Any, Any], n_sweeps: int = 3) -> None:
+        super().__init__(env)
         self.n_sweeps = _check_sweep_count(self._env, n_sweeps)
 
-    def reset(self, seed: int | None = None) -> None:
-        """Nothing to reset: the procedure is the same at every decision."""
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
+    def decide(self, observation: np.ndarray) -> np.ndarray:
         return self._env.encode_action(self.n_sweeps, "front")
 
 
-class CovarianceAgent:
+class CovarianceAgent(ScriptedAgent[SweepLocalizationEnv]):
     """Sweeps only when the EKF is uncertain, toward the sector with the most structure.
 
     Args:
@@ -107,13 +113,13 @@ class CovarianceAgent:
 
     def __init__(
         self,
-        env: gym.Env,
+        env: gym.Env[Any, Any],
         position_std_threshold_m: float = 0.02,
         heading_std_threshold_deg: float = 3.5,
         n_sweeps: int = 2,
         sector_rule: str = "vote",
     ) -> None:
-        self._env = env.unwrapped
+        super().__init__(env)
         self.n_sweeps = _check_sweep_count(self._env, n_sweeps)
         for name, value in (
             ("position_std_threshold_m", position_std_threshold_m),
@@ -139,16 +145,7 @@ class CovarianceAgent:
         )
         self._rng = np.random.default_rng(0)  # an ideal readout draws nothing; the API wants one
 
-    def reset(self, seed: int | None = None) -> None:
-        """The agent is deterministic; nothing to reset."""
-
-    def act(self, observation: np.ndarray) -> np.ndarray:
-        from sonar_gym.envs.sweep_localization import (
-            HEADING_STD_SCALE_RAD,
-            POSITION_STD_SCALE_M,
-            SECTOR_CENTRES_RAD,
-        )
-
+    def decide(self, observation: np.ndarray) -> np.ndarray:
         layout = self._env.observation_layout
         std_x, std_y, std_heading = (float(v) for v in observation[layout["estimate_std"]])
         position_std = max(std_x, std_y) * POSITION_STD_SCALE_M
@@ -169,8 +166,6 @@ class CovarianceAgent:
         estimate, in units of 0.1 m and 5 deg. ``"range_sum"``: minus the sum of the predicted
         ranges (m).
         """
-        from sonar_gym.envs.sweep_localization import HEADING_UNIT_RAD, POSITION_UNIT_M
-
         scan = self._predictor.sweep(self._map_world, estimate, self._rng, sector_centre_rad)
         if self.sector_rule == "range_sum":
             return -float(np.nansum(scan.ranges))
@@ -198,7 +193,3 @@ class CovarianceAgent:
                 + abs(angle_difference(result.pose.theta, estimate.theta)) / HEADING_UNIT_RAD
             )
         return total / len(PRIOR_OFFSETS)
-
-
-register_agent("paper", PaperAgent, ENV_ID)
-register_agent("covariance", CovarianceAgent, ENV_ID)

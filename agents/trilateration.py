@@ -36,7 +36,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import register_agent
+from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.envs.trilateration import TrilaterationEnv
 
 ENV_ID = "SonarGym/Trilateration-v0"
 MEAN_OF_RAYLEIGH_PER_RMS = math.sqrt(math.pi) / 2.0
@@ -47,22 +48,20 @@ SLIP_HEADING_ERROR_RAD = math.radians(15.0)
 """Rough heading error a wheel slip on a leg leaves, radians (slip_fraction_max = 0.3)."""
 
 
-class PaperAgent:
+class PaperAgent(ScriptedAgent[TrilaterationEnv]):
     """Wu & Tsai: n = 10 fixes at every decision point (the offered n nearest to 10)."""
 
     name = "paper"
 
-    def __init__(self, env: gym.Env) -> None:
-        self._action = env.unwrapped.paper_action
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        super().__init__(env)
+        self._action = self._env.paper_action
 
-    def reset(self, seed: int | None = None) -> None:
-        """Nothing to reset: the procedure is fixed."""
-
-    def act(self, observation: np.ndarray) -> int:
+    def decide(self, observation: np.ndarray) -> int:
         return self._action
 
 
-class AdaptiveAgent:
+class AdaptiveAgent(ScriptedAgent[TrilaterationEnv]):
     """Chooses n by the expected error after the correction against the measuring time.
 
     With ``horizon > 1`` it plans over the next decision points (dynamic programming over
@@ -81,8 +80,11 @@ class AdaptiveAgent:
 
     name = "adaptive"
 
-    def __init__(self, env: gym.Env, slip_risk_weight: float = 1.0, horizon: int = 6) -> None:
-        unwrapped = env.unwrapped
+    def __init__(
+        self, env: gym.Env[Any, Any], slip_risk_weight: float = 1.0, horizon: int = 6
+    ) -> None:
+        super().__init__(env)
+        unwrapped = self._env
         self._layout = unwrapped.observation_layout
         config = unwrapped.config
         self._config = config
@@ -108,9 +110,9 @@ class AdaptiveAgent:
             2.0 * config.initial_position_std_m**2,
             math.radians(config.initial_heading_std_deg) ** 2,
         )
-        self.reset()
+        self.start_episode()
 
-    def reset(self, seed: int | None = None) -> None:
+    def start_episode(self) -> None:
         """Forget the previous episode's variances."""
         self._after_decision = self._initial_variances
 
@@ -221,7 +223,7 @@ class AdaptiveAgent:
                 planned[n] = now[n] + fix_future[horizon - 1][n]
         return planned
 
-    def act(self, observation: np.ndarray) -> int:
+    def decide(self, observation: np.ndarray) -> int:
         costs = self.planned_costs(observation)
         best = min(costs, key=lambda n: (costs[n], n))
         state = self._state(observation)
@@ -257,11 +259,3 @@ def _fused(first_std: float, second_std: float) -> float:
     if first_std <= 0.0 or second_std <= 0.0:
         return 0.0
     return 1.0 / math.sqrt(1.0 / first_std**2 + 1.0 / second_std**2)
-
-
-def _make_adaptive(env: gym.Env, **options: Any) -> AdaptiveAgent:
-    return AdaptiveAgent(env, **options)
-
-
-register_agent("paper", PaperAgent, ENV_ID)
-register_agent("adaptive", _make_adaptive, ENV_ID)

@@ -23,14 +23,19 @@ Everything the agents decide on comes from the observation.
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
 import math
+from abc import abstractmethod
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import register_agent
+from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.envs.wall_correction import (
+    HEADING_STD_SCALE_RAD,
+    POSITION_STD_SCALE_M,
+    WallCorrectionEnv,
+)
 
 ENV_ID = "SonarGym/WallCorrection-v0"
 PAPER_SPACING_CM = 3
@@ -38,13 +43,11 @@ PAPER_SPACING_CM = 3
 _TIE_TOLERANCE = 1e-3
 
 
-class _WallCorrectionAgent(ABC):
+class _WallCorrectionAgent(ScriptedAgent[WallCorrectionEnv]):
     """Shared reading of the observation and encoding of the actions."""
 
-    name = "scripted"
-
-    def __init__(self, env: gym.Env) -> None:
-        self._env = env.unwrapped
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        super().__init__(env)
         self._layout = self._env.observation_layout
         config = self._env.config
         self._spacing_cm = (
@@ -52,9 +55,6 @@ class _WallCorrectionAgent(ABC):
             if PAPER_SPACING_CM in config.sample_spacings_cm
             else min(config.sample_spacings_cm)
         )
-
-    def reset(self, seed: int | None = None) -> None:
-        """Start a new episode (the scripted agents keep no randomness)."""
 
     def _map_ahead(self, observation: np.ndarray) -> tuple[float, float, float, float]:
         """``(left continuity, left distance, right continuity, right distance)``, normalised."""
@@ -67,7 +67,7 @@ class _WallCorrectionAgent(ABC):
         return self._env.encode_action(side, spacing_cm=self._spacing_cm, standoff_m=0.0)
 
     @abstractmethod
-    def act(self, observation: np.ndarray) -> Any:
+    def decide(self, observation: np.ndarray) -> Any:
         """The action for this observation."""
 
 
@@ -76,7 +76,7 @@ class PaperAgent(_WallCorrectionAgent):
 
     name = "paper"
 
-    def act(self, observation: np.ndarray) -> Any:
+    def decide(self, observation: np.ndarray) -> Any:
         _, left_distance, _, right_distance = self._map_ahead(observation)
         side = "right" if right_distance < left_distance - _TIE_TOLERANCE else "left"
         return self._action(side)
@@ -98,7 +98,7 @@ class BothWallsAgent(_WallCorrectionAgent):
 
     def __init__(
         self,
-        env: gym.Env,
+        env: gym.Env[Any, Any],
         pause_when_confident: bool = False,
         heading_std_threshold_deg: float = 0.3,
         position_std_threshold_m: float = 0.01,
@@ -109,10 +109,10 @@ class BothWallsAgent(_WallCorrectionAgent):
         self.position_std_threshold_m = position_std_threshold_m
         self._paused_last_leg = False
 
-    def reset(self, seed: int | None = None) -> None:
+    def start_episode(self) -> None:
         self._paused_last_leg = False
 
-    def act(self, observation: np.ndarray) -> Any:
+    def decide(self, observation: np.ndarray) -> Any:
         if self.pause_when_confident and not self._paused_last_leg and self._confident(observation):
             self._paused_last_leg = True
             return self._action("none")
@@ -120,15 +120,9 @@ class BothWallsAgent(_WallCorrectionAgent):
         return self._action("both")
 
     def _confident(self, observation: np.ndarray) -> bool:
-        from sonar_gym.envs.wall_correction import HEADING_STD_SCALE_RAD, POSITION_STD_SCALE_M
-
         across_std_m = float(observation[self._layout["position_std"]][1]) * POSITION_STD_SCALE_M
         heading_std_rad = float(observation[self._layout["heading_std"]][0]) * HEADING_STD_SCALE_RAD
         return (
             heading_std_rad < self.heading_std_threshold_rad
             and across_std_m < self.position_std_threshold_m
         )
-
-
-register_agent("paper", PaperAgent, ENV_ID)
-register_agent("both_walls", BothWallsAgent, ENV_ID)
