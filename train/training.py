@@ -13,7 +13,9 @@ A run directory ``DIR`` (default ``runs/<env-short>-<algo>-<seed>``) receives:
 
 Hyper-parameters come from ``train/configs/<env-short>.<algo>.toml`` (for example
 ``beacon_scan.ppo.toml``), falling back to ``default.<algo>.toml``; ``--config`` names another
-file. A config file holds::
+file. The RL Zoo reads the same values from ``train/hyperparams/<algo>.yml``, generated from
+these files by ``python -m sonar_gym.train.zoo`` (see :mod:`sonar_gym.train.zoo`). A config
+file holds::
 
     policy = "MlpPolicy"        # stable-baselines3 policy name
     n_envs = 4                  # vector-env workers
@@ -38,7 +40,7 @@ import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -69,7 +71,16 @@ ALLOWED_ACTION_SPACES: dict[str, tuple[type[gym.Space], ...]] = {
     "sac": (gym.spaces.Box,),
     "dqn": (gym.spaces.Discrete,),
 }
-ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu", "gelu", "silu")
+ACTIVATION_CLASSES = {
+    "tanh": "Tanh",
+    "relu": "ReLU",
+    "elu": "ELU",
+    "leaky_relu": "LeakyReLU",
+    "gelu": "GELU",
+    "silu": "SiLU",
+}
+"""Activation names a config may give -> the ``torch.nn`` class each stands for."""
+ACTIVATIONS = tuple(ACTIVATION_CLASSES)
 CONFIG_KEYS = (
     "policy",
     "n_envs",
@@ -156,16 +167,19 @@ class TrainingConfig:
         if "activation_fn" in kwargs:
             import torch
 
-            classes = {
-                "tanh": torch.nn.Tanh,
-                "relu": torch.nn.ReLU,
-                "elu": torch.nn.ELU,
-                "leaky_relu": torch.nn.LeakyReLU,
-                "gelu": torch.nn.GELU,
-                "silu": torch.nn.SiLU,
-            }
-            kwargs["activation_fn"] = classes[kwargs["activation_fn"]]
+            kwargs["activation_fn"] = getattr(torch.nn, ACTIVATION_CLASSES[kwargs["activation_fn"]])
         return kwargs
+
+    def vec_normalize_kwargs(self, algo: str) -> dict[str, Any]:
+        """Keyword arguments of ``VecNormalize`` for ``algo``: observations always normalised,
+        rewards for PPO only, unless the config's ``[vec_normalize]`` says otherwise; returns
+        discounted with the algorithm's ``gamma``."""
+        return {
+            "norm_obs": True,
+            "norm_reward": algo == "ppo",
+            "gamma": float(self.hyperparameters.get("gamma", 0.99)),
+            **self.vec_normalize,
+        }
 
 
 def config_path_for(env_id: str, algo: str) -> Path:
@@ -438,8 +452,6 @@ def _build_model(request: _Request, seed: int, subproc: bool) -> tuple[Any, VecN
     run_dir = request.run_dir
     algorithm = algorithm_class(request.algo)
     if request.resume is None:
-        hyperparameters = dict(request.config.hyperparameters)
-        settings = {"norm_obs": True, "norm_reward": request.algo == "ppo"}
         venv = VecNormalize(
             make_training_vec_env(
                 request.env_id,
@@ -449,8 +461,7 @@ def _build_model(request: _Request, seed: int, subproc: bool) -> tuple[Any, VecN
                 run_dir / "monitor",
                 subproc,
             ),
-            gamma=float(hyperparameters.get("gamma", 0.99)),
-            **{**settings, **request.config.vec_normalize},
+            **request.config.vec_normalize_kwargs(request.algo),
         )
         model = algorithm(
             request.config.policy,
@@ -459,7 +470,7 @@ def _build_model(request: _Request, seed: int, subproc: bool) -> tuple[Any, VecN
             verbose=0,
             tensorboard_log=str(run_dir / "tb"),
             policy_kwargs=request.config.sb3_policy_kwargs(),
-            **hyperparameters,
+            **request.config.hyperparameters,
         )
         return model, venv
     base = make_training_vec_env(
@@ -607,8 +618,10 @@ def train(
     )
     run_file = run_dir / RUN_FILE
     run_file.write_text(json.dumps(run_info, indent=2) + "\n")
+    curve_timesteps, curve_rewards = read_episode_log(run_dir / EPISODES_FILE)
     curve_path = plot_learning_curve(
-        *read_episode_log(run_dir / EPISODES_FILE),
+        curve_timesteps.tolist(),
+        curve_rewards.tolist(),
         run_dir / LEARNING_CURVE_FILE,
         title=f"{request.algo.upper()} on {request.env_id}",
     )
@@ -652,8 +665,10 @@ def evaluate_trained_policy(
     venv.seed(seed)
     try:
         model = algorithm_class(detect_algorithm(model_path)).load(model_path, device="cpu")
-        mean_reward, std_reward = evaluate_policy(
-            model, venv, n_eval_episodes=episodes, deterministic=True
+        # without return_episode_rewards, evaluate_policy returns (mean, std) as floats
+        mean_reward, std_reward = cast(
+            tuple[float, float],
+            evaluate_policy(model, venv, n_eval_episodes=episodes, deterministic=True),
         )
     finally:
         venv.close()
