@@ -107,7 +107,7 @@ def vecnormalize_path_for(model_path: Path) -> Path:
     return model_path.with_name(f"{match['prefix']}_vecnormalize_{match['steps']}_steps.pkl")
 
 
-def _load_normalizer(path: Path, observation_space: gym.Space) -> Any:
+def _load_normalizer(path: Path, observation_space: gym.Space[Any]) -> Any:
     with path.open("rb") as handle:
         normalizer = pickle.load(handle)
     normalizer.training = False
@@ -125,7 +125,7 @@ class PolicyAgent:
     """A trained policy: normalises the observation, then acts deterministically."""
 
     def __init__(
-        self, name: str, model: Any, action_space: gym.Space, normalizer: Any | None = None
+        self, name: str, model: Any, action_space: gym.Space[Any], normalizer: Any | None = None
     ) -> None:
         self.name = name
         self.model = model

@@ -176,7 +176,7 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
             record.done = True
         return self._checked_observation(), reward, outcome.terminated, truncated, info
 
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
+    def render(self) -> np.ndarray | None:
         if self.render_mode == "rgb_array":
             return self._render_frame()
         return None

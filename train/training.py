@@ -65,7 +65,7 @@ from sonar_gym.train.report import plot_learning_curve
 
 CONFIG_DIR = Path(__file__).with_name("configs")
 TRAINABLE_ALGORITHMS = ("ppo", "sac", "dqn", "a2c")
-ALLOWED_ACTION_SPACES: dict[str, tuple[type[gym.Space], ...]] = {
+ALLOWED_ACTION_SPACES: dict[str, tuple[type[gym.Space[Any]], ...]] = {
     "ppo": (gym.spaces.Box, gym.spaces.Discrete, gym.spaces.MultiDiscrete, gym.spaces.MultiBinary),
     "a2c": (gym.spaces.Box, gym.spaces.Discrete, gym.spaces.MultiDiscrete, gym.spaces.MultiBinary),
     "sac": (gym.spaces.Box,),
@@ -116,7 +116,7 @@ def default_run_dir(env_id: str, algo: str, seed: int) -> Path:
     return Path("runs") / f"{env_short_name(env_id)}-{algo}-{seed}"
 
 
-def check_algorithm_allowed(algo: str, action_space: gym.Space) -> None:
+def check_algorithm_allowed(algo: str, action_space: gym.Space[Any]) -> None:
     """Refuse an algorithm the action space does not allow.
 
     Raises:
