@@ -23,8 +23,8 @@ Everything the agents decide on comes from the observation.
 
 from __future__ import annotations
 
-import math
 from abc import abstractmethod
+import math
 from typing import Any
 
 import gymnasium as gym

@@ -62,7 +62,7 @@ def test_beacon_scan_paper_agent_localizes_as_often_without_reset() -> None:
     without_reset = _play(env, make_agent("paper", env), seeds, reset_agent=False)
     localized = [status == "ok" for _, status in with_reset]
     assert [status == "ok" for _, status in without_reset] == localized
-    assert sum(localized) >= 15  # the paper's procedure localizes in most rooms
+    assert sum(localized) > len(seeds) // 2  # the paper's procedure localizes in most rooms
 
 
 class _CountingAgent(ScriptedAgent[Any]):
