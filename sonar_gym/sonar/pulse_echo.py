@@ -25,6 +25,7 @@ listening), is a dropout: its range is NaN (never a stand-in maximum range) and 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
@@ -116,7 +117,7 @@ def first_echoes(
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     in_frame = np.array(((c, s), (-s, c))) @ candidates.directions.T  # (2, candidates)
     cosines = beam_directions @ in_frame  # (pings, candidates)
-    rows = np.arange(n)
+    rows = _ping_rows(n)
     if beam.side_lobes:
         amplitude = beam.two_way_from_cos(cosines) * candidates.amplitudes
         detected = amplitude >= threshold
@@ -126,13 +127,24 @@ def first_echoes(
     else:
         detected = cosines >= beam.main_lobe_cos_limits(threshold / candidates.amplitudes)
         first = detected.argmax(axis=1)
-        hit = detected[rows, first]
-        first_amplitude = beam.two_way_from_cos(cosines[rows, first]) * candidates.amplitudes[first]
+        flat = rows * len(candidates) + first  # index of (ping, first) in the flat arrays
+        hit = detected.ravel().take(flat)
+        first_amplitude = beam.two_way_from_cos(
+            cosines.ravel().take(flat)
+        ) * candidates.amplitudes.take(first)
     return FirstEchoes(
         detected=hit,
-        path_lengths=candidates.path_lengths[first],
+        path_lengths=candidates.path_lengths.take(first),
         amplitudes=np.where(hit, first_amplitude, 0.0),
     )
+
+
+@functools.lru_cache(maxsize=64)
+def _ping_rows(n: int) -> np.ndarray:
+    """``arange(n)``, read-only (cached: pans repeat their ping counts)."""
+    rows = np.arange(n)
+    rows.flags.writeable = False
+    return rows
 
 
 def measured_times(
@@ -143,14 +155,16 @@ def measured_times(
     rng: np.random.Generator | None,
 ) -> FloatArray:
     """Round-trip times the counter reads for the first echoes, seconds (steps 1-4 above)."""
+    # Out-of-place arithmetic: on pan-sized arrays numpy's in-place operators cost more.
     tof = echoes.path_lengths * (2.0 / true_speed_mps)
     if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
         safe = np.where(echoes.detected, echoes.amplitudes, transducer.detection_threshold)
-        tof += (transducer.echo_rise_time_s * transducer.detection_threshold) / safe
+        tof = tof + (transducer.echo_rise_time_s * transducer.detection_threshold) / safe
     if readout.range_noise and transducer.range_noise_std_m > 0.0:
         if rng is None:
             raise ValueError("argument 'rng' is needed: the readout adds range noise")
-        tof += rng.standard_normal(len(tof)) * (2.0 * transducer.range_noise_std_m / true_speed_mps)
+        jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps
+        tof = tof + rng.standard_normal(len(tof)) * jitter_s
     if readout.quantisation and transducer.timer_period_s > 0.0:
         period = transducer.timer_period_s
         tof = np.floor(tof * (1.0 / period)) * period
