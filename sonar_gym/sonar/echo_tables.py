@@ -155,10 +155,11 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     occlusion[circles, 1, 1] = -1.0
     occlusion[circles, 1, 2] = geometry.circles[:, 1]
 
-    twin = np.arange(n_wedges)
-    for i in range(n_wedges):
-        same = np.flatnonzero(np.hypot(*(vertices[:n_wedges] - vertices[i]).T) < LOOP_TOLERANCE_M)
-        twin[i] = same[same != i][0] if len(same) > 1 else i
+    wedge_points = vertices[:n_wedges]
+    same_point = _pairwise_distances(wedge_points, wedge_points) < LOOP_TOLERANCE_M
+    np.fill_diagonal(same_point, False)
+    # The first other vertex at the same point, else the vertex itself.
+    twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), np.arange(n_wedges))
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     return EchoTables(
         position_map=position_map,
@@ -202,11 +203,8 @@ def convex_loops(
     both sides.
     """
     n = len(starts)
-    successor = np.full(n, -1)
-    for i in range(n):
-        matches = np.flatnonzero(np.hypot(*(starts - ends[i]).T) < LOOP_TOLERANCE_M)
-        if len(matches) == 1:
-            successor[i] = matches[0]
+    joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
+    successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
     points = np.concatenate([starts, ends, centres])
     solid_side = np.zeros(n)
     encloses = np.zeros(n, dtype=bool)
@@ -231,3 +229,11 @@ def convex_loops(
         solid_side[loop] = -interior_left if enclosure else interior_left
         encloses[loop] = enclosure
     return solid_side, encloses
+
+
+def _pairwise_distances(from_points: FloatArray, to_points: FloatArray) -> FloatArray:
+    """``[i, j]``: the distance from ``from_points[i]`` to ``to_points[j]`` (metres)."""
+    return np.hypot(
+        to_points[None, :, 0] - from_points[:, None, 0],
+        to_points[None, :, 1] - from_points[:, None, 1],
+    )

@@ -189,6 +189,11 @@ def echo_readings(
 
 _Sonar = TypeVar("_Sonar", bound="PulseEchoSonar")
 
+_LAST_CANDIDATES: dict[
+    str, tuple[StaticGeometry, Transducer, tuple[float | str, ...], EchoCandidates]
+] = {}
+"""The last sensor position's echo candidates (see :meth:`PulseEchoSonar.candidates`)."""
+
 
 @dataclass(frozen=True)
 class PulseEchoSonar:
@@ -234,7 +239,41 @@ class PulseEchoSonar:
     def candidates(
         self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
     ) -> EchoCandidates:
-        """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``."""
+        """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``.
+
+        They depend on where the sensor is, not where it points, so successive pans from one
+        pose (sector pans, a pan after a calibration) reuse the last position's candidates: the
+        memory holds one entry, matched on the very geometry and transducer objects, the
+        sensor and robot positions, the robot radius, the temperature and the edge law. The
+        arrays are read-only.
+        """
+        geometry, temperature_c = world.geometry, world.temperature_c
+        key = (
+            float(sensor_xy[0]),
+            float(sensor_xy[1]),
+            robot_pose.x,
+            robot_pose.y,
+            world.scenario.robot.radius,
+            temperature_c,
+            self.edge_law,
+        )
+        last = _LAST_CANDIDATES.get("entry")
+        if (
+            last is not None
+            and last[0] is geometry
+            and last[1] is self.transducer
+            and last[2] == key
+        ):
+            return last[3]
+        candidates = self._search_candidates(world, robot_pose, sensor_xy)
+        for array in (candidates.directions, candidates.path_lengths, candidates.amplitudes):
+            array.flags.writeable = False
+        _LAST_CANDIDATES["entry"] = (geometry, self.transducer, key, candidates)
+        return candidates
+
+    def _search_candidates(
+        self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
+    ) -> EchoCandidates:
         speed = speed_of_sound_mps(world.temperature_c)
         transducer = self.transducer
         return echo_candidates(
