@@ -159,7 +159,9 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     same_point = _pairwise_distances(wedge_points, wedge_points) < LOOP_TOLERANCE_M
     np.fill_diagonal(same_point, False)
     # The first other vertex at the same point, else the vertex itself.
-    twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), np.arange(n_wedges))
+    twin = np.arange(n_wedges)
+    if n_wedges:  # (argmax refuses an empty axis)
+        twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     return EchoTables(
         position_map=position_map,
@@ -204,7 +206,9 @@ def convex_loops(
     """
     n = len(starts)
     joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
-    successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
+    successor = np.full(n, -1)
+    if len(starts):  # (argmax refuses an empty axis)
+        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
     points = np.concatenate([starts, ends, centres])
     solid_side = np.zeros(n)
     encloses = np.zeros(n, dtype=bool)
