@@ -29,7 +29,8 @@ class ScanMemory:
         n_slots = round(2.0 * math.pi / resolution_rad)
         if n_slots < 4 or abs(n_slots * resolution_rad - 2.0 * math.pi) > 1e-9:
             raise ValueError(
-                f"argument 'resolution_rad' must divide a full turn into >= 4 slots; got {resolution_rad!r}"
+                "argument 'resolution_rad' must divide a full turn into >= 4 slots; "
+                f"got {resolution_rad!r}"
             )
         self.resolution_rad = 2.0 * math.pi / n_slots
         self.n_slots = n_slots
@@ -45,7 +46,7 @@ class ScanMemory:
     @property
     def slot_angles(self) -> FloatArray:
         """Angle of every slot in {R}, radians, ascending from -pi."""
-        return -math.pi + self.resolution_rad * np.arange(self.n_slots)
+        return -math.pi + self.resolution_rad * np.arange(self.n_slots, dtype=np.float64)
 
     @property
     def coverage(self) -> float:
@@ -72,35 +73,73 @@ class ScanMemory:
     def as_scans(self, speed_of_sound_mps: float) -> list[Scan]:
         """The stored pings as pans of uniform spacing that RCD extraction can walk.
 
-        A fully covered grid at one increment is one pan from -pi, so that RCDs wrap around
-        +-180 deg. Otherwise the pings are walked in angular order starting after the widest
-        unscanned gap, with angles unwrapped (they may exceed pi), and split into blocks of
-        consecutive pings taken at one increment; a gap or a change of increment ends a block,
-        as it would end an RCD.
+        Each pan handed out is a *chain*: pings taken at one increment ``g`` on consecutive
+        points ``s, s + g, s + 2 g, ...`` of the grid, so its angles are strictly ascending
+        and equally spaced whatever pans were mixed: pans of other increments, or of the same
+        increment on another offset (odd and even degrees), interleave with a chain without
+        breaking it. A lattice ``g`` that divides the grid and is scanned all the way round is
+        one full-turn pan from its lowest slot, so that RCDs wrap around +-180 deg (a full pan
+        at 1 deg comes back as the pan from -pi). Other chains keep their angles unwrapped
+        (they may exceed pi) and are listed in angular order, starting after the widest
+        unscanned gap; an unscanned slot on the lattice ends a chain, as it would end an RCD.
         """
         ranges = self.ranges(speed_of_sound_mps)
         scanned = np.flatnonzero(self.scanned)
         if len(scanned) == 0:
             return []
-        increments = self.slot_increment[scanned]
-        if np.all(increments == increments[0]) and len(scanned) * increments[0] == self.n_slots:
-            return [Scan(self.slot_angles[scanned], ranges[scanned], self.amplitudes[scanned], 0.0)]
-
+        chains = self._chains()
         gaps = np.diff(np.append(scanned, scanned[0] + self.n_slots))
-        order = np.roll(scanned, -((int(np.argmax(gaps)) + 1) % len(scanned)))
-        unwrapped = order + self.n_slots * np.cumsum(np.diff(order, prepend=order[0]) < 0)
-        step = np.diff(unwrapped)
-        increment = self.slot_increment[order]
-        same_block = (step == increment[:-1]) & (increment[:-1] == increment[1:])
-        breaks = np.flatnonzero(~same_block) + 1
+        walk_start = int(scanned[(int(np.argmax(gaps)) + 1) % len(scanned)])
+        chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % self.n_slots)
         scans = []
-        for block in np.split(np.arange(len(order)), breaks):
-            slots = order[block]
-            angles = -math.pi + self.resolution_rad * unwrapped[block]
+        for chain in chains:
+            head = int(chain[0])
+            if head < walk_start and len(chain) * self.slot_increment[head] < self.n_slots:
+                head += self.n_slots  # the walk reaches it after crossing +-180 deg
+            unwrapped = head + self.slot_increment[chain[0]] * np.arange(len(chain))
+            angles = -math.pi + self.resolution_rad * unwrapped
             scans.append(
-                Scan(angles.astype(np.float64), ranges[slots], self.amplitudes[slots], 0.0)
+                Scan(angles.astype(np.float64), ranges[chain], self.amplitudes[chain], 0.0)
             )
         return scans
+
+    def _chains(self) -> list[np.ndarray]:
+        """Scanned slots grouped into chains ``s, s + g, ...`` (``g``: their pans' increment).
+
+        A slot links to ``s + g`` when that slot was scanned at the same increment; across
+        +-180 deg only when ``g`` divides the grid (else the lattice does not close on
+        itself). Every slot has at most one predecessor (``s - g``), so the links form paths
+        and, for a lattice scanned all the way round, rings; a ring starts at its lowest slot.
+        """
+        n = self.n_slots
+        slots = np.arange(n)
+        increment = np.maximum(self.slot_increment, 1)
+        after = slots + increment
+        successor = after % n
+        linked = (
+            self.scanned
+            & self.scanned[successor]
+            & (self.slot_increment[successor] == self.slot_increment)
+            & ((after < n) | (n % increment == 0))
+        )
+        has_predecessor = np.zeros(n, dtype=bool)
+        has_predecessor[successor[linked]] = True
+        visited = np.zeros(n, dtype=bool)
+        chains = []
+        heads = np.flatnonzero(self.scanned & ~has_predecessor)
+        rings = np.flatnonzero(self.scanned & has_predecessor)  # candidates; most are visited
+        for head in (*heads.tolist(), *rings.tolist()):
+            if visited[head]:
+                continue
+            chain = [head]
+            visited[head] = True
+            slot = head
+            while linked[slot] and not visited[successor[slot]]:
+                slot = int(successor[slot])
+                visited[slot] = True
+                chain.append(slot)
+            chains.append(np.array(chain, dtype=np.int64))
+        return chains
 
     def _slots(self, angles_rad: FloatArray) -> np.ndarray:
         position = (wrap_angles(angles_rad) + math.pi) / self.resolution_rad

@@ -281,6 +281,10 @@ class PistonBeam:
     _main_lobe_rising: FloatArray = field(repr=False)
     _reaches_back: bool = field(repr=False)
     side_lobe_leakage: float = 0.0
+    _falls: FloatArray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_falls", -self._slopes)  # the drop per cell, >= 0 on the lobe
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
@@ -319,10 +323,12 @@ class PistonBeam:
 
     def two_way_from_cos(self, cos_off_axis: FloatArray) -> FloatArray:
         """The pattern at off-axis angles given by their cosines (any shape, values in [-1, 1])."""
+        # Out-of-place arithmetic throughout: on arrays this small numpy's in-place operators
+        # cost several times more than the operation.
         scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
         index = scaled.astype(np.intp)
         fraction = scaled - index
-        values = self._values[index] + fraction * self._slopes[index]
+        values = self._values.take(index) + fraction * self._slopes.take(index)
         if self._reaches_back:  # the pattern jumps to 0 at 90 deg
             return np.where(cos_off_axis > 0.0, values, 0.0)
         return values
@@ -343,9 +349,10 @@ class PistonBeam:
         """
         rising = self._main_lobe_rising
         reachable = np.minimum(levels, 1.0)
-        cell = len(rising) - 1 - np.searchsorted(rising, reachable, side="left")
-        upper = self._values[cell]
-        s_limit = (cell + (upper - reachable) / -self._slopes[cell]) * (1.0 / _TABLE_STEPS_PER_UNIT)
+        cell = (len(rising) - 1) - rising.searchsorted(reachable, side="left")
+        s_limit = (cell + (self._values.take(cell) - reachable) / self._falls.take(cell)) * (
+            1.0 / _TABLE_STEPS_PER_UNIT
+        )
         return np.where(levels > 1.0, 2.0, np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE))
 
 

@@ -44,8 +44,14 @@ class EchoTables:
             ``(3 S + C, 3)`` it is the matrix ``N`` such that ``N @ (rel_x, rel_y, 1)`` gives,
             for every segment, ``rel x d``, then for every segment ``(a - p) x d``, then
             ``(a - p) x rel``, then for every circle ``(c - p) . rel``.
+        position_and_occlusion_map: both maps stacked, so that one product with
+            ``(px, py, 1)`` evaluates them together.
+        n_position_rows: the number of rows of ``position_map``.
         n_segments, n_circles, n_vertices, n_wedges: the counts ``S, C, V, W``.
         radius, radius_sq: ``(C,)`` cylinder radii and their squares.
+        radius_padded: ``(S+C+V,)`` the radius of every candidate (0 but for cylinders).
+        circles_pass, edges_pass: all-True ``(C,)`` and ``(V - W,)``: the candidates that no
+            per-kind test (along the segment, facing, T-junction) can drop.
         solid_side: ``(S,)`` +1 when the solid lies left of the segment, -1 right, 0 for open
             chains (see :func:`convex_loops`).
         encloses: ``(S,)`` whether the segment belongs to an enclosure (the room).
@@ -56,12 +62,17 @@ class EchoTables:
 
     position_map: FloatArray
     occlusion_map: FloatArray
+    position_and_occlusion_map: FloatArray
+    n_position_rows: int
     n_segments: int
     n_circles: int
     n_vertices: int
     n_wedges: int
     radius: FloatArray
     radius_sq: FloatArray
+    radius_padded: FloatArray
+    circles_pass: np.ndarray
+    edges_pass: np.ndarray
     solid_side: FloatArray
     encloses: np.ndarray
     twin: np.ndarray
@@ -144,20 +155,30 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     occlusion[circles, 1, 1] = -1.0
     occlusion[circles, 1, 2] = geometry.circles[:, 1]
 
+    wedge_points = vertices[:n_wedges]
+    same_point = _pairwise_distances(wedge_points, wedge_points) < LOOP_TOLERANCE_M
+    np.fill_diagonal(same_point, False)
+    # The first other vertex at the same point, else the vertex itself.
     twin = np.arange(n_wedges)
-    for i in range(n_wedges):
-        same = np.flatnonzero(np.hypot(*(vertices[:n_wedges] - vertices[i]).T) < LOOP_TOLERANCE_M)
-        twin[i] = same[same != i][0] if len(same) > 1 else i
+    if n_wedges:  # (argmax refuses an empty axis)
+        twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
+        position_and_occlusion_map=np.concatenate([position_map, occlusion.reshape(-1, 3)]),
+        n_position_rows=len(position_map),
         n_segments=n_segments,
         n_circles=n_circles,
         n_vertices=n_vertices,
         n_wedges=n_wedges,
         radius=geometry.circles[:, 2].copy(),
         radius_sq=geometry.circles[:, 2] ** 2,
+        radius_padded=np.concatenate(
+            [np.zeros(n_segments), geometry.circles[:, 2], np.zeros(n_vertices)]
+        ),
+        circles_pass=np.ones(n_circles, dtype=bool),
+        edges_pass=np.ones(n_vertices - n_wedges, dtype=bool),
         solid_side=solid_side,
         encloses=encloses,
         twin=twin,
@@ -184,11 +205,10 @@ def convex_loops(
     both sides.
     """
     n = len(starts)
+    joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
     successor = np.full(n, -1)
-    for i in range(n):
-        matches = np.flatnonzero(np.hypot(*(starts - ends[i]).T) < LOOP_TOLERANCE_M)
-        if len(matches) == 1:
-            successor[i] = matches[0]
+    if len(starts):  # (argmax refuses an empty axis)
+        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
     points = np.concatenate([starts, ends, centres])
     solid_side = np.zeros(n)
     encloses = np.zeros(n, dtype=bool)
@@ -213,3 +233,11 @@ def convex_loops(
         solid_side[loop] = -interior_left if enclosure else interior_left
         encloses[loop] = enclosure
     return solid_side, encloses
+
+
+def _pairwise_distances(from_points: FloatArray, to_points: FloatArray) -> FloatArray:
+    """``[i, j]``: the distance from ``from_points[i]`` to ``to_points[j]`` (metres)."""
+    return np.hypot(
+        to_points[None, :, 0] - from_points[:, None, 0],
+        to_points[None, :, 1] - from_points[:, None, 1],
+    )

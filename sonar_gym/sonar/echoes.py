@@ -210,46 +210,57 @@ def echo_candidates(
     n_candidates = n_specular + tables.n_vertices
     wedge_end = n_specular + n_wedges
 
-    mapped = tables.position_map @ np.array((px, py, 1.0))
+    mapped = tables.position_and_occlusion_map @ np.array((px, py, 1.0))
+    occlusion_matrix = mapped[tables.n_position_rows :].reshape(-1, 3)
     rel = mapped[: 3 * n_candidates].reshape(n_candidates, 3)  # (rel_x, rel_y, 1) per candidate
     along = mapped[3 * n_candidates : 3 * n_candidates + n_segments]
     signed_distance = mapped[3 * n_candidates + n_segments : 3 * n_candidates + 2 * n_segments]
-    wedge_tests = mapped[3 * n_candidates + 2 * n_segments :]
+    wedge_tests = mapped[3 * n_candidates + 2 * n_segments : tables.n_position_rows]
     concave = (wedge_tests[:n_wedges] > 0.0) & (wedge_tests[n_wedges:] > 0.0)
 
     # Ranges: planes and vertices are |rel|; a cylinder is its centre distance minus its radius.
-    ranges = np.hypot(rel[:, 0], rel[:, 1])
-    centre_distance = ranges[n_segments:n_specular].copy()
-    ranges[n_segments:n_specular] -= tables.radius
+    # (Whole-array arithmetic with per-table padded constants rather than in-place updates of
+    # slices: on arrays this small, numpy's in-place operators cost more than the operation.)
+    distance = np.hypot(rel[:, 0], rel[:, 1])
+    centre_distance = distance[n_segments:n_specular]
+    ranges = distance - tables.radius_padded
     rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
         :, None
     ]
 
     safe = np.maximum(ranges, 1e-9)
-    amplitudes = 0.5 / safe  # planes and corners
+    inverse_square_law = 0.5 / safe  # planes and corners
     cylinder_ranges = safe[n_segments:n_specular]
-    amplitudes[n_segments:n_specular] *= np.sqrt(tables.radius / (cylinder_ranges + tables.radius))
     edges = edge_echo_amplitude(safe[n_specular:], wavenumber, edge_law)
-    amplitudes[n_specular:wedge_end] = np.where(
-        concave, amplitudes[n_specular:wedge_end], edges[:n_wedges]
+    amplitudes = np.concatenate(
+        (
+            inverse_square_law[:n_segments],
+            inverse_square_law[n_segments:n_specular]
+            * np.sqrt(tables.radius / (cylinder_ranges + tables.radius)),
+            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[:n_wedges]),
+            edges[n_wedges:],
+        )
     )
-    amplitudes[wedge_end:] = edges[n_wedges:]
     if absorption_db_per_m > 0.0:
         # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-        amplitudes *= np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+        amplitudes = amplitudes * np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
     if receiver_gain is not None:
-        amplitudes *= receiver_gain.gain(safe)
+        amplitudes = amplitudes * receiver_gain.gain(safe)
 
-    valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold)
     facing = tables.solid_side * signed_distance <= 0.0  # not on a segment's solid side
-    valid[:n_segments] &= (along > 0.0) & (along < 1.0) & facing
     # A T-junction yields one echo: from its concave side if it has one, else from its first vertex.
-    twin_concave = concave[tables.twin]
-    valid[n_specular:wedge_end] &= ~np.where(
-        twin_concave == concave, tables.twin_comes_first, twin_concave
+    twin_concave = concave.take(tables.twin)
+    kind_tests = np.concatenate(
+        (
+            (along > 0.0) & (along < 1.0) & facing,
+            tables.circles_pass,
+            ~np.where(twin_concave == concave, tables.twin_comes_first, twin_concave),
+            tables.edges_pass,
+        )
     )
+    valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold) & kind_tests
 
-    keep = np.flatnonzero(valid)
+    keep = valid.nonzero()[0]
     if footprint_center is not None and footprint_radius_m > 0.0:
         fx, fy = float(footprint_center[0]), float(footprint_center[1])
         if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
@@ -258,12 +269,15 @@ def echo_candidates(
             )
             keep = keep[outside]
     occluders = facing & ~tables.encloses
-    keep = keep[_unoccluded(tables, px, py, rel[keep], ranges[keep], centre_distance, occluders)]
-    keep = keep[np.argsort(ranges[keep], kind="stable")]
+    kept_rel = rel.take(keep, axis=0)
+    keep = keep[
+        _unoccluded(tables, occlusion_matrix, kept_rel, ranges[keep], centre_distance, occluders)
+    ]
+    keep = keep[ranges[keep].argsort(kind="stable")]
     path_lengths = ranges[keep]
     return EchoCandidates(
         position=np.array([px, py]),
-        directions=rel[keep, :2] / path_lengths[:, None],
+        directions=rel.take(keep, axis=0)[:, :2] / path_lengths[:, None],
         path_lengths=path_lengths,
         amplitudes=amplitudes[keep],
         _primitive_indices=keep,
@@ -274,8 +288,7 @@ def echo_candidates(
 
 def _unoccluded(
     tables: EchoTables,
-    px: float,
-    py: float,
+    matrix: FloatArray,
     rel: FloatArray,
     ranges: FloatArray,
     centre_distance: FloatArray,
@@ -292,30 +305,34 @@ def _unoccluded(
     never inside a circle; the reflecting cylinder itself has ``u* > 1``.)
 
     Args:
+        matrix: ``(3 S + C, 3)``, the occlusion map of ``tables`` at the sensor position
+            (:class:`~sonar_gym.sonar.echo_tables.EchoTables`).
         rel: ``(K, 3)`` rows ``(rel_x, rel_y, 1)``.
         ranges: ``(K,)`` path lengths ``|rel|``.
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
         occluders: ``(S,)`` which segments may occlude.
     """
     n_segments = tables.n_segments
-    blocked = np.zeros(len(rel), dtype=bool)
     if len(rel) == 0:
-        return blocked
-    matrix = (tables.occlusion_map @ np.array((px, py, 1.0))).reshape(-1, 3)
-    matrix[:n_segments] *= occluders[:, None]
+        return np.zeros(0, dtype=bool)
     products = matrix @ rel.T  # (3 S + C, K)
+    blocked = np.zeros(len(rel), dtype=bool)
     if n_segments:
+        # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
+        crossing_denominator = products[:n_segments] * occluders[:, None]
         with np.errstate(divide="ignore", invalid="ignore"):
             uv = (
                 products[n_segments : 3 * n_segments].reshape(2, n_segments, len(rel))
-                / products[:n_segments]
+                / crossing_denominator
             )
         inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
-        blocked |= (inside[0] & inside[1]).any(axis=0)
+        blocked = np.logical_or.reduce(inside[0] & inside[1], axis=0)
     if tables.n_circles:
         dots = products[3 * n_segments :]
         nearest = dots / (ranges * ranges)
         on_path = np.abs(nearest - _UV_CENTRE[0, 0]) <= _UV_HALF_WIDTH[0, 0]
         gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
-        blocked |= (on_path & (gap_sq < tables.radius_sq[:, None])).any(axis=0)
+        blocked = blocked | np.logical_or.reduce(
+            on_path & (gap_sq < tables.radius_sq[:, None]), axis=0
+        )
     return ~blocked

@@ -25,6 +25,7 @@ listening), is a dropout: its range is NaN (never a stand-in maximum range) and 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any, Protocol, TypeVar
@@ -116,7 +117,7 @@ def first_echoes(
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     in_frame = np.array(((c, s), (-s, c))) @ candidates.directions.T  # (2, candidates)
     cosines = beam_directions @ in_frame  # (pings, candidates)
-    rows = np.arange(n)
+    rows = _ping_rows(n)
     if beam.side_lobes:
         amplitude = beam.two_way_from_cos(cosines) * candidates.amplitudes
         detected = amplitude >= threshold
@@ -126,13 +127,24 @@ def first_echoes(
     else:
         detected = cosines >= beam.main_lobe_cos_limits(threshold / candidates.amplitudes)
         first = detected.argmax(axis=1)
-        hit = detected[rows, first]
-        first_amplitude = beam.two_way_from_cos(cosines[rows, first]) * candidates.amplitudes[first]
+        flat = rows * len(candidates) + first  # index of (ping, first) in the flat arrays
+        hit = detected.ravel().take(flat)
+        first_amplitude = beam.two_way_from_cos(
+            cosines.ravel().take(flat)
+        ) * candidates.amplitudes.take(first)
     return FirstEchoes(
         detected=hit,
-        path_lengths=candidates.path_lengths[first],
+        path_lengths=candidates.path_lengths.take(first),
         amplitudes=np.where(hit, first_amplitude, 0.0),
     )
+
+
+@functools.lru_cache(maxsize=64)
+def _ping_rows(n: int) -> np.ndarray:
+    """``arange(n)``, read-only (cached: pans repeat their ping counts)."""
+    rows = np.arange(n)
+    rows.flags.writeable = False
+    return rows
 
 
 def measured_times(
@@ -143,14 +155,16 @@ def measured_times(
     rng: np.random.Generator | None,
 ) -> FloatArray:
     """Round-trip times the counter reads for the first echoes, seconds (steps 1-4 above)."""
+    # Out-of-place arithmetic: on pan-sized arrays numpy's in-place operators cost more.
     tof = echoes.path_lengths * (2.0 / true_speed_mps)
     if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
         safe = np.where(echoes.detected, echoes.amplitudes, transducer.detection_threshold)
-        tof += (transducer.echo_rise_time_s * transducer.detection_threshold) / safe
+        tof = tof + (transducer.echo_rise_time_s * transducer.detection_threshold) / safe
     if readout.range_noise and transducer.range_noise_std_m > 0.0:
         if rng is None:
             raise ValueError("argument 'rng' is needed: the readout adds range noise")
-        tof += rng.standard_normal(len(tof)) * (2.0 * transducer.range_noise_std_m / true_speed_mps)
+        jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps
+        tof = tof + rng.standard_normal(len(tof)) * jitter_s
     if readout.quantisation and transducer.timer_period_s > 0.0:
         period = transducer.timer_period_s
         tof = np.floor(tof * (1.0 / period)) * period
@@ -174,6 +188,11 @@ def echo_readings(
 
 
 _Sonar = TypeVar("_Sonar", bound="PulseEchoSonar")
+
+_LAST_CANDIDATES: dict[
+    str, tuple[StaticGeometry, Transducer, tuple[float | str, ...], EchoCandidates]
+] = {}
+"""The last sensor position's echo candidates (see :meth:`PulseEchoSonar.candidates`)."""
 
 
 @dataclass(frozen=True)
@@ -220,7 +239,41 @@ class PulseEchoSonar:
     def candidates(
         self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
     ) -> EchoCandidates:
-        """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``."""
+        """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``.
+
+        They depend on where the sensor is, not where it points, so successive pans from one
+        pose (sector pans, a pan after a calibration) reuse the last position's candidates: the
+        memory holds one entry, matched on the very geometry and transducer objects, the
+        sensor and robot positions, the robot radius, the temperature and the edge law. The
+        arrays are read-only.
+        """
+        geometry, temperature_c = world.geometry, world.temperature_c
+        key = (
+            float(sensor_xy[0]),
+            float(sensor_xy[1]),
+            robot_pose.x,
+            robot_pose.y,
+            world.scenario.robot.radius,
+            temperature_c,
+            self.edge_law,
+        )
+        last = _LAST_CANDIDATES.get("entry")
+        if (
+            last is not None
+            and last[0] is geometry
+            and last[1] is self.transducer
+            and last[2] == key
+        ):
+            return last[3]
+        candidates = self._search_candidates(world, robot_pose, sensor_xy)
+        for array in (candidates.directions, candidates.path_lengths, candidates.amplitudes):
+            array.flags.writeable = False
+        _LAST_CANDIDATES["entry"] = (geometry, self.transducer, key, candidates)
+        return candidates
+
+    def _search_candidates(
+        self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
+    ) -> EchoCandidates:
         speed = speed_of_sound_mps(world.temperature_c)
         transducer = self.transducer
         return echo_candidates(
