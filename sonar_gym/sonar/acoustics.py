@@ -268,10 +268,10 @@ class PistonBeam:
     edge of a detection window by at most 0.004 deg (under 0.001 deg for echoes less than 40 dB
     above the threshold, such as the beacons). The one exception is the table cell holding the
     leakage onset (near 11.7 deg for the Polaroid 6500), where the pattern has a kink (the larger
-    of the lobe and the leakage floor): there the interpolation is within 1 % of the pattern. ``s = 1`` (90 deg) is a sample; behind the
-    transducer the pattern is 0. Without side lobes the pattern falls monotonically from the
-    axis (over the main lobe, and with leakage over the whole front half-space), so it can be
-    inverted exactly (:meth:`main_lobe_cos_limits`).
+    of the lobe and the leakage floor): there the interpolation is within 1 % of the pattern.
+    ``s = 1`` (90 deg) is a sample; behind the transducer the pattern is 0. Without side lobes
+    the pattern falls monotonically from the axis (over the main lobe, and with leakage over
+    the whole front half-space), so it can be inverted exactly (:meth:`main_lobe_cos_limits`).
 
     Build it with :meth:`for_ka` (cached per ``k a``, side lobes and leakage).
     """
