@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from tests.cli_fakes import BOX_ID, DISCRETE_ID
+from tests.cli_fakes import BOX_ID, DISCRETE_ID, MAX_EPISODE_STEPS
 from sonar_gym.train import cli
 
 torch.set_num_threads(1)  # the trainings here use tiny networks: more threads only contend
@@ -277,23 +277,69 @@ def install_fake_bench_sonar(monkeypatch, rows=None) -> None:
     monkeypatch.setitem(sys.modules, "sonar_gym.train.bench_sonar", fake)
 
 
-def test_benchmark_reports_steps_per_second_and_phase_shares(tmp_path, capsys, monkeypatch):
+def test_benchmark_reports_random_and_ppo_rates_against_cartpole(tmp_path, capsys, monkeypatch):
     install_fake_bench_sonar(monkeypatch, rows=[{"name": "pan", "pans_per_s": 10.0}])
     path = tmp_path / "b.json"
     code, out, err = run_cli(
-        capsys, "benchmark", "--env", DISCRETE_ID, BOX_ID, "--steps", "200", "--json", str(path)
+        capsys, "benchmark", "--env", DISCRETE_ID, BOX_ID, "--seconds", "0.2", "--json", str(path)
     )
     assert code == 0, err
-    assert "env steps per second" in out and DISCRETE_ID in out and "sensing" in out
+    assert "env steps per second" in out and DISCRETE_ID in out and "CartPole-v1" in out
     data = json.loads(path.read_text())
-    assert data["meta"]["steps"] == 200
+    assert data["meta"]["seconds"] == 0.2 and data["meta"]["ppo"]["n_steps"] == 512
+    assert data["meta"]["ppo"]["torch_threads"] == 1
+    reference = data["reference"]
+    assert reference["env_id"] == "CartPole-v1"
+    before, after = reference["before"], reference["after"]
+    assert before["timesteps"] >= 1 and after["timesteps"] >= 1
+    assert reference["ppo_steps_per_s"] == pytest.approx(
+        (before["steps_per_s"] + after["steps_per_s"]) / 2
+    )
+    assert reference["drift_after_over_before"] == pytest.approx(
+        after["steps_per_s"] / before["steps_per_s"]
+    )
     assert [entry["env_id"] for entry in data["envs"]] == [DISCRETE_ID, BOX_ID]
     for entry in data["envs"]:
-        assert entry["steps"] == 200 and entry["env_steps_per_s"] > 0
-        assert entry["agent"] == "coin"  # no "paper" agent here: the first registered one
-        assert set(entry["phase_shares"]) == {"sensing", "localization", "other"}
-        assert sum(entry["phase_shares"].values()) == pytest.approx(1.0)
+        random, ppo = entry["random"], entry["ppo"]
+        assert random["steps"] >= 1 and random["episodes"] >= 1
+        assert random["steps_per_s"] == pytest.approx(random["steps"] / random["seconds"])
+        assert ppo["steps_per_s"] == pytest.approx(ppo["timesteps"] / ppo["seconds"])
+        assert entry["ppo_over_cartpole"] == pytest.approx(
+            ppo["steps_per_s"] / reference["ppo_steps_per_s"]
+        )
+        assert set(random["phase_shares"]) == {"sensing", "localization", "env other"}
+        assert set(ppo["phase_shares"]) == {"sensing", "localization", "env other", "learner"}
+        assert sum(ppo["phase_shares"].values()) == pytest.approx(1.0)
+        assert 0.0 < sum(random["phase_shares"].values()) <= 1.0 + 1e-9
     assert data["pan"] == [{"name": "pan", "pans_per_s": 10.0}] and data["notes"] == []
+
+
+def test_benchmark_random_run_starts_a_new_episode_whenever_one_ends():
+    from sonar_gym.train.benchmark import random_rate
+
+    rate = random_rate(DISCRETE_ID, seconds=0.3)
+    # CliFake episodes last at most MAX_EPISODE_STEPS steps, so many episodes fit in the budget
+    assert rate.steps > MAX_EPISODE_STEPS
+    assert rate.episodes >= rate.steps / MAX_EPISODE_STEPS
+    assert rate.env_seconds <= rate.seconds
+
+
+def test_benchmark_phase_shares_split_the_wall_time():
+    from sonar_gym.train.benchmark import phase_shares
+
+    shares = phase_shares(10.0, 6.0, {"sensing": 3.0, "localization": 1.0}, outside="learner")
+    assert shares == pytest.approx(
+        {"sensing": 0.3, "localization": 0.1, "env other": 0.2, "learner": 0.4}
+    )
+    assert phase_shares(0.0, 0.0, {}) == {}
+
+
+@pytest.mark.parametrize("seconds", ["0", "-1", "inf", "soon"])
+def test_benchmark_rejects_a_budget_that_is_not_a_positive_number(seconds, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["benchmark", "--seconds", seconds])
+    assert exit_info.value.code == 2
+    assert "--seconds" in capsys.readouterr().err
 
 
 def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys, monkeypatch):
@@ -303,8 +349,8 @@ def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys
         "benchmark",
         "--env",
         DISCRETE_ID,
-        "--steps",
-        "10",
+        "--seconds",
+        "0.1",
         "--json",
         str(tmp_path / "b.json"),
     )
@@ -320,8 +366,8 @@ def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, c
         "benchmark",
         "--env",
         DISCRETE_ID,
-        "--steps",
-        "10",
+        "--seconds",
+        "0.1",
         "--json",
         str(tmp_path / "b.json"),
     )
@@ -469,16 +515,17 @@ def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
     assert all(len(r["episodes"]) == 2 for r in data["results"])
 
 
-def test_benchmark_beacon_scan_with_the_paper_agent(tmp_path, capsys):
+def test_benchmark_beacon_scan_end_to_end(tmp_path, capsys):
     path = tmp_path / "b.json"
     code, out, err = run_cli(
-        capsys, "benchmark", "--env", BEACON_SCAN, "--steps", "30", "--json", str(path)
+        capsys, "benchmark", "--env", BEACON_SCAN, "--seconds", "0.5", "--json", str(path)
     )
     assert code == 0, err
     assert BEACON_SCAN in out
     data = json.loads(path.read_text())
     assert data["failures"] == {}
     (entry,) = data["envs"]
-    assert entry["agent"] == "paper" and entry["steps"] == 30 and entry["env_steps_per_s"] > 0
+    assert entry["random"]["steps"] >= 1 and entry["ppo"]["timesteps"] >= 1
+    assert entry["ppo"]["phase_seconds"]["sensing"] > 0
     assert data["pan"] and all(row["pans_per_s"] > 0 for row in data["pan"])  # bench_sonar's
     assert "sonar pan throughput" in out

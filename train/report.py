@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from sonar_gym.train.benchmark import EnvThroughput
+from sonar_gym.train.benchmark import BenchmarkReport
 from sonar_gym.train.evaluation import AgentResult, AgentSummary
 
 MISSING = "–"
@@ -292,26 +292,33 @@ def pan_table(rows: Sequence[Mapping[str, Any]]) -> Table:
     return table
 
 
-def throughput_table(results: Sequence[EnvThroughput]) -> Table:
-    """Steps per second per env: env time only, whole loop, and the time share per phase."""
-    table = Table(title="env steps per second", title_justify="left", header_style="bold")
+def _shares_text(shares: Mapping[str, float]) -> str:
+    return " · ".join(f"{phase} {100 * share:.0f}%" for phase, share in shares.items()) or MISSING
+
+
+def speed_table(report: BenchmarkReport) -> Table:
+    """Per env: random-action steps/s, PPO env-steps/s and its ratio to PPO on CartPole-v1 in
+    the same run, and the share of wall time per phase of both runs."""
+    reference = report.reference_steps_per_s
+    table = Table(
+        title=f"env steps per second (PPO on CartPole-v1: {reference:.0f} steps/s, "
+        f"after/before {report.reference_drift:.2f})",
+        title_justify="left",
+        header_style="bold",
+    )
     table.add_column("env", no_wrap=True)
-    table.add_column("agent")
-    for column in ("steps", "episodes", "env steps/s", "loop steps/s", "ms/step (env)"):
+    for column in ("random steps/s", "episodes", "PPO steps/s", "PPO vs CartPole"):
         table.add_column(column, justify="right")
-    table.add_column("env time share per phase")
-    for result in results:
-        shares = " · ".join(
-            f"{phase} {100 * share:.0f}%" for phase, share in result.phase_shares.items()
-        )
+    table.add_column("random: time share")
+    table.add_column("PPO: time share")
+    for speed in report.envs:
         table.add_row(
-            result.env_id,
-            result.agent,
-            str(result.steps),
-            str(result.episodes),
-            f"{result.env_steps_per_s:.1f}",
-            f"{result.loop_steps_per_s:.1f}",
-            f"{1e3 * result.env_seconds / result.steps:.2f}",
-            shares or MISSING,
+            speed.env_id,
+            f"{speed.random.steps_per_s:.1f}",
+            str(speed.random.episodes),
+            f"{speed.ppo.steps_per_s:.1f}",
+            f"{speed.ppo_over_reference:.3f}",
+            _shares_text(speed.random.phase_shares),
+            _shares_text(speed.ppo.phase_shares),
         )
     return table
