@@ -234,27 +234,30 @@ class _TopDownCanvas:
 
         px = self.px
         size = max(4.0, self.width / 90.0) * px
+        # (label, marker, face colour, edge colour)
         entries = [
-            (
-                "robot",
-                {
-                    "marker": "o",
-                    "color": COLOURS["robot"],
-                    "markeredgecolor": COLOURS["robot_edge"],
-                },
-            ),
-            ("estimate", {"marker": "o", "color": "none", "markeredgecolor": COLOURS["estimate"]}),
+            ("robot", "o", COLOURS["robot"], COLOURS["robot_edge"]),
+            ("estimate", "o", "none", COLOURS["estimate"]),
         ]
         roles = {cylinder.role for cylinder in scenario.cylinders}
         for role, label in (("small_beacon", "small beacon"), ("large_beacon", "large beacon")):
             if role in roles:
-                entries.append((label, {"marker": "o", "color": COLOURS[role]}))
+                entries.append((label, "o", COLOURS[role], COLOURS[role]))
         if scenario.emitters:
-            entries.append(("emitter", {"marker": "^", "color": COLOURS["emitter"]}))
-        entries.append(("range dots (beam axis)", {"marker": "o", "color": COLOURS["scan"]}))
+            entries.append(("emitter", "^", COLOURS["emitter"], COLOURS["emitter"]))
+        entries.append(("range dots (beam axis)", "o", COLOURS["scan"], COLOURS["scan"]))
         handles = [
-            Line2D([], [], linestyle="none", markersize=size, label=label, **style)
-            for label, style in entries
+            Line2D(
+                [],
+                [],
+                linestyle="none",
+                marker=marker,
+                markersize=size,
+                markerfacecolor=face,
+                markeredgecolor=edge,
+                label=label,
+            )
+            for label, marker, face, edge in entries
         ]
         self.ax.legend(
             handles=handles,
