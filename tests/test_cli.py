@@ -42,8 +42,8 @@ def test_evaluate_defaults_are_the_main_job():
     assert arguments.env is None  # SonarGym/BeaconScan-v0, resolved when run
     assert arguments.agent is None  # every agent of the env
     assert arguments.episodes == 50 and arguments.seed == 0
-    assert arguments.json == Path("results/evaluate.json")
-    assert arguments.plot == Path("results/evaluate.png")
+    # outputs go to a folder named after the arguments, resolved when run
+    assert arguments.out is None and arguments.json is None and arguments.plot is None
     assert arguments.csv is None and arguments.env_arg == []
 
 
@@ -129,15 +129,55 @@ def test_evaluate_prints_a_table_and_writes_json_csv_and_plot(tmp_path, capsys):
     assert (tmp_path / "e.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_evaluate_writes_to_results_by_default(tmp_path, capsys, monkeypatch):
+def test_evaluate_writes_to_a_folder_named_after_its_arguments(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, _ = run_cli(capsys, "evaluate", "--env", DISCRETE_ID, "--episodes", "2")
     assert code == 0
-    assert (tmp_path / "results" / "evaluate.json").is_file()
-    assert (tmp_path / "results" / "evaluate.png").is_file()
-    assert "results/evaluate.json" in out and "results/evaluate.png" in out
-    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    folder = Path("results/evaluate/CliFake-Locate-v0_all-agents_2ep_seed0")
+    assert (tmp_path / folder / "evaluate.json").is_file()
+    assert (tmp_path / folder / "evaluate.png").is_file()
+    assert str(folder / "evaluate.json") in out and str(folder / "evaluate.png") in out
+    data = json.loads((tmp_path / folder / "evaluate.json").read_text())
     assert {"scripted", "coin", "patient", "random"} <= {r["agent"] for r in data["results"]}
+
+
+def test_evaluations_with_other_arguments_do_not_overwrite_each_other(
+    tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    for argv in (
+        ["--env", DISCRETE_ID, "--agent", "scripted"],
+        ["--env", DISCRETE_ID, "--agent", "coin"],
+        ["--env", DISCRETE_ID, "--agent", "coin", "--seed", "4"],
+        ["--env", DISCRETE_ID, "--agent", "coin", "--env-arg", "noise_std_m=0.2"],
+    ):
+        assert run_cli(capsys, "evaluate", "--episodes", "1", *argv)[0] == 0
+    folders = sorted(path.name for path in (tmp_path / "results" / "evaluate").iterdir())
+    assert folders == [
+        "CliFake-Locate-v0_coin_1ep_seed0",
+        "CliFake-Locate-v0_coin_1ep_seed0_noise_std_m=0.2",
+        "CliFake-Locate-v0_coin_1ep_seed4",
+        "CliFake-Locate-v0_scripted_1ep_seed0",
+    ]
+
+
+def test_evaluate_out_names_the_folder(tmp_path, capsys):
+    code, _, _ = run_cli(
+        capsys, "evaluate", "--env", DISCRETE_ID, "--episodes", "1", "--out", str(tmp_path / "x")
+    )
+    assert code == 0
+    assert (tmp_path / "x" / "evaluate.json").is_file() and (
+        tmp_path / "x" / "evaluate.png"
+    ).is_file()
+
+
+def test_benchmark_writes_a_file_named_after_its_arguments(tmp_path, capsys, monkeypatch):
+    install_fake_bench_sonar(monkeypatch, rows=[{"name": "pan", "pans_per_s": 10.0}])
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run_cli(capsys, "benchmark", "--env", DISCRETE_ID, "--seconds", "0.1")
+    assert code == 0
+    path = Path("results/benchmark/CliFake-Locate-v0_0.1s.json")
+    assert (tmp_path / path).is_file() and str(path) in out
 
 
 def test_evaluate_passes_env_args(tmp_path, capsys):
@@ -456,14 +496,15 @@ def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(
     code, out, err = run_cli(capsys, "evaluate", "--episodes", "3")  # all other defaults
     assert code == 0, err
     assert arguments.episodes == 50  # what `make evaluate` runs; 3 here to stay fast
-    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    folder = Path("results/evaluate/BeaconScan-v0_all-agents_3ep_seed0")
+    data = json.loads((tmp_path / folder / "evaluate.json").read_text())
     assert data["meta"]["env_ids"] == [BEACON_SCAN]
     assert [r["agent"] for r in data["results"]] == ["paper", "random", "sector"]
     for result in data["results"]:
         assert [e["seed"] for e in result["episodes"]] == [0, 1, 2]
         assert all(isinstance(e["position_error_m"], float) for e in result["episodes"])
-    assert (tmp_path / "results" / "evaluate.png").is_file()
-    assert "paper" in out and "sector" in out and "results/evaluate.json" in out
+    assert (tmp_path / folder / "evaluate.png").is_file()
+    assert "paper" in out and "sector" in out and str(folder / "evaluate.json") in out
 
 
 def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):

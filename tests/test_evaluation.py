@@ -349,3 +349,21 @@ def test_plot_is_a_png_with_one_row_per_env(tmp_path):
     results = evaluate_agents([DISCRETE_ID, BOX_ID], ["scripted", "patient"], episodes=2, seed=0)
     path = plot_results(results, tmp_path / "plots" / "e.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_output_folder_name_is_made_of_the_arguments() -> None:
+    from sonar_gym.train.evaluation import MAX_FOLDER_NAME, output_folder_name
+
+    assert output_folder_name(["SonarGym/BeaconScan-v0"], None, 50, 0) == (
+        "BeaconScan-v0_all-agents_50ep_seed0"
+    )
+    assert output_folder_name(["all"], ["paper", "random"], 10, 3, {"max_steps": 20}) == (
+        "all_paper+random_10ep_seed3_max_steps=20"
+    )
+    # a saved model by its run directory and file; no path separators reach the name
+    assert output_folder_name(["all"], ["runs/bs-ppo-0/model.zip"], 5, 0) == (
+        "all_bs-ppo-0.model_5ep_seed0"
+    )
+    long = output_folder_name(["all"], ["a" * 300], 5, 0)
+    assert len(long) == MAX_FOLDER_NAME
+    assert long != output_folder_name(["all"], ["a" * 301], 5, 0)  # the hash tells them apart

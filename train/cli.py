@@ -25,9 +25,8 @@ from sonar_gym.train import UsageError
 
 PROGRAM = "sonar-gym"
 DEFAULT_EPISODES = 50
-DEFAULT_EVALUATE_JSON = Path("results/evaluate.json")
-DEFAULT_EVALUATE_PLOT = Path("results/evaluate.png")
-DEFAULT_BENCHMARK_JSON = Path("results/benchmark.json")
+DEFAULT_EVALUATE_ROOT = Path("results/evaluate")
+DEFAULT_BENCHMARK_ROOT = Path("results/benchmark")
 DEFAULT_BENCHMARK_SECONDS = 20.0
 DEFAULT_REPRODUCE_DIR = Path("results/reproduce")
 REPRODUCIBLE_PAPERS = ("beom-cho", "beom-cho-map", "kim", "wu-tsai", "roh", "apcs")
@@ -73,11 +72,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--seed", type=int, default=0, metavar="S", help="episode i uses seed S + i (default 0)"
     )
     evaluate.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help=f"output folder (default {DEFAULT_EVALUATE_ROOT}/<name from the arguments>, e.g. "
+        f"{DEFAULT_EVALUATE_ROOT}/BeaconScan-v0_all-agents_50ep_seed0)",
+    )
+    evaluate.add_argument(
         "--json",
         type=Path,
-        default=DEFAULT_EVALUATE_JSON,
+        default=None,
         metavar="PATH",
-        help=f"summaries and every episode (default {DEFAULT_EVALUATE_JSON})",
+        help="summaries and every episode (default <out>/evaluate.json)",
     )
     evaluate.add_argument(
         "--csv", type=Path, default=None, metavar="PATH", help="one row per episode (default: none)"
@@ -85,9 +92,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--plot",
         type=Path,
-        default=DEFAULT_EVALUATE_PLOT,
+        default=None,
         metavar="PATH",
-        help=f"bar charts per env (default {DEFAULT_EVALUATE_PLOT})",
+        help="bar charts per env (default <out>/evaluate.png)",
     )
     _add_env_arg(evaluate)
     evaluate.set_defaults(handler=_evaluate)
@@ -173,9 +180,10 @@ def build_parser() -> argparse.ArgumentParser:
     benchmark.add_argument(
         "--json",
         type=Path,
-        default=DEFAULT_BENCHMARK_JSON,
+        default=None,
         metavar="PATH",
-        help=f"default {DEFAULT_BENCHMARK_JSON}",
+        help=f"default {DEFAULT_BENCHMARK_ROOT}/<envs>_<seconds>s.json, e.g. "
+        f"{DEFAULT_BENCHMARK_ROOT}/all_20s.json",
     )
     _add_env_arg(benchmark)
     benchmark.set_defaults(handler=_benchmark)
@@ -284,6 +292,15 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         f"on {', '.join(env_ids)}",
         markup=False,
     )
+    out_dir = arguments.out or DEFAULT_EVALUATE_ROOT / evaluation.output_folder_name(
+        arguments.env or [evaluation.DEFAULT_ENV_ID],
+        arguments.agent,
+        arguments.episodes,
+        arguments.seed,
+        env_kwargs,
+    )
+    json_path = arguments.json or out_dir / "evaluate.json"
+    plot_path = arguments.plot or out_dir / "evaluate.png"
     started = time.perf_counter()
     with episode_progress(console, total) as advance:
         results = evaluation.evaluate_agents(
@@ -302,10 +319,10 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         "versions": evaluation.software_versions(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    written = [report.write_json(results, arguments.json, meta)]
+    written = [report.write_json(results, json_path, meta)]
     if arguments.csv is not None:
         written.append(report.write_csv(results, arguments.csv))
-    written.append(report.plot_results(results, arguments.plot))
+    written.append(report.plot_results(results, plot_path))
     console.print(
         f"{total} episodes in {elapsed_s:.1f} s. Wrote " + ", ".join(map(str, written)),
         markup=False,
@@ -383,9 +400,25 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
         "versions": evaluation.software_versions(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    arguments.json.parent.mkdir(parents=True, exist_ok=True)
-    arguments.json.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
-    console.print(f"Benchmark took {elapsed_s:.0f} s. Wrote {arguments.json}", markup=False)
+    json_path = arguments.json or DEFAULT_BENCHMARK_ROOT / benchmark_file_name(
+        arguments.env, arguments.seconds, env_kwargs
+    )
+    json_path.parent.mkdir(parents=True, exist_ok=True)
+    json_path.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
+    console.print(f"Benchmark took {elapsed_s:.0f} s. Wrote {json_path}", markup=False)
+
+
+def benchmark_file_name(
+    env_selection: Sequence[str], seconds: float, env_kwargs: dict[str, object]
+) -> str:
+    """``<envs>_<seconds>s[_<key=value>...].json``, named after the arguments like the
+    evaluation folders (:func:`sonar_gym.train.evaluation.output_folder_name`)."""
+    from sonar_gym.train.evaluation import env_selection_label, name_from_arguments
+
+    return (
+        name_from_arguments([env_selection_label(env_selection), f"{seconds:g}s"], env_kwargs)
+        + ".json"
+    )
 
 
 def reproduce_module_name(name: str) -> str:
