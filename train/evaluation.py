@@ -234,7 +234,10 @@ def resolve_env_ids(selection: str | Sequence[str], namespace: str = ENV_NAMESPA
 
 
 def _looks_like_model(name: str) -> bool:
-    return name.endswith(".zip") or Path(name).exists()
+    try:
+        return name.endswith(".zip") or Path(name).exists()
+    except OSError:  # e.g. a name too long for the file system is no model either
+        return False
 
 
 def resolve_agent_names(
