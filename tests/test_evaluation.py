@@ -367,3 +367,43 @@ def test_output_folder_name_is_made_of_the_arguments() -> None:
     long = output_folder_name(["all"], ["a" * 300], 5, 0)
     assert len(long) == MAX_FOLDER_NAME
     assert long != output_folder_name(["all"], ["a" * 301], 5, 0)  # the hash tells them apart
+
+
+def test_plot_panels_leave_out_the_heading_error_where_no_agent_has_one():
+    from sonar_gym.train.report import evaluation_panels
+
+    with_heading = evaluate_agents(DISCRETE_ID, ["scripted"], episodes=2, seed=0)
+    without = evaluate_agents(
+        DISCRETE_ID, ["scripted"], episodes=2, seed=0, env_kwargs={"report_heading": False}
+    )
+    assert evaluation_panels(with_heading) == [
+        "E_xy [cm]",
+        "E_θ [deg]",
+        "mean sensing time [s]",
+        "episode reward (mean, 95% CI)",
+    ]
+    assert evaluation_panels(without) == [
+        "E_xy [cm]",
+        "mean sensing time [s]",
+        "episode reward (mean, 95% CI)",
+    ]
+
+
+def test_plot_marks_thin_samples_and_draws_the_reward_interval():
+    from sonar_gym.train.report import THIN_SAMPLE, evaluation_figure, sample_note
+
+    assert sample_note(3) == "n=3" and sample_note(THIN_SAMPLE) == "" and sample_note(0) == ""
+    results = evaluate_agents(DISCRETE_ID, ["scripted", "coin"], episodes=4, seed=0)
+    figure = evaluation_figure(results)
+    texts = [text.get_text() for axis in figure.axes for text in axis.texts]
+    successes = [result.summary.successes for result in results]
+    expected = [f"n={n}" for n in successes if 0 < n < THIN_SAMPLE]
+    assert expected and all(texts.count(note) >= 2 for note in expected)  # E_xy and E_θ
+    reward_axis = figure.axes[3]
+    assert reward_axis.get_ylabel() == "episode reward (mean, 95% CI)"
+    # the error bar spans the Student-t interval of the first agent
+    (bars,) = [c for c in reward_axis.containers]
+    segments = bars.lines[2][0].get_segments()
+    low, high = segments[0][0][1], segments[0][1][1]
+    interval = results[0].summary.reward
+    assert low == pytest.approx(interval.low) and high == pytest.approx(interval.high)

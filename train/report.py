@@ -176,19 +176,40 @@ def _use_log_scale_for_wide_ranges(axis: Any, values: Sequence[float]) -> None:
         axis.set_yscale("log")
 
 
-def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
-    """One figure, one row of bar charts per env: E_xy median and p95 [cm], E_theta median and
-    p95 [deg] (log axes when they span more than two decades), mean sensing time [s]; one group
-    per agent, labelled with its success rate. Missing values leave no bar."""
-    import matplotlib
+THIN_SAMPLE = 10
+"""Error statistics from fewer successful episodes than this are marked ``n=...`` in plots."""
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+ERROR_PANELS = (
+    ("E_xy [cm]", 100.0, "position_error_median_m", "position_error_p95_m"),
+    ("E_θ [deg]", 180.0 / math.pi, "heading_error_median_rad", "heading_error_p95_rad"),
+)
+SENSING_PANEL = "mean sensing time [s]"
+REWARD_PANEL = "episode reward (mean, 95% CI)"
+
+
+def evaluation_panels(env_results: Sequence[AgentResult]) -> list[str]:
+    """The panels of one env's row of :func:`plot_results`, left to right: E_xy, E_theta (only
+    when some agent has a heading error: tasks without a heading get no empty panel), mean
+    sensing time, episode reward."""
+    panels = [ERROR_PANELS[0][0]]
+    if any(result.summary.heading_error_median_rad is not None for result in env_results):
+        panels.append(ERROR_PANELS[1][0])
+    return [*panels, SENSING_PANEL, REWARD_PANEL]
+
+
+def sample_note(successes: int) -> str:
+    """``"n=3"`` for error statistics from fewer than :data:`THIN_SAMPLE` episodes, else ``""``."""
+    return f"n={successes}" if 0 < successes < THIN_SAMPLE else ""
+
+
+def evaluation_figure(results: Sequence[AgentResult]) -> Any:
+    """The matplotlib figure of :func:`plot_results` (Agg; the caller closes it)."""
+    from matplotlib.figure import Figure
 
     grouped = group_by_env(results)
-    figure, axes = plt.subplots(
-        len(grouped), 3, figsize=(13, 3.4 * len(grouped)), squeeze=False, layout="constrained"
-    )
+    columns = max(len(evaluation_panels(env_results)) for env_results in grouped.values())
+    figure = Figure(figsize=(4.2 * columns, 3.6 * len(grouped)), layout="constrained")
+    axes = figure.subplots(len(grouped), columns, squeeze=False)
     width = 0.38
     for row, (env_id, env_results) in enumerate(grouped.items()):
         summaries = [result.summary for result in env_results]
@@ -197,34 +218,72 @@ def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
             for result in env_results
         ]
         positions = np.arange(len(names))
-        panels = (
-            ("E_xy [cm]", 100.0, "position_error_median_m", "position_error_p95_m"),
-            ("E_θ [deg]", 180.0 / math.pi, "heading_error_median_rad", "heading_error_p95_rad"),
-        )
-        for column, (label, scale, median_key, p95_key) in enumerate(panels):
+        panels = evaluation_panels(env_results)
+        for column, panel in enumerate(panels):
             axis = axes[row][column]
-            medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
-            p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
-            for offset, values, name in (
-                (-width / 2, medians, "median"),
-                (width / 2, p95s, "95th percentile"),
-            ):
-                bars = axis.bar(positions + offset, values, width, label=name)
+            errors = [entry for entry in ERROR_PANELS if entry[0] == panel]
+            if errors:
+                _, scale, median_key, p95_key = errors[0]
+                medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
+                p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
+                for offset, values, name in (
+                    (-width / 2, medians, "median"),
+                    (width / 2, p95s, "95th percentile"),
+                ):
+                    bars = axis.bar(positions + offset, values, width, label=name)
+                    axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
+                for position, summary, high in zip(positions, summaries, p95s, strict=True):
+                    note = sample_note(summary.successes)
+                    if note and math.isfinite(high):
+                        axis.annotate(
+                            note,
+                            (position, high),
+                            xytext=(0, 10),
+                            textcoords="offset points",
+                            ha="center",
+                            fontsize="x-small",
+                            color="#b22222",
+                        )
+                _use_log_scale_for_wide_ranges(axis, medians + p95s)
+                axis.legend(fontsize="small")
+            elif panel == SENSING_PANEL:
+                times = [_value_or_nan(s.sensing_time_mean_s) for s in summaries]
+                bars = axis.bar(positions, times, 0.6)
                 axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
-            _use_log_scale_for_wide_ranges(axis, medians + p95s)
-            axis.set_ylabel(label)
-            axis.legend(fontsize="small")
-        axis = axes[row][2]
-        bars = axis.bar(positions, [_value_or_nan(s.sensing_time_mean_s) for s in summaries], 0.6)
-        axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
-        axis.set_ylabel("mean sensing time [s]")
-        for column in range(3):
-            axes[row][column].set_xticks(positions, names, rotation=20, ha="right")
-            axes[row][column].set_title(env_id if column == 0 else "", loc="left")
+            else:
+                means = [s.reward.mean for s in summaries]
+                half = [
+                    math.nan if s.reward.half_width is None else s.reward.half_width
+                    for s in summaries
+                ]
+                axis.errorbar(positions, means, yerr=half, fmt="o", capsize=4)
+                axis.axhline(0.0, color="#999999", linewidth=0.8)
+            axis.set_ylabel(panel)
+            axis.set_xticks(positions, names, rotation=20, ha="right")
+            axis.set_title(env_id if column == 0 else "", loc="left")
+            axis.set_xlim(-0.6, len(names) - 0.4)
+        for column in range(len(panels), columns):
+            figure.delaxes(axes[row][column])
+    if any(0 < r.summary.successes < THIN_SAMPLE for r in results):
+        figure.supxlabel(
+            f"n=...: error statistics from fewer than {THIN_SAMPLE} successful episodes",
+            fontsize="small",
+            color="#b22222",
+        )
+    return figure
+
+
+def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
+    """One figure, one row of charts per env (panels: :func:`evaluation_panels`): E_xy median
+    and p95 [cm], E_theta median and p95 [deg] where the task has a heading (log axes when
+    they span more than two decades; ``n=...`` over agents whose statistics rest on fewer than
+    :data:`THIN_SAMPLE` successful episodes), mean sensing time [s], and the mean episode
+    reward with its 95 % Student-t confidence interval. One group per agent, labelled with its
+    success rate. Missing values leave no bar."""
+    figure = evaluation_figure(results)
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(target, dpi=110)
-    plt.close(figure)
     return target
 
 
