@@ -217,6 +217,11 @@ def evaluation_figure(results: Sequence[AgentResult]) -> Any:
             f"{short_agent_label(result.agent)}\n{100 * result.summary.success_rate:.0f}% ok"
             for result in env_results
         ]
+        # error statistics from few episodes say so under their bars
+        thin_names = [
+            f"{name} ({note})" if (note := sample_note(result.summary.successes)) else name
+            for name, result in zip(names, env_results, strict=True)
+        ]
         positions = np.arange(len(names))
         panels = evaluation_panels(env_results)
         for column, panel in enumerate(panels):
@@ -232,18 +237,6 @@ def evaluation_figure(results: Sequence[AgentResult]) -> Any:
                 ):
                     bars = axis.bar(positions + offset, values, width, label=name)
                     axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
-                for position, summary, high in zip(positions, summaries, p95s, strict=True):
-                    note = sample_note(summary.successes)
-                    if note and math.isfinite(high):
-                        axis.annotate(
-                            note,
-                            (position, high),
-                            xytext=(0, 10),
-                            textcoords="offset points",
-                            ha="center",
-                            fontsize="x-small",
-                            color="#b22222",
-                        )
                 _use_log_scale_for_wide_ranges(axis, medians + p95s)
                 axis.legend(fontsize="small")
             elif panel == SENSING_PANEL:
@@ -259,7 +252,8 @@ def evaluation_figure(results: Sequence[AgentResult]) -> Any:
                 axis.errorbar(positions, means, yerr=half, fmt="o", capsize=4)
                 axis.axhline(0.0, color="#999999", linewidth=0.8)
             axis.set_ylabel(panel)
-            axis.set_xticks(positions, names, rotation=20, ha="right")
+            axis.margins(y=0.12)
+            axis.set_xticks(positions, thin_names if errors else names, rotation=20, ha="right")
             axis.set_title(env_id if column == 0 else "", loc="left")
             axis.set_xlim(-0.6, len(names) - 0.4)
         for column in range(len(panels), columns):
