@@ -446,6 +446,42 @@ def test_reproduce_all_runs_what_exists(tmp_path, capsys, monkeypatch):
     assert "not available yet, skipped: beom-cho-map, kim, wu-tsai, roh, apcs" in out
 
 
+def install_talking_reproduction(monkeypatch, name: str) -> None:
+    """A reproduction that prints a finding and a wide table, as the real ones do."""
+    from rich.table import Table
+
+    def run(out_dir, console):
+        table = Table(title="Table IX")
+        table.add_column("column")
+        table.add_row("a table cell")
+        console.print(table)
+        console.print("Finding: within the paper's bound.")
+
+    module_name = f"sonar_gym.train.reproduce.{name}"
+    module = types.ModuleType(module_name)
+    module.__spec__ = importlib.machinery.ModuleSpec(module_name, None)
+    module.run = run
+    monkeypatch.setitem(sys.modules, module_name, module)
+
+
+def test_reproduce_prints_findings_and_files_the_tables_by_default(tmp_path, capsys, monkeypatch):
+    install_talking_reproduction(monkeypatch, "kim")
+    code, out, _ = run_cli(capsys, "reproduce", "kim", "--out", str(tmp_path))
+    assert code == 0
+    assert "Finding: within the paper's bound." in out
+    assert "a table cell" not in out and "1 tables in" in out and "--verbose" in out
+    report = (tmp_path / "kim" / "report.txt").read_text()
+    assert "Table IX" in report and "a table cell" in report
+    assert "Finding: within the paper's bound." in report
+
+
+def test_reproduce_verbose_prints_every_table(tmp_path, capsys, monkeypatch):
+    install_talking_reproduction(monkeypatch, "kim")
+    code, out, _ = run_cli(capsys, "reproduce", "kim", "--verbose", "--out", str(tmp_path))
+    assert code == 0
+    assert "a table cell" in out and "Finding: within the paper's bound." in out
+
+
 def test_reproduce_unknown_or_missing_paper_exits_2_listing_the_papers(capsys, monkeypatch):
     monkeypatch.setattr(cli, "available_reproductions", lambda: ["kim"])
     code, _, err = run_cli(capsys, "reproduce", "smith")

@@ -201,6 +201,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output directory (one subdirectory per paper)",
     )
+    reproduce.add_argument(
+        "--verbose",
+        action="store_true",
+        help="print every table (by default only the findings; the tables go to "
+        "<out>/<paper>/report.txt either way)",
+    )
     reproduce.set_defaults(handler=_reproduce)
     return parser
 
@@ -465,12 +471,27 @@ def _reproduce(arguments: argparse.Namespace, console: Console) -> None:
         raise UsageError(
             f"no reproduction is available yet; the papers are {list(REPRODUCIBLE_PAPERS)}"
         )
+    from sonar_gym.train.report import CompactConsole
+
     for name in dict.fromkeys(requested):
         module = importlib.import_module(reproduce_module_name(name))
         out_dir = arguments.out / name.replace("-", "_")
         out_dir.mkdir(parents=True, exist_ok=True)
         console.rule(f"reproduce {name} -> {out_dir}")
-        module.run(out_dir, console)
+        paper_console = CompactConsole(
+            file=console.file, width=console.width, color_system=console.color_system
+        )
+        if arguments.verbose:
+            module.run(out_dir, console)
+            continue
+        module.run(out_dir, paper_console)
+        report_path = out_dir / "report.txt"
+        report_path.write_text(paper_console.full_text())
+        console.print(
+            f"{paper_console.tables_filed} tables in {report_path} (--verbose prints them)",
+            style="dim",
+            markup=False,
+        )
 
 
 if __name__ == "__main__":

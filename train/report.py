@@ -7,6 +7,7 @@ centimetres and E_theta in degrees, the units the papers print (Beom & Cho eq. (
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from collections.abc import Mapping, Sequence
@@ -15,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rich.console import Console
+from rich.console import Console, RenderableType
 from rich.table import Table
 from rich.text import Text
 
@@ -375,3 +376,32 @@ def speed_table(report: BenchmarkReport) -> Table:
             _shares_text(speed.ppo.phase_shares),
         )
     return table
+
+
+# --------------------------------------------------------------------------------------------
+# reproductions
+
+
+class CompactConsole(Console):
+    """A console that prints everything but tables, and keeps every object, tables included,
+    for :meth:`full_text` (the complete report, for a file).
+
+    The papers' reproductions print wide tables; by default the command line shows their
+    prose (setup, verdicts, one line per finding) and files the tables.
+    """
+
+    def __init__(self, *, full_width: int = 160, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.full = Console(file=io.StringIO(), width=full_width, record=True, color_system=None)
+        self.tables_filed = 0
+
+    def print(self, *objects: RenderableType | Any, **kwargs: Any) -> None:  # type: ignore[override]
+        self.full.print(*objects, **kwargs)
+        if any(isinstance(item, Table) for item in objects):
+            self.tables_filed += 1
+            return
+        super().print(*objects, **kwargs)
+
+    def full_text(self) -> str:
+        """Everything printed so far, tables included, as plain text."""
+        return self.full.export_text()
