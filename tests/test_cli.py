@@ -606,3 +606,50 @@ def test_benchmark_beacon_scan_end_to_end(tmp_path, capsys):
     assert entry["ppo"]["phase_seconds"]["sensing"] > 0
     assert data["pan"] and all(row["pans_per_s"] > 0 for row in data["pan"])  # bench_sonar's
     assert "sonar pan throughput" in out
+
+
+# --------------------------------------------------------------------------------------------
+# the closing hints name a command the user's shell can run
+
+
+def test_hint_uses_the_script_beside_python_when_sonar_gym_is_not_on_path(monkeypatch, tmp_path):
+    bin_dir = tmp_path / "venv" / "bin"
+    bin_dir.mkdir(parents=True)
+    (bin_dir / "sonar-gym").write_text("#!/bin/sh\n")
+    monkeypatch.setattr(sys, "executable", str(bin_dir / "python"))
+    monkeypatch.setattr(cli.shutil, "which", lambda name: None)
+    monkeypatch.chdir(tmp_path)
+    assert cli.runnable_command("sonar-gym evaluate --env X") == (
+        "venv/bin/sonar-gym evaluate --env X"
+    )
+    monkeypatch.chdir(tmp_path / "venv")
+    assert cli.runnable_program() == "bin/sonar-gym"
+
+
+def test_hint_falls_back_to_python_dash_m(monkeypatch, tmp_path):
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "python"))  # no script beside it
+    monkeypatch.setattr(cli.shutil, "which", lambda name: None)
+    assert (
+        cli.runnable_command("sonar-gym evaluate") == f"{tmp_path / 'python'} -m sonar_gym evaluate"
+    )
+
+
+def test_hint_keeps_sonar_gym_when_it_is_on_path(monkeypatch, tmp_path):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "sonar-gym").write_text("#!/bin/sh\n")
+    monkeypatch.setattr(sys, "executable", str(bin_dir / "python"))
+    monkeypatch.setattr(cli.shutil, "which", lambda name: str(bin_dir / name))
+    assert cli.runnable_command("sonar-gym evaluate") == "sonar-gym evaluate"
+    assert cli.runnable_command("other evaluate") == "other evaluate"
+
+
+def test_python_dash_m_sonar_gym_runs_the_command_line():
+    completed = subprocess.run(
+        [sys.executable, "-m", "sonar_gym", "--help"],
+        capture_output=True,
+        text=True,
+        cwd=REPOSITORY,
+        timeout=120,
+    )
+    assert completed.returncode == 0 and "evaluate" in completed.stdout

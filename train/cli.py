@@ -14,6 +14,8 @@ import importlib
 import importlib.util
 import json
 import os
+import shlex
+import shutil
 import sys
 import time
 from collections.abc import Sequence
@@ -234,6 +236,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def runnable_program() -> str:
+    """How the user's shell can call this command line: ``sonar-gym`` when that name on PATH
+    is this installation's script, else the script's path beside the running Python
+    (relative when under the working directory, e.g. ``.venv/bin/sonar-gym``), else
+    ``<python> -m sonar_gym``."""
+    script = Path(sys.executable).with_name(PROGRAM)
+    found = shutil.which(PROGRAM)
+    if found is not None and (not script.exists() or Path(found).resolve() == script.resolve()):
+        return PROGRAM
+    if script.exists():
+        try:
+            return shlex.quote(str(script.relative_to(Path.cwd())))
+        except ValueError:
+            return shlex.quote(str(script))
+    return f"{shlex.quote(sys.executable)} -m sonar_gym"
+
+
+def runnable_command(command: str) -> str:
+    """``command`` (a ``sonar-gym ...`` line) with the program as :func:`runnable_program`."""
+    if command == PROGRAM or command.startswith(PROGRAM + " "):
+        return runnable_program() + command[len(PROGRAM) :]
+    return command
+
+
 def make_console(stderr: bool = False) -> Console:
     """A rich console; 160 columns wide when writing to a file or pipe (unless COLUMNS is set),
     so the tables do not wrap in logs."""
@@ -373,7 +399,12 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
             f"episode reward {result.eval_mean_reward:.3f} ± {result.eval_std_reward:.3f} (std)"
         )
     console.print("Evaluate it against the baselines with:")
-    console.print(f"  {evaluate_command(result)}", highlight=False, markup=False, soft_wrap=True)
+    console.print(
+        f"  {runnable_command(evaluate_command(result))}",
+        highlight=False,
+        markup=False,
+        soft_wrap=True,
+    )
 
 
 def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
