@@ -69,3 +69,20 @@ def test_the_documented_error_message_is_the_real_one(tmp_path: Path) -> None:
     documented = re.search(r"my_lab\.toml: (field 'cylinders\[0\]\.role'.*)", DOC.read_text())
     assert documented is not None
     assert str(error.value) == f"{path}: {documented.group(1)}"
+
+
+def test_output_folder_examples_in_docs_are_what_the_command_line_writes() -> None:
+    """Every example row of docs/outputs.md names the folder its command writes to."""
+    import shlex
+
+    from sonar_gym.train import cli, evaluation
+
+    text = (DOC.parent / "outputs.md").read_text(encoding="utf-8")
+    rows = re.findall(
+        r"^\| `sonar-gym (evaluate[^`]*)`[^|]*\| `results/evaluate/([^`]+)/` \|", text, re.M
+    )
+    assert len(rows) == 4
+    for command, folder in rows:
+        arguments = cli.build_parser().parse_args(shlex.split(command))
+        out_dir = cli.evaluate_output_dir(arguments, evaluation.parse_env_args(arguments.env_arg))
+        assert out_dir.as_posix() == f"results/evaluate/{folder}", command

@@ -324,13 +324,7 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         f"on {', '.join(env_ids)}",
         markup=False,
     )
-    out_dir = arguments.out or DEFAULT_EVALUATE_ROOT / evaluation.output_folder_name(
-        arguments.env or [evaluation.DEFAULT_ENV_ID],
-        arguments.agent,
-        arguments.episodes,
-        arguments.seed,
-        env_kwargs,
-    )
+    out_dir = evaluate_output_dir(arguments, env_kwargs)
     json_path = arguments.json or out_dir / "evaluate.json"
     plot_path = arguments.plot or out_dir / "evaluate.png"
     started = time.perf_counter()
@@ -358,6 +352,22 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
     console.print(
         f"{total} episodes in {elapsed_s:.1f} s. Wrote " + ", ".join(map(str, written)),
         markup=False,
+    )
+
+
+def evaluate_output_dir(arguments: argparse.Namespace, env_kwargs: dict[str, object]) -> Path:
+    """``--out``, else ``results/evaluate/<name>`` with the name made of the arguments
+    (:func:`sonar_gym.train.evaluation.output_folder_name`; docs/outputs.md)."""
+    from sonar_gym.train import evaluation
+
+    if arguments.out is not None:
+        return Path(arguments.out)
+    return DEFAULT_EVALUATE_ROOT / evaluation.output_folder_name(
+        arguments.env or [evaluation.DEFAULT_ENV_ID],
+        arguments.agent,
+        arguments.episodes,
+        arguments.seed,
+        env_kwargs,
     )
 
 
