@@ -322,6 +322,8 @@ def env_argument_names(env_id: str) -> list[str] | None:
             if isinstance(spec.entry_point, str)
             else spec.entry_point
         )
+        if creator is None:
+            return None
         parameters = inspect.signature(creator).parameters.values()
     except (ImportError, AttributeError, TypeError, ValueError):
         return None  # gym.make will report what is wrong with the entry point
