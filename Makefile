@@ -11,8 +11,9 @@ STAMP := $(VENV)/.installed
 
 .PHONY: install evaluate test test-slow lint benchmark reproduce clean
 
-# pip's own progress shows on the long steps (torch, then the package and its dependencies);
-# --progress-bar on keeps the bars when make's output is piped into a log.
+# pip's own progress shows on the long steps (torch, then the dependencies); the editable link
+# is made last and quietly, since its build backend only repeats a notice about editable
+# installs. --progress-bar on keeps the bars when make's output is piped into a log.
 PIP := $(BIN)/python -m pip --disable-pip-version-check
 PIP_PROGRESS ?= --progress-bar on
 
@@ -22,8 +23,10 @@ $(STAMP): pyproject.toml
 	$(PIP) install --quiet --upgrade pip
 	@echo "==> installing $(TORCH_SPEC) (the largest download)"
 	$(PIP) install $(PIP_PROGRESS) "$(TORCH_SPEC)"
-	@echo "==> installing sonar-gym and its dependencies"
-	$(PIP) install $(PIP_PROGRESS) -e ".[dev]"
+	@echo "==> installing sonar-gym's dependencies"
+	$(PIP) install $(PIP_PROGRESS) ".[dev]"
+	@echo "==> linking sonar-gym to this checkout (editable install)"
+	$(PIP) install --quiet --no-deps -e .
 	touch $(STAMP)
 	@echo "==> ready: $(BIN)/sonar-gym (or $(BIN)/python -m sonar_gym)"
 
