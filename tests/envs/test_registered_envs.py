@@ -242,3 +242,24 @@ def test_spec_of_a_configured_env_survives_a_json_round_trip(env_id: str) -> Non
     assert again.unwrapped.config == env.unwrapped.config
     env.close()
     again.close()
+
+
+# tuple-valued arguments come back from JSON as lists
+TUPLE_ARGUMENTS = {
+    "SonarGym/BeaconScan-v0": {"temperature_range_c": (10.0, 30.0), "increments_deg": (1, 5)},
+    "SonarGym/Trilateration-v0": {"fix_counts": (0, 1, 5)},
+}
+
+
+@pytest.mark.parametrize("env_id", sorted(TUPLE_ARGUMENTS))
+def test_spec_with_tuple_arguments_rebuilds_an_env_that_acts_the_same(env_id: str) -> None:
+    env = gym.make(env_id, **TUPLE_ARGUMENTS[env_id])
+    assert env.spec is not None
+    again = gym.make(EnvSpec.from_json(env.spec.to_json()))
+    assert env.action_space == again.action_space
+    assert env.observation_space == again.observation_space
+    first, second = _rollout(env, seed=3, steps=6), _rollout(again, seed=3, steps=6)
+    assert len(first) == len(second)
+    for a, b in zip(first, second, strict=True):
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]
