@@ -480,6 +480,7 @@ def test_reproduce_verbose_prints_every_table(tmp_path, capsys, monkeypatch):
     code, out, _ = run_cli(capsys, "reproduce", "kim", "--verbose", "--out", str(tmp_path))
     assert code == 0
     assert "a table cell" in out and "Finding: within the paper's bound." in out
+    assert "a table cell" in (tmp_path / "kim" / "report.txt").read_text()
 
 
 def test_reproduce_unknown_or_missing_paper_exits_2_listing_the_papers(capsys, monkeypatch):

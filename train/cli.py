@@ -520,19 +520,19 @@ def _reproduce(arguments: argparse.Namespace, console: Console) -> None:
         out_dir.mkdir(parents=True, exist_ok=True)
         console.rule(f"reproduce {name} -> {out_dir}")
         paper_console = CompactConsole(
-            file=console.file, width=console.width, color_system=console.color_system
+            compact=not arguments.verbose,
+            file=console.file,
+            width=console.width,
+            color_system=console.color_system,
         )
-        if arguments.verbose:
-            module.run(out_dir, console)
-            continue
         module.run(out_dir, paper_console)
         report_path = out_dir / "report.txt"
         report_path.write_text(paper_console.full_text())
-        console.print(
-            f"{paper_console.tables_filed} tables in {report_path} (--verbose prints them)",
-            style="dim",
-            markup=False,
-        )
+        if arguments.verbose:
+            line = f"full report: {report_path}"
+        else:
+            line = f"{paper_console.tables_filed} tables in {report_path} (--verbose prints them)"
+        console.print(line, style="dim", markup=False)
 
 
 if __name__ == "__main__":

@@ -383,21 +383,23 @@ def speed_table(report: BenchmarkReport) -> Table:
 
 
 class CompactConsole(Console):
-    """A console that prints everything but tables, and keeps every object, tables included,
-    for :meth:`full_text` (the complete report, for a file).
+    """A console that prints everything but tables (all of it with ``compact=False``), and
+    keeps every object, tables included, for :meth:`full_text` (the complete report, for a
+    file).
 
     The papers' reproductions print wide tables; by default the command line shows their
     prose (setup, verdicts, one line per finding) and files the tables.
     """
 
-    def __init__(self, *, full_width: int = 160, **kwargs: Any) -> None:
+    def __init__(self, *, compact: bool = True, full_width: int = 160, **kwargs: Any) -> None:
         super().__init__(**kwargs)
+        self.compact = compact
         self.full = Console(file=io.StringIO(), width=full_width, record=True, color_system=None)
         self.tables_filed = 0
 
     def print(self, *objects: RenderableType | Any, **kwargs: Any) -> None:  # type: ignore[override]
         self.full.print(*objects, **kwargs)
-        if any(isinstance(item, Table) for item in objects):
+        if self.compact and any(isinstance(item, Table) for item in objects):
             self.tables_filed += 1
             return
         super().print(*objects, **kwargs)
