@@ -12,8 +12,9 @@ STAMP := $(VENV)/.installed
 .PHONY: install evaluate test test-slow lint benchmark reproduce clean
 
 # pip's own progress shows on the long steps (torch, then the dependencies); the editable link
-# is made last and quietly, since its build backend only repeats a notice about editable
-# installs. --progress-bar on keeps the bars when make's output is piped into a log.
+# is made last and quietly, with setuptools' "Editable installation." notice (information,
+# not a problem) filtered out; every other warning still shows. --progress-bar on keeps the
+# bars when make's output is piped into a log.
 PIP := $(BIN)/python -m pip --disable-pip-version-check
 PIP_PROGRESS ?= --progress-bar on
 
@@ -26,7 +27,7 @@ $(STAMP): pyproject.toml
 	@echo "==> installing sonar-gym's dependencies"
 	$(PIP) install $(PIP_PROGRESS) ".[dev]"
 	@echo "==> linking sonar-gym to this checkout (editable install)"
-	$(PIP) install --quiet --no-deps -e .
+	PYTHONWARNINGS="ignore:Editable installation" $(PIP) install --quiet --no-deps -e .
 	touch $(STAMP)
 	@echo "==> ready: $(BIN)/sonar-gym (or $(BIN)/python -m sonar_gym)"
 
