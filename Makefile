@@ -11,12 +11,25 @@ STAMP := $(VENV)/.installed
 
 .PHONY: install evaluate test test-slow lint benchmark reproduce clean
 
+# pip's own progress shows on the long steps (torch, then the dependencies); the editable link
+# is made last and quietly, with setuptools' "Editable installation." notice (information,
+# not a problem) filtered out; every other warning still shows. --progress-bar on keeps the
+# bars when make's output is piped into a log.
+PIP := $(BIN)/python -m pip --disable-pip-version-check
+PIP_PROGRESS ?= --progress-bar on
+
 $(STAMP): pyproject.toml
+	@echo "==> creating $(VENV)"
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet "$(TORCH_SPEC)"
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	$(PIP) install --quiet --upgrade pip
+	@echo "==> installing $(TORCH_SPEC) (the largest download)"
+	$(PIP) install $(PIP_PROGRESS) "$(TORCH_SPEC)"
+	@echo "==> installing sonar-gym's dependencies"
+	$(PIP) install $(PIP_PROGRESS) ".[dev]"
+	@echo "==> linking sonar-gym to this checkout (editable install)"
+	PYTHONWARNINGS="ignore:Editable installation" $(PIP) install --quiet --no-deps -e .
 	touch $(STAMP)
+	@echo "==> ready: $(BIN)/sonar-gym (or $(BIN)/python -m sonar_gym)"
 
 install: $(STAMP)
 

@@ -4,11 +4,15 @@
 cylinders (small beacon red, large beacon blue, clutter grey; objects missing from the map
 drawn dashed), emitters (green triangles), the robot at its true pose (green disc with a
 heading line), the estimated pose (magenta outline with heading line) and scan points (orange
-dots), all in the world frame {W}, with a 0.5 m grid as in Beom & Cho Fig. 7.
+dots), all in the world frame {W}, with a 0.5 m grid as in Beom & Cho Fig. 7. A legend (lower
+right) names the robot, the estimate, the beacons or emitters present and the range dots
+(ranges placed along the beam axis: the paper's way of drawing RCD arcs, Beom & Cho Fig. 8),
+and a scale bar (lower left) gives 1 m (0.5 m in small images).
 
 Image size: ``W = width_px`` and ``H = height_px`` if given, else
-``H = max(16, round(width_px * (span_y + 2 m) / (span_x + 2 m)))`` with ``span`` the extent of
-``scenario.bounds`` and ``m`` = :data:`MARGIN_M`. The world is drawn at equal scale in x and
+``H = max(16, 2 * round(width_px * (span_y + 2 m) / (span_x + 2 m) / 2))`` (even, so video
+encoders take the frames as they are) with ``span`` the extent of ``scenario.bounds`` and
+``m`` = :data:`MARGIN_M`. The world is drawn at equal scale in x and
 y, centred; :func:`world_to_pixel` gives the pixel of a world point.
 
 matplotlib (Agg) is imported inside the functions. The static part of a picture is drawn once
@@ -41,6 +45,9 @@ MARGIN_M = 0.25
 
 GRID_SPACING_M = 0.5
 """Spacing of the background grid, metres (Beom & Cho Fig. 7)."""
+
+SCALE_BAR_M = 1.0
+"""Length of the scale bar, metres (shorter when 1 m would take over a quarter of the width)."""
 
 _DPI = 64  # a power of two, so width_px / dpi * dpi is exact
 _CACHE_SIZE = 4
@@ -75,7 +82,7 @@ def image_size(
         return _positive_int(height_px, "height_px"), width
     (x0, y0), (x1, y1) = scenario.bounds
     span_x, span_y = x1 - x0 + 2 * MARGIN_M, y1 - y0 + 2 * MARGIN_M
-    return max(16, round(width * span_y / span_x)), width
+    return max(16, 2 * round(width * span_y / span_x / 2.0)), width
 
 
 def _view(scenario: Scenario, height: int, width: int) -> tuple[float, float, float]:
@@ -120,6 +127,8 @@ class _TopDownCanvas:
         self.px = 72.0 / _DPI  # one pixel in points
         self.figure.patch.set_facecolor(COLOURS["outside"] if scenario.room else COLOURS["floor"])
         self._draw_static(scenario)
+        self._draw_legend(scenario)
+        self._draw_scale_bar(scale)
         self.canvas.draw()
         self.background = self.canvas.copy_from_bbox(self.figure.bbox)
         self._make_animated(scenario.robot.radius)
@@ -219,6 +228,76 @@ class _TopDownCanvas:
                     color=COLOURS["emitter"],
                     zorder=5,
                 )
+
+    def _draw_legend(self, scenario: Scenario) -> None:
+        from matplotlib.lines import Line2D
+
+        px = self.px
+        size = max(4.0, self.width / 90.0) * px
+        # (label, marker, face colour, edge colour)
+        entries = [
+            ("robot", "o", COLOURS["robot"], COLOURS["robot_edge"]),
+            ("estimate", "o", "none", COLOURS["estimate"]),
+        ]
+        roles = {cylinder.role for cylinder in scenario.cylinders}
+        for role, label in (("small_beacon", "small beacon"), ("large_beacon", "large beacon")):
+            if role in roles:
+                entries.append((label, "o", COLOURS[role], COLOURS[role]))
+        if scenario.emitters:
+            entries.append(("emitter", "^", COLOURS["emitter"], COLOURS["emitter"]))
+        entries.append(("range dots (beam axis)", "o", COLOURS["scan"], COLOURS["scan"]))
+        handles = [
+            Line2D(
+                [],
+                [],
+                linestyle="none",
+                marker=marker,
+                markersize=size,
+                markerfacecolor=face,
+                markeredgecolor=edge,
+                label=label,
+            )
+            for label, marker, face, edge in entries
+        ]
+        self.ax.legend(
+            handles=handles,
+            loc="lower right",
+            fontsize=max(5.0, self.width / 85.0) * px,
+            framealpha=0.8,
+            borderpad=0.3,
+            handletextpad=0.3,
+            labelspacing=0.25,
+        )
+
+    def _draw_scale_bar(self, pixels_per_metre: float) -> None:
+        length_m = SCALE_BAR_M if pixels_per_metre * SCALE_BAR_M <= self.width / 4 else 0.5
+        if pixels_per_metre * length_m > self.width / 4:
+            length_m = 0.1
+        self.scale_bar_m = length_m
+        x_left, x_right = self.ax.get_xlim()
+        y_bottom, y_top = self.ax.get_ylim()
+        # in the margin band below the scene, clear of the bottom wall
+        x0, y0 = x_left + 0.02 * (x_right - x_left), y_bottom + 0.45 * MARGIN_M
+        self.scale_bar_start = (x0, y0)
+        self.ax.plot(
+            [x0, x0 + length_m],
+            [y0, y0],
+            color=COLOURS["text"],
+            linewidth=max(2.0, self.width / 200.0) * self.px,
+            solid_capstyle="butt",
+            zorder=11,
+        )
+        self.ax.annotate(
+            f"{length_m:g} m",
+            (x0 + length_m, y0),
+            xytext=(3, 0),
+            textcoords="offset points",
+            ha="left",
+            va="center",
+            fontsize=max(5.0, self.width / 85.0) * self.px,
+            color=COLOURS["text"],
+            zorder=11,
+        )
 
     def _make_animated(self, robot_radius: float) -> None:
         from matplotlib.lines import Line2D

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import torch
 
-from tests.cli_fakes import BOX_ID, DISCRETE_ID
+from tests.cli_fakes import BOX_ID, DISCRETE_ID, MAX_EPISODE_STEPS
 from sonar_gym.train import cli
 
 torch.set_num_threads(1)  # the trainings here use tiny networks: more threads only contend
@@ -42,8 +42,8 @@ def test_evaluate_defaults_are_the_main_job():
     assert arguments.env is None  # SonarGym/BeaconScan-v0, resolved when run
     assert arguments.agent is None  # every agent of the env
     assert arguments.episodes == 50 and arguments.seed == 0
-    assert arguments.json == Path("results/evaluate.json")
-    assert arguments.plot == Path("results/evaluate.png")
+    # outputs go to a folder named after the arguments, resolved when run
+    assert arguments.out is None and arguments.json is None and arguments.plot is None
     assert arguments.csv is None and arguments.env_arg == []
 
 
@@ -129,15 +129,55 @@ def test_evaluate_prints_a_table_and_writes_json_csv_and_plot(tmp_path, capsys):
     assert (tmp_path / "e.png").read_bytes()[:4] == b"\x89PNG"
 
 
-def test_evaluate_writes_to_results_by_default(tmp_path, capsys, monkeypatch):
+def test_evaluate_writes_to_a_folder_named_after_its_arguments(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, _ = run_cli(capsys, "evaluate", "--env", DISCRETE_ID, "--episodes", "2")
     assert code == 0
-    assert (tmp_path / "results" / "evaluate.json").is_file()
-    assert (tmp_path / "results" / "evaluate.png").is_file()
-    assert "results/evaluate.json" in out and "results/evaluate.png" in out
-    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    folder = Path("results/evaluate/CliFake-Locate-v0_all-agents_2ep_seed0")
+    assert (tmp_path / folder / "evaluate.json").is_file()
+    assert (tmp_path / folder / "evaluate.png").is_file()
+    assert str(folder / "evaluate.json") in out and str(folder / "evaluate.png") in out
+    data = json.loads((tmp_path / folder / "evaluate.json").read_text())
     assert {"scripted", "coin", "patient", "random"} <= {r["agent"] for r in data["results"]}
+
+
+def test_evaluations_with_other_arguments_do_not_overwrite_each_other(
+    tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    for argv in (
+        ["--env", DISCRETE_ID, "--agent", "scripted"],
+        ["--env", DISCRETE_ID, "--agent", "coin"],
+        ["--env", DISCRETE_ID, "--agent", "coin", "--seed", "4"],
+        ["--env", DISCRETE_ID, "--agent", "coin", "--env-arg", "noise_std_m=0.2"],
+    ):
+        assert run_cli(capsys, "evaluate", "--episodes", "1", *argv)[0] == 0
+    folders = sorted(path.name for path in (tmp_path / "results" / "evaluate").iterdir())
+    assert folders == [
+        "CliFake-Locate-v0_coin_1ep_seed0",
+        "CliFake-Locate-v0_coin_1ep_seed0_noise_std_m=0.2",
+        "CliFake-Locate-v0_coin_1ep_seed4",
+        "CliFake-Locate-v0_scripted_1ep_seed0",
+    ]
+
+
+def test_evaluate_out_names_the_folder(tmp_path, capsys):
+    code, _, _ = run_cli(
+        capsys, "evaluate", "--env", DISCRETE_ID, "--episodes", "1", "--out", str(tmp_path / "x")
+    )
+    assert code == 0
+    assert (tmp_path / "x" / "evaluate.json").is_file() and (
+        tmp_path / "x" / "evaluate.png"
+    ).is_file()
+
+
+def test_benchmark_writes_a_file_named_after_its_arguments(tmp_path, capsys, monkeypatch):
+    install_fake_bench_sonar(monkeypatch, rows=[{"name": "pan", "pans_per_s": 10.0}])
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run_cli(capsys, "benchmark", "--env", DISCRETE_ID, "--seconds", "0.1")
+    assert code == 0
+    path = Path("results/benchmark/CliFake-Locate-v0_0.1s.json")
+    assert (tmp_path / path).is_file() and str(path) in out
 
 
 def test_evaluate_passes_env_args(tmp_path, capsys):
@@ -277,23 +317,69 @@ def install_fake_bench_sonar(monkeypatch, rows=None) -> None:
     monkeypatch.setitem(sys.modules, "sonar_gym.train.bench_sonar", fake)
 
 
-def test_benchmark_reports_steps_per_second_and_phase_shares(tmp_path, capsys, monkeypatch):
+def test_benchmark_reports_random_and_ppo_rates_against_cartpole(tmp_path, capsys, monkeypatch):
     install_fake_bench_sonar(monkeypatch, rows=[{"name": "pan", "pans_per_s": 10.0}])
     path = tmp_path / "b.json"
     code, out, err = run_cli(
-        capsys, "benchmark", "--env", DISCRETE_ID, BOX_ID, "--steps", "200", "--json", str(path)
+        capsys, "benchmark", "--env", DISCRETE_ID, BOX_ID, "--seconds", "0.2", "--json", str(path)
     )
     assert code == 0, err
-    assert "env steps per second" in out and DISCRETE_ID in out and "sensing" in out
+    assert "env steps per second" in out and DISCRETE_ID in out and "CartPole-v1" in out
     data = json.loads(path.read_text())
-    assert data["meta"]["steps"] == 200
+    assert data["meta"]["seconds"] == 0.2 and data["meta"]["ppo"]["n_steps"] == 512
+    assert data["meta"]["ppo"]["torch_threads"] == 1
+    reference = data["reference"]
+    assert reference["env_id"] == "CartPole-v1"
+    before, after = reference["before"], reference["after"]
+    assert before["timesteps"] >= 1 and after["timesteps"] >= 1
+    assert reference["ppo_steps_per_s"] == pytest.approx(
+        (before["steps_per_s"] + after["steps_per_s"]) / 2
+    )
+    assert reference["drift_after_over_before"] == pytest.approx(
+        after["steps_per_s"] / before["steps_per_s"]
+    )
     assert [entry["env_id"] for entry in data["envs"]] == [DISCRETE_ID, BOX_ID]
     for entry in data["envs"]:
-        assert entry["steps"] == 200 and entry["env_steps_per_s"] > 0
-        assert entry["agent"] == "coin"  # no "paper" agent here: the first registered one
-        assert set(entry["phase_shares"]) == {"sensing", "localization", "other"}
-        assert sum(entry["phase_shares"].values()) == pytest.approx(1.0)
+        random, ppo = entry["random"], entry["ppo"]
+        assert random["steps"] >= 1 and random["episodes"] >= 1
+        assert random["steps_per_s"] == pytest.approx(random["steps"] / random["seconds"])
+        assert ppo["steps_per_s"] == pytest.approx(ppo["timesteps"] / ppo["seconds"])
+        assert entry["ppo_over_cartpole"] == pytest.approx(
+            ppo["steps_per_s"] / reference["ppo_steps_per_s"]
+        )
+        assert set(random["phase_shares"]) == {"sensing", "localization", "env other"}
+        assert set(ppo["phase_shares"]) == {"sensing", "localization", "env other", "learner"}
+        assert sum(ppo["phase_shares"].values()) == pytest.approx(1.0)
+        assert 0.0 < sum(random["phase_shares"].values()) <= 1.0 + 1e-9
     assert data["pan"] == [{"name": "pan", "pans_per_s": 10.0}] and data["notes"] == []
+
+
+def test_benchmark_random_run_starts_a_new_episode_whenever_one_ends():
+    from sonar_gym.train.benchmark import random_rate
+
+    rate = random_rate(DISCRETE_ID, seconds=0.3)
+    # CliFake episodes last at most MAX_EPISODE_STEPS steps, so many episodes fit in the budget
+    assert rate.steps > MAX_EPISODE_STEPS
+    assert rate.episodes >= rate.steps / MAX_EPISODE_STEPS
+    assert rate.env_seconds <= rate.seconds
+
+
+def test_benchmark_phase_shares_split_the_wall_time():
+    from sonar_gym.train.benchmark import phase_shares
+
+    shares = phase_shares(10.0, 6.0, {"sensing": 3.0, "localization": 1.0}, outside="learner")
+    assert shares == pytest.approx(
+        {"sensing": 0.3, "localization": 0.1, "env other": 0.2, "learner": 0.4}
+    )
+    assert phase_shares(0.0, 0.0, {}) == {}
+
+
+@pytest.mark.parametrize("seconds", ["0", "-1", "inf", "soon"])
+def test_benchmark_rejects_a_budget_that_is_not_a_positive_number(seconds, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(["benchmark", "--seconds", seconds])
+    assert exit_info.value.code == 2
+    assert "--seconds" in capsys.readouterr().err
 
 
 def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys, monkeypatch):
@@ -303,8 +389,8 @@ def test_benchmark_pan_throughput_uses_bench_sonar_when_present(tmp_path, capsys
         "benchmark",
         "--env",
         DISCRETE_ID,
-        "--steps",
-        "10",
+        "--seconds",
+        "0.1",
         "--json",
         str(tmp_path / "b.json"),
     )
@@ -320,8 +406,8 @@ def test_benchmark_skips_pan_throughput_with_a_note_when_unavailable(tmp_path, c
         "benchmark",
         "--env",
         DISCRETE_ID,
-        "--steps",
-        "10",
+        "--seconds",
+        "0.1",
         "--json",
         str(tmp_path / "b.json"),
     )
@@ -358,6 +444,43 @@ def test_reproduce_all_runs_what_exists(tmp_path, capsys, monkeypatch):
     assert code == 0
     assert calls == [("beom_cho", tmp_path / "beom_cho")]
     assert "not available yet, skipped: beom-cho-map, kim, wu-tsai, roh, apcs" in out
+
+
+def install_talking_reproduction(monkeypatch, name: str) -> None:
+    """A reproduction that prints a finding and a wide table, as the real ones do."""
+    from rich.table import Table
+
+    def run(out_dir, console):
+        table = Table(title="Table IX")
+        table.add_column("column")
+        table.add_row("a table cell")
+        console.print(table)
+        console.print("Finding: within the paper's bound.")
+
+    module_name = f"sonar_gym.train.reproduce.{name}"
+    module = types.ModuleType(module_name)
+    module.__spec__ = importlib.machinery.ModuleSpec(module_name, None)
+    module.run = run
+    monkeypatch.setitem(sys.modules, module_name, module)
+
+
+def test_reproduce_prints_findings_and_files_the_tables_by_default(tmp_path, capsys, monkeypatch):
+    install_talking_reproduction(monkeypatch, "kim")
+    code, out, _ = run_cli(capsys, "reproduce", "kim", "--out", str(tmp_path))
+    assert code == 0
+    assert "Finding: within the paper's bound." in out
+    assert "a table cell" not in out and "1 tables in" in out and "--verbose" in out
+    report = (tmp_path / "kim" / "report.txt").read_text()
+    assert "Table IX" in report and "a table cell" in report
+    assert "Finding: within the paper's bound." in report
+
+
+def test_reproduce_verbose_prints_every_table(tmp_path, capsys, monkeypatch):
+    install_talking_reproduction(monkeypatch, "kim")
+    code, out, _ = run_cli(capsys, "reproduce", "kim", "--verbose", "--out", str(tmp_path))
+    assert code == 0
+    assert "a table cell" in out and "Finding: within the paper's bound." in out
+    assert "a table cell" in (tmp_path / "kim" / "report.txt").read_text()
 
 
 def test_reproduce_unknown_or_missing_paper_exits_2_listing_the_papers(capsys, monkeypatch):
@@ -410,14 +533,15 @@ def test_evaluate_without_arguments_runs_the_three_beacon_scan_baselines(
     code, out, err = run_cli(capsys, "evaluate", "--episodes", "3")  # all other defaults
     assert code == 0, err
     assert arguments.episodes == 50  # what `make evaluate` runs; 3 here to stay fast
-    data = json.loads((tmp_path / "results" / "evaluate.json").read_text())
+    folder = Path("results/evaluate/BeaconScan-v0_all-agents_3ep_seed0")
+    data = json.loads((tmp_path / folder / "evaluate.json").read_text())
     assert data["meta"]["env_ids"] == [BEACON_SCAN]
     assert [r["agent"] for r in data["results"]] == ["paper", "random", "sector"]
     for result in data["results"]:
         assert [e["seed"] for e in result["episodes"]] == [0, 1, 2]
         assert all(isinstance(e["position_error_m"], float) for e in result["episodes"])
-    assert (tmp_path / "results" / "evaluate.png").is_file()
-    assert "paper" in out and "sector" in out and "results/evaluate.json" in out
+    assert (tmp_path / folder / "evaluate.png").is_file()
+    assert "paper" in out and "sector" in out and str(folder / "evaluate.json") in out
 
 
 def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
@@ -469,16 +593,64 @@ def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
     assert all(len(r["episodes"]) == 2 for r in data["results"])
 
 
-def test_benchmark_beacon_scan_with_the_paper_agent(tmp_path, capsys):
+def test_benchmark_beacon_scan_end_to_end(tmp_path, capsys):
     path = tmp_path / "b.json"
     code, out, err = run_cli(
-        capsys, "benchmark", "--env", BEACON_SCAN, "--steps", "30", "--json", str(path)
+        capsys, "benchmark", "--env", BEACON_SCAN, "--seconds", "0.5", "--json", str(path)
     )
     assert code == 0, err
     assert BEACON_SCAN in out
     data = json.loads(path.read_text())
     assert data["failures"] == {}
     (entry,) = data["envs"]
-    assert entry["agent"] == "paper" and entry["steps"] == 30 and entry["env_steps_per_s"] > 0
+    assert entry["random"]["steps"] >= 1 and entry["ppo"]["timesteps"] >= 1
+    assert entry["ppo"]["phase_seconds"]["sensing"] > 0
     assert data["pan"] and all(row["pans_per_s"] > 0 for row in data["pan"])  # bench_sonar's
     assert "sonar pan throughput" in out
+
+
+# --------------------------------------------------------------------------------------------
+# the closing hints name a command the user's shell can run
+
+
+def test_hint_uses_the_script_beside_python_when_sonar_gym_is_not_on_path(monkeypatch, tmp_path):
+    bin_dir = tmp_path / "venv" / "bin"
+    bin_dir.mkdir(parents=True)
+    (bin_dir / "sonar-gym").write_text("#!/bin/sh\n")
+    monkeypatch.setattr(sys, "executable", str(bin_dir / "python"))
+    monkeypatch.setattr(cli.shutil, "which", lambda name: None)
+    monkeypatch.chdir(tmp_path)
+    assert cli.runnable_command("sonar-gym evaluate --env X") == (
+        "venv/bin/sonar-gym evaluate --env X"
+    )
+    monkeypatch.chdir(tmp_path / "venv")
+    assert cli.runnable_program() == "bin/sonar-gym"
+
+
+def test_hint_falls_back_to_python_dash_m(monkeypatch, tmp_path):
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "python"))  # no script beside it
+    monkeypatch.setattr(cli.shutil, "which", lambda name: None)
+    assert (
+        cli.runnable_command("sonar-gym evaluate") == f"{tmp_path / 'python'} -m sonar_gym evaluate"
+    )
+
+
+def test_hint_keeps_sonar_gym_when_it_is_on_path(monkeypatch, tmp_path):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    (bin_dir / "sonar-gym").write_text("#!/bin/sh\n")
+    monkeypatch.setattr(sys, "executable", str(bin_dir / "python"))
+    monkeypatch.setattr(cli.shutil, "which", lambda name: str(bin_dir / name))
+    assert cli.runnable_command("sonar-gym evaluate") == "sonar-gym evaluate"
+    assert cli.runnable_command("other evaluate") == "other evaluate"
+
+
+def test_python_dash_m_sonar_gym_runs_the_command_line():
+    completed = subprocess.run(
+        [sys.executable, "-m", "sonar_gym", "--help"],
+        capture_output=True,
+        text=True,
+        cwd=REPOSITORY,
+        timeout=120,
+    )
+    assert completed.returncode == 0 and "evaluate" in completed.stdout

@@ -349,3 +349,65 @@ def test_plot_is_a_png_with_one_row_per_env(tmp_path):
     results = evaluate_agents([DISCRETE_ID, BOX_ID], ["scripted", "patient"], episodes=2, seed=0)
     path = plot_results(results, tmp_path / "plots" / "e.png")
     assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_output_folder_name_is_made_of_the_arguments() -> None:
+    from sonar_gym.train.evaluation import MAX_FOLDER_NAME, output_folder_name
+
+    assert output_folder_name(["SonarGym/BeaconScan-v0"], None, 50, 0) == (
+        "BeaconScan-v0_all-agents_50ep_seed0"
+    )
+    assert output_folder_name(["all"], ["paper", "random"], 10, 3, {"max_steps": 20}) == (
+        "all_paper+random_10ep_seed3_max_steps=20"
+    )
+    # a saved model by its run directory and file; no path separators reach the name
+    assert output_folder_name(["all"], ["runs/bs-ppo-0/model.zip"], 5, 0) == (
+        "all_bs-ppo-0.model_5ep_seed0"
+    )
+    long = output_folder_name(["all"], ["a" * 300], 5, 0)
+    assert len(long) == MAX_FOLDER_NAME
+    assert long != output_folder_name(["all"], ["a" * 301], 5, 0)  # the hash tells them apart
+
+
+def test_plot_panels_leave_out_the_heading_error_where_no_agent_has_one():
+    from sonar_gym.train.report import evaluation_panels
+
+    with_heading = evaluate_agents(DISCRETE_ID, ["scripted"], episodes=2, seed=0)
+    without = evaluate_agents(
+        DISCRETE_ID, ["scripted"], episodes=2, seed=0, env_kwargs={"report_heading": False}
+    )
+    assert evaluation_panels(with_heading) == [
+        "E_xy [cm]",
+        "E_θ [deg]",
+        "mean sensing time [s]",
+        "episode reward (mean, 95% CI)",
+    ]
+    assert evaluation_panels(without) == [
+        "E_xy [cm]",
+        "mean sensing time [s]",
+        "episode reward (mean, 95% CI)",
+    ]
+
+
+def test_plot_marks_thin_samples_and_draws_the_reward_interval():
+    from sonar_gym.train.report import THIN_SAMPLE, evaluation_figure, sample_note
+
+    assert sample_note(3) == "n=3" and sample_note(THIN_SAMPLE) == "" and sample_note(0) == ""
+    results = evaluate_agents(DISCRETE_ID, ["scripted", "coin"], episodes=4, seed=0)
+    figure = evaluation_figure(results)
+    successes = [result.summary.successes for result in results]
+    assert any(0 < n < THIN_SAMPLE for n in successes)
+    for column in (0, 1):  # E_xy and E_θ
+        labels = [label.get_text() for label in figure.axes[column].get_xticklabels()]
+        for label, n in zip(labels, successes, strict=True):
+            assert (f"(n={n})" in label) == (0 < n < THIN_SAMPLE)
+    sensing_labels = [label.get_text() for label in figure.axes[2].get_xticklabels()]
+    assert not any("n=" in label for label in sensing_labels)
+    reward_axis = figure.axes[3]
+    assert reward_axis.get_ylabel() == "episode reward (mean, 95% CI)"
+    # the error bar spans the Student-t interval of the first agent
+    (bars,) = [c for c in reward_axis.containers]
+    segments = bars.lines[2][0].get_segments()
+    low, high = segments[0][0][1], segments[0][1][1]
+    interval = results[0].summary.reward
+    assert low == pytest.approx(interval.low) and high == pytest.approx(interval.high)

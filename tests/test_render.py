@@ -27,7 +27,9 @@ LAB = load_scenario("beom_cho_lab")
 def test_image_shape_and_dtype_follow_the_formula() -> None:
     image = render_topdown(LAB)
     (x0, y0), (x1, y1) = LAB.bounds
-    expected_height = round(600 * (y1 - y0 + 2 * MARGIN_M) / (x1 - x0 + 2 * MARGIN_M))
+    exact_height = 600 * (y1 - y0 + 2 * MARGIN_M) / (x1 - x0 + 2 * MARGIN_M)
+    expected_height = 2 * round(exact_height / 2)  # even: video encoders need even sizes
+    assert abs(expected_height - exact_height) <= 1.0
     assert image.shape == (expected_height, 600, 3) == (*image_size(LAB), 3)
     assert image.dtype == np.uint8
 
@@ -166,3 +168,88 @@ def test_importing_render_does_not_import_matplotlib() -> None:
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     )
     assert output.stdout.strip() == "False"
+
+
+def test_every_env_renders_frames_of_even_size() -> None:
+    import gymnasium as gym
+
+    from sonar_gym.registration import ENVIRONMENTS
+
+    for env_id in ENVIRONMENTS:
+        env = gym.make(env_id, render_mode="rgb_array")
+        env.reset(seed=0)
+        frame = env.render()
+        env.close()
+        assert frame.ndim == 3 and frame.shape[0] % 2 == 0 and frame.shape[1] % 2 == 0, env_id
+
+
+def test_scale_bar_is_one_metre_long_in_the_bottom_margin() -> None:
+    from sonar_gym.render import SCALE_BAR_M, _view
+
+    image = render_topdown(LAB)
+    height, width = image.shape[:2]
+    left, bottom, scale = _view(LAB, height, width)
+    x0 = left + 0.02 * width / scale
+    y = bottom + 0.45 * MARGIN_M
+
+    def dark(x: float) -> bool:
+        row, col = world_to_pixel(LAB, (x, y))
+        return bool(np.all(image[row, col] < 80))
+
+    assert SCALE_BAR_M == 1.0
+    assert all(dark(x0 + f * SCALE_BAR_M) for f in (0.1, 0.5, 0.9))
+    assert not dark(x0 + 1.05 * SCALE_BAR_M + 0.4)  # past the bar and its label's start
+
+
+def test_legend_names_the_beacons_only_where_the_scenario_has_them() -> None:
+    from sonar_gym.render import _TopDownCanvas
+
+    def labels(scenario) -> list[str]:
+        height, width = image_size(scenario)
+        canvas = _TopDownCanvas(scenario, height, width)
+        legend = canvas.ax.get_legend()
+        return [text.get_text() for text in legend.get_texts()]
+
+    lab = labels(LAB)
+    assert lab[:2] == ["robot", "estimate"]
+    assert "small beacon" in lab and "large beacon" in lab
+    assert "range dots (beam axis)" in lab
+    corridor = labels(load_scenario("apcs_corridor"))
+    assert "small beacon" not in corridor and "range dots (beam axis)" in corridor
+    assert "emitter" in labels(load_scenario("roh_beacons"))
+
+
+def test_legend_is_drawn_in_the_lower_right_corner() -> None:
+    image = render_topdown(LAB)
+    height, width = image.shape[:2]
+    corner = image[int(0.85 * height) :, int(0.8 * width) :]
+    # the legend's entries carry the robot green and the range-dot orange
+    greens = np.all(np.abs(corner.astype(int) - (0x2C, 0xA0, 0x2C)) < 30, axis=-1)
+    oranges = np.all(np.abs(corner.astype(int) - (0xFF, 0x7F, 0x0E)) < 30, axis=-1)
+    assert greens.any() and oranges.any()
+
+
+def test_record_video_writes_a_video_for_every_env(tmp_path: Path) -> None:
+    pytest.importorskip("moviepy", reason="the [video] extra (moviepy) is not installed")
+    import gymnasium as gym
+    from gymnasium.wrappers import RecordVideo
+
+    from sonar_gym.registration import ENVIRONMENTS
+
+    for index, env_id in enumerate(ENVIRONMENTS):
+        folder = tmp_path / str(index)
+        env = RecordVideo(
+            gym.make(env_id, render_mode="rgb_array"),
+            str(folder),
+            episode_trigger=lambda episode: episode == 0,
+            disable_logger=True,
+        )
+        env.reset(seed=0)
+        env.action_space.seed(0)
+        for _ in range(3):
+            _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+            if terminated or truncated:
+                break
+        env.close()
+        videos = list(folder.glob("*.mp4"))
+        assert len(videos) == 1 and videos[0].stat().st_size > 1000, env_id

@@ -1,15 +1,22 @@
-"""Speed of the simulation: sonar pans per second and environment steps per second.
+"""Speed as a user feels it: random-action steps per second and PPO training steps per second.
 
-Three measurements, reported as tables and written to ``results/benchmark.json``:
+One run, one process, reported as tables and written to JSON:
 
-- pan throughput, from ``sonar_gym.train.bench_sonar.pan_throughput()`` when that module provides it
-  (a mapping or a list of mappings, one per configuration, e.g. ``{"name": ..., "pans_per_s":
-  ..., "pings_per_s": ...}``); otherwise skipped with a note;
-- environment steps per second per env, driven by the env's ``paper`` agent (else the first
-  registered agent), counting the time inside ``reset`` and ``step`` and, separately, the
-  whole loop with the agent's ``act``;
-- where the env exposes ``env.unwrapped.timing`` (cumulative seconds per phase, e.g.
-  ``{"sensing": s, "localization": s}``), the share of the env's time spent in each phase.
+- **sonar pan throughput**, the rows of ``sonar_gym.train.bench_sonar.pan_throughput()`` (each
+  with its ratio to bare pymunk ray casts), or a note when that module does not provide them;
+- **PPO on CartPole-v1** (the yardstick every RL user knows), measured before the envs *and*
+  after them, so drift of the machine's load during the run is visible;
+- per env, **random-action steps per second** (``action_space.sample()``, a new episode with
+  seed ``seed + k`` whenever one ends, the time of ``reset`` included), and **SB3 PPO
+  env-steps per second** (``PPO("MlpPolicy", n_steps=512, batch_size=64, n_epochs=4)``, one
+  env, torch on one thread, until the wall-time budget is spent)
+  with its ratio to CartPole's PPO rate (the mean of the before and after runs);
+- per env, the **share of wall time per phase**: the env's own ``env.unwrapped.timing``
+  phases (e.g. ``sensing``, ``localization``), the rest of ``reset``/``step`` (``env other``),
+  and for PPO everything outside the env (``learner``: policy, rollout buffer, updates).
+
+The budget is wall time, so the numbers are rates, not counts: the machine's load moves them,
+which is why the ratio to CartPole in the same run is the number to compare across machines.
 """
 
 from __future__ import annotations
@@ -21,115 +28,225 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from sonar_gym.agents import base as agent_registry
+import gymnasium as gym
+
 from sonar_gym.train import UsageError
 from sonar_gym.train.evaluation import check_env_kwargs, make_env
 
-PREFERRED_AGENT = "paper"
+REFERENCE_ENV_ID = "CartPole-v1"
+PPO_N_STEPS = 512
+PPO_BATCH_SIZE = 64
+PPO_N_EPOCHS = 4
+DEFAULT_SECONDS = 20.0
+RANDOM_SHARE_OF_BUDGET = 0.5
+"""The random-action run gets this fraction of the per-env budget (it needs less to settle)."""
+ENV_OTHER = "env other"
+LEARNER = "learner"
 
 
-@dataclass(frozen=True)
-class EnvThroughput:
-    """Steps per second of one env under one agent.
+class StepClock(gym.Wrapper):
+    """Adds up the wall time spent inside ``reset`` and ``step`` (seconds), and counts them."""
 
-    Attributes:
-        env_id: the env.
-        agent: the agent that chose the actions.
-        steps: ``env.step`` calls measured.
-        episodes: episodes started (``reset`` calls).
-        env_seconds: wall time inside ``reset`` and ``step``, seconds.
-        loop_seconds: wall time of the whole loop including ``act``, seconds.
-        phase_seconds: increase of ``env.unwrapped.timing`` per phase over the run, seconds
-            (empty when the env has no ``timing``).
-    """
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.env_seconds = 0.0
+        self.steps = 0
+        self.resets = 0
 
-    env_id: str
-    agent: str
-    steps: int
-    episodes: int
-    env_seconds: float
-    loop_seconds: float
-    phase_seconds: Mapping[str, float] = field(default_factory=dict)
+    def reset(self, **kwargs: Any) -> Any:
+        start = time.perf_counter()
+        try:
+            return self.env.reset(**kwargs)
+        finally:
+            self.env_seconds += time.perf_counter() - start
+            self.resets += 1
 
-    @property
-    def env_steps_per_s(self) -> float:
-        """Steps per second counting only the env's time."""
-        return self.steps / self.env_seconds if self.env_seconds > 0 else math.inf
-
-    @property
-    def loop_steps_per_s(self) -> float:
-        """Steps per second of the whole loop (env and agent)."""
-        return self.steps / self.loop_seconds if self.loop_seconds > 0 else math.inf
-
-    @property
-    def phase_shares(self) -> dict[str, float]:
-        """Fraction of the env's time per phase (plus ``"other"`` for the rest, if any)."""
-        if not self.phase_seconds or self.env_seconds <= 0:
-            return {}
-        total = max(self.env_seconds, sum(self.phase_seconds.values()))
-        shares = {phase: seconds / total for phase, seconds in self.phase_seconds.items()}
-        rest = 1.0 - sum(shares.values())
-        if rest > 1e-9:
-            shares["other"] = rest
-        return shares
+    def step(self, action: Any) -> Any:
+        start = time.perf_counter()
+        try:
+            return self.env.step(action)
+        finally:
+            self.env_seconds += time.perf_counter() - start
+            self.steps += 1
 
 
-def _timing_snapshot(env: Any) -> dict[str, float]:
+def _timing_snapshot(env: gym.Env) -> dict[str, float]:
     timing = getattr(env.unwrapped, "timing", None)
     if not isinstance(timing, Mapping):
         return {}
     return {str(phase): float(seconds) for phase, seconds in timing.items()}
 
 
-def choose_agent(env_id: str) -> str:
-    """The agent that drives the benchmark: ``paper`` when registered, else the first one."""
-    names = agent_registry.agent_names(env_id)
-    if PREFERRED_AGENT in names:
-        return PREFERRED_AGENT
-    if not names:
-        raise ValueError(f"no agents are registered for {env_id}")
-    return names[0]
+def phase_shares(
+    wall_seconds: float,
+    env_seconds: float,
+    env_phases: Mapping[str, float],
+    outside: str | None = None,
+) -> dict[str, float]:
+    """Fractions of ``wall_seconds`` per phase: each of ``env_phases`` (seconds), the rest of
+    ``env_seconds`` as :data:`ENV_OTHER`, and, when ``outside`` names it, the time outside the
+    env. Empty when ``wall_seconds`` is not positive. The shares sum to 1 when ``outside`` is
+    given (to the env's share otherwise)."""
+    if wall_seconds <= 0.0:
+        return {}
+    shares = {phase: seconds / wall_seconds for phase, seconds in env_phases.items()}
+    shares[ENV_OTHER] = max(0.0, env_seconds - sum(env_phases.values())) / wall_seconds
+    if outside is not None:
+        shares[outside] = max(0.0, 1.0 - sum(shares.values()))
+    return shares
 
 
-def env_throughput(
+@dataclass(frozen=True)
+class RandomRate:
+    """Random actions on one env for a wall-time budget.
+
+    Attributes:
+        env_id: the env.
+        steps: ``env.step`` calls.
+        episodes: episodes started (``reset`` calls).
+        seconds: wall time of the whole loop, seconds.
+        env_seconds: wall time inside ``reset`` and ``step``, seconds.
+        phase_seconds: increase of ``env.unwrapped.timing`` per phase, seconds (empty when
+            the env keeps no ``timing``).
+    """
+
+    env_id: str
+    steps: int
+    episodes: int
+    seconds: float
+    env_seconds: float
+    phase_seconds: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def steps_per_s(self) -> float:
+        """Steps per second of the loop (``reset`` time included)."""
+        return self.steps / self.seconds if self.seconds > 0 else math.inf
+
+    @property
+    def phase_shares(self) -> dict[str, float]:
+        """Share of the loop's wall time per env phase (see :func:`phase_shares`)."""
+        return phase_shares(self.seconds, self.env_seconds, self.phase_seconds)
+
+
+@dataclass(frozen=True)
+class PPORate:
+    """SB3 PPO training on one env for a wall-time budget.
+
+    Attributes:
+        env_id: the env.
+        timesteps: env steps PPO collected.
+        updates: rollout + update cycles.
+        seconds: wall time of the training, seconds.
+        env_seconds: wall time inside the env's ``reset`` and ``step``, seconds.
+        phase_seconds: increase of ``env.unwrapped.timing`` per phase, seconds.
+    """
+
+    env_id: str
+    timesteps: int
+    updates: int
+    seconds: float
+    env_seconds: float
+    phase_seconds: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def steps_per_s(self) -> float:
+        """Env steps per second of training."""
+        return self.timesteps / self.seconds if self.seconds > 0 else math.inf
+
+    @property
+    def phase_shares(self) -> dict[str, float]:
+        """Share of the training's wall time per env phase and :data:`LEARNER`."""
+        return phase_shares(self.seconds, self.env_seconds, self.phase_seconds, LEARNER)
+
+
+def random_rate(
     env_id: str,
-    steps: int,
-    agent_name: str | None = None,
+    seconds: float,
     env_kwargs: Mapping[str, Any] | None = None,
     seed: int = 0,
-) -> EnvThroughput:
-    """Run ``steps`` env steps of ``agent_name`` (default :func:`choose_agent`) on ``env_id``,
-    starting a new episode (seed ``seed + k``) whenever one ends, and time them."""
-    if steps < 1:
-        raise ValueError(f"steps must be at least 1, got {steps}")
-    name = agent_name or choose_agent(env_id)
-    env = make_env(env_id, env_kwargs)
+) -> RandomRate:
+    """Step ``env_id`` with ``action_space.sample()`` until ``seconds`` of wall time pass (at
+    least one step), resetting with seed ``seed + k`` whenever an episode ends."""
+    if not seconds > 0.0:
+        raise ValueError(f"seconds must be positive, got {seconds}")
+    env = StepClock(make_env(env_id, env_kwargs))
     try:
-        agent = agent_registry.make_agent(name, env)
+        env.action_space.seed(seed)
         before = _timing_snapshot(env)
-        env_seconds = 0.0
         episodes = 0
-        done = True
-        observation: Any = None
-        loop_start = time.perf_counter()
-        for _ in range(steps):
-            if done:
-                agent.reset(seed=seed + episodes)
-                tick = time.perf_counter()
-                observation, _ = env.reset(seed=seed + episodes)
-                env_seconds += time.perf_counter() - tick
+        start = time.perf_counter()
+        env.reset(seed=seed)
+        episodes += 1
+        while True:
+            _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+            if time.perf_counter() - start >= seconds:
+                break
+            if terminated or truncated:
+                env.reset(seed=seed + episodes)
                 episodes += 1
-            action = agent.act(observation)
-            tick = time.perf_counter()
-            observation, _, terminated, truncated, _ = env.step(action)
-            env_seconds += time.perf_counter() - tick
-            done = terminated or truncated
-        loop_seconds = time.perf_counter() - loop_start
+        elapsed = time.perf_counter() - start
         after = _timing_snapshot(env)
     finally:
         env.close()
     phases = {phase: after[phase] - before.get(phase, 0.0) for phase in after}
-    return EnvThroughput(env_id, name, steps, episodes, env_seconds, loop_seconds, phases)
+    return RandomRate(env_id, env.steps, episodes, elapsed, env.env_seconds, phases)
+
+
+def ppo_rate(
+    env_id: str,
+    seconds: float,
+    env_kwargs: Mapping[str, Any] | None = None,
+    seed: int = 0,
+    n_steps: int = PPO_N_STEPS,
+) -> PPORate:
+    """Train ``PPO("MlpPolicy", n_steps, batch_size=64, n_epochs=4)`` on one ``env_id`` until
+    ``seconds`` of wall time pass (checked after every env step, so at least one step).
+
+    The budget can end inside a rollout: for an env too slow to fill one rollout in the budget
+    the rate leaves out PPO's update, which then costs little next to the env anyway (the
+    ``learner`` share says how much). Torch runs on the threads it is given
+    (:func:`run_benchmark` sets one).
+    """
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    if not seconds > 0.0:
+        raise ValueError(f"seconds must be positive, got {seconds}")
+
+    class WallTimeBudget(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.start = time.perf_counter()
+
+        def _on_training_start(self) -> None:
+            self.start = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            return time.perf_counter() - self.start < seconds
+
+    env = StepClock(make_env(env_id, env_kwargs))
+    try:
+        model = PPO(
+            "MlpPolicy",
+            env,
+            n_steps=n_steps,
+            batch_size=min(PPO_BATCH_SIZE, n_steps),
+            n_epochs=PPO_N_EPOCHS,
+            seed=seed,
+            device="cpu",
+            verbose=0,
+        )
+        before = _timing_snapshot(env)
+        start = time.perf_counter()
+        model.learn(total_timesteps=10**12, callback=WallTimeBudget())
+        elapsed = time.perf_counter() - start
+        after = _timing_snapshot(env)
+        timesteps = int(model.num_timesteps)
+        updates = int(model._n_updates) // PPO_N_EPOCHS
+    finally:
+        env.close()
+    phases = {phase: after[phase] - before.get(phase, 0.0) for phase in after}
+    return PPORate(env_id, timesteps, updates, elapsed, env.env_seconds, phases)
 
 
 def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
@@ -148,85 +265,188 @@ def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
     return [dict(row) for row in rows], None
 
 
-def throughput_to_dict(result: EnvThroughput) -> dict[str, Any]:
-    """A JSON-ready dict of ``result`` with the derived rates and shares."""
-    return {
-        "env_id": result.env_id,
-        "agent": result.agent,
-        "steps": result.steps,
-        "episodes": result.episodes,
-        "env_seconds": result.env_seconds,
-        "loop_seconds": result.loop_seconds,
-        "env_steps_per_s": result.env_steps_per_s,
-        "loop_steps_per_s": result.loop_steps_per_s,
-        "phase_seconds": dict(result.phase_seconds),
-        "phase_shares": result.phase_shares,
+@dataclass(frozen=True)
+class EnvSpeed:
+    """Both rates of one env and PPO's ratio to CartPole-v1's PPO rate in the same run."""
+
+    env_id: str
+    random: RandomRate
+    ppo: PPORate
+    reference_steps_per_s: float
+
+    @property
+    def ppo_over_reference(self) -> float:
+        """PPO env-steps/s here over PPO env-steps/s on CartPole-v1 (1 = as fast as CartPole)."""
+        if self.reference_steps_per_s <= 0.0:
+            return math.nan
+        return self.ppo.steps_per_s / self.reference_steps_per_s
+
+
+def _rate_to_dict(rate: RandomRate | PPORate) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        key: value for key, value in vars(rate).items() if key not in ("env_id", "phase_seconds")
     }
+    data.update(
+        steps_per_s=rate.steps_per_s,
+        phase_seconds=dict(rate.phase_seconds),
+        phase_shares=rate.phase_shares,
+    )
+    return data
 
 
 @dataclass(frozen=True)
 class BenchmarkReport:
-    """Everything one benchmark measured, and what it could not.
+    """Everything one benchmark run measured, and what it could not.
 
     Attributes:
-        steps: env steps per env.
+        seconds: the per-env wall-time budget of PPO, seconds (random actions get
+            :data:`RANDOM_SHARE_OF_BUDGET` of it; CartPole the whole budget, twice).
+        ppo_n_steps: PPO's rollout length.
         pan_rows: rows of :func:`pan_throughput`.
-        envs: throughput per env that ran.
+        reference_before: PPO on CartPole-v1 before the envs.
+        reference_after: PPO on CartPole-v1 after the envs.
+        envs: the rates per env that ran.
         failures: env id -> error text, for envs that could not run.
         notes: measurements skipped and why.
     """
 
-    steps: int
+    seconds: float
+    ppo_n_steps: int
     pan_rows: tuple[Mapping[str, Any], ...]
-    envs: tuple[EnvThroughput, ...]
+    reference_before: PPORate
+    reference_after: PPORate
+    envs: tuple[EnvSpeed, ...]
     failures: Mapping[str, str]
     notes: tuple[str, ...]
+
+    @property
+    def reference_steps_per_s(self) -> float:
+        """CartPole-v1 PPO env-steps/s, mean of the runs before and after the envs."""
+        return 0.5 * (self.reference_before.steps_per_s + self.reference_after.steps_per_s)
+
+    @property
+    def reference_drift(self) -> float:
+        """CartPole-v1 PPO rate after over before (1 = the machine's load did not change)."""
+        before = self.reference_before.steps_per_s
+        return self.reference_after.steps_per_s / before if before > 0 else math.nan
 
     def to_dict(self, meta: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """A JSON-ready dict (``meta`` first)."""
         return {
-            "meta": {"steps": self.steps, **dict(meta or {})},
+            "meta": {
+                "seconds": self.seconds,
+                "ppo": {
+                    "policy": "MlpPolicy",
+                    "n_steps": self.ppo_n_steps,
+                    "batch_size": PPO_BATCH_SIZE,
+                    "n_epochs": PPO_N_EPOCHS,
+                    "n_envs": 1,
+                    "torch_threads": 1,
+                },
+                **dict(meta or {}),
+            },
             "pan": [dict(row) for row in self.pan_rows],
-            "envs": [throughput_to_dict(result) for result in self.envs],
+            "reference": {
+                "env_id": REFERENCE_ENV_ID,
+                "before": _rate_to_dict(self.reference_before),
+                "after": _rate_to_dict(self.reference_after),
+                "ppo_steps_per_s": self.reference_steps_per_s,
+                "drift_after_over_before": self.reference_drift,
+            },
+            "envs": [
+                {
+                    "env_id": speed.env_id,
+                    "random": _rate_to_dict(speed.random),
+                    "ppo": _rate_to_dict(speed.ppo),
+                    "ppo_over_cartpole": speed.ppo_over_reference,
+                }
+                for speed in self.envs
+            ],
             "failures": dict(self.failures),
             "notes": list(self.notes),
         }
 
 
+BenchmarkProgress = Callable[[str], None]
+"""Called with a line saying what is measured next (status display)."""
+
+
 def run_benchmark(
     env_ids: Sequence[str],
-    steps: int,
+    seconds: float = DEFAULT_SECONDS,
     env_kwargs: Mapping[str, Any] | None = None,
-    on_env_start: Callable[[str, str], None] | None = None,
+    on_stage: BenchmarkProgress | None = None,
+    *,
+    ppo_n_steps: int = PPO_N_STEPS,
+    measure_pan: bool = True,
 ) -> BenchmarkReport:
-    """Pan throughput, then :func:`env_throughput` for each env with :func:`choose_agent`.
+    """Pan throughput, CartPole PPO, then per env random actions and PPO, then CartPole again.
 
-    An env that raises while running is recorded in ``failures`` (the others still run);
-    ``on_env_start(env_id, agent)`` is called before each env (status display).
+    Torch is set to one thread for the run (and restored after). An env that raises is
+    recorded in ``failures`` and the others still run.
+
+    Args:
+        env_ids: the envs to measure.
+        seconds: PPO wall-time budget per env and per CartPole run (positive).
+        env_kwargs: keyword arguments for every env's ``gym.make`` (checked first).
+        on_stage: told what is measured next.
+        ppo_n_steps: PPO's rollout length (512 in every reported number; smaller only to
+            test the plumbing quickly).
+        measure_pan: False skips the pan rows (with a note).
 
     Raises:
         UsageError: an env's constructor does not take a key of ``env_kwargs``.
+        ValueError: ``seconds`` is not positive.
     """
-    pan_rows, note = pan_throughput()
-    notes = [note] if note else []
+    import torch
+
+    if not seconds > 0.0:
+        raise ValueError(f"seconds must be positive, got {seconds}")
     for env_id in env_ids:
         check_env_kwargs(env_id, env_kwargs or {})
-    throughputs: list[EnvThroughput] = []
-    failures: dict[str, str] = {}
-    for env_id in env_ids:
-        try:
-            agent = choose_agent(env_id)
-            if on_env_start is not None:
-                on_env_start(env_id, agent)
-            throughputs.append(env_throughput(env_id, steps, agent, env_kwargs))
-        except UsageError:
-            raise
-        except Exception as error:  # a broken env must not hide the other envs' numbers
-            failures[env_id] = f"{type(error).__name__}: {error}"
+
+    def stage(text: str) -> None:
+        if on_stage is not None:
+            on_stage(text)
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        notes: list[str] = []
+        pan_rows: list[dict[str, Any]] = []
+        if measure_pan:
+            stage("sonar pan throughput")
+            pan_rows, note = pan_throughput()
+            notes.extend([note] if note else [])
+        else:
+            notes.append("pan throughput skipped: not requested")
+        stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (before)")
+        before = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
+        measured: list[tuple[str, RandomRate, PPORate]] = []
+        failures: dict[str, str] = {}
+        for env_id in env_ids:
+            try:
+                stage(f"{env_id}: random actions for {RANDOM_SHARE_OF_BUDGET * seconds:g} s")
+                random = random_rate(env_id, RANDOM_SHARE_OF_BUDGET * seconds, env_kwargs)
+                stage(f"{env_id}: PPO for {seconds:g} s")
+                ppo = ppo_rate(env_id, seconds, env_kwargs, n_steps=ppo_n_steps)
+                measured.append((env_id, random, ppo))
+            except UsageError:
+                raise
+            except Exception as error:  # a broken env must not hide the other envs' numbers
+                failures[env_id] = f"{type(error).__name__}: {error}"
+        stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (after)")
+        after = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
+    finally:
+        torch.set_num_threads(threads)
+    reference = 0.5 * (before.steps_per_s + after.steps_per_s)
     return BenchmarkReport(
-        steps=steps,
+        seconds=seconds,
+        ppo_n_steps=ppo_n_steps,
         pan_rows=tuple(pan_rows),
-        envs=tuple(throughputs),
+        reference_before=before,
+        reference_after=after,
+        envs=tuple(EnvSpeed(env_id, r, p, reference) for env_id, r, p in measured),
         failures=failures,
         notes=tuple(notes),
     )

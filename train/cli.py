@@ -1,9 +1,10 @@
 """The ``sonar-gym`` command line: ``evaluate``, ``train``, ``benchmark``, ``reproduce``.
 
-Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`, :mod:`sonar_gym.train.training`,
-:mod:`sonar_gym.train.benchmark` and :mod:`sonar_gym.train.report`. A request the user can fix (unknown env or
-agent, bad ``--env-arg``, an algorithm the action space does not allow) prints one line naming
-the allowed values and exits with status 2.
+Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`,
+:mod:`sonar_gym.train.training`, :mod:`sonar_gym.train.benchmark` and
+:mod:`sonar_gym.train.report`. A request the user can fix (unknown env or agent, bad
+``--env-arg``, an algorithm the action space does not allow) prints one line naming the
+allowed values and exits with status 2. ``python -m sonar_gym`` runs the same command line.
 """
 
 from __future__ import annotations
@@ -13,6 +14,8 @@ import importlib
 import importlib.util
 import json
 import os
+import shlex
+import shutil
 import sys
 import time
 from collections.abc import Sequence
@@ -24,10 +27,9 @@ from sonar_gym.train import UsageError
 
 PROGRAM = "sonar-gym"
 DEFAULT_EPISODES = 50
-DEFAULT_EVALUATE_JSON = Path("results/evaluate.json")
-DEFAULT_EVALUATE_PLOT = Path("results/evaluate.png")
-DEFAULT_BENCHMARK_JSON = Path("results/benchmark.json")
-DEFAULT_BENCHMARK_STEPS = 500
+DEFAULT_EVALUATE_ROOT = Path("results/evaluate")
+DEFAULT_BENCHMARK_ROOT = Path("results/benchmark")
+DEFAULT_BENCHMARK_SECONDS = 20.0
 DEFAULT_REPRODUCE_DIR = Path("results/reproduce")
 REPRODUCIBLE_PAPERS = ("beom-cho", "beom-cho-map", "kim", "wu-tsai", "roh", "apcs")
 PIPED_WIDTH = 160
@@ -72,11 +74,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--seed", type=int, default=0, metavar="S", help="episode i uses seed S + i (default 0)"
     )
     evaluate.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help=f"output folder (default {DEFAULT_EVALUATE_ROOT}/<name from the arguments>, e.g. "
+        f"{DEFAULT_EVALUATE_ROOT}/BeaconScan-v0_all-agents_50ep_seed0)",
+    )
+    evaluate.add_argument(
         "--json",
         type=Path,
-        default=DEFAULT_EVALUATE_JSON,
+        default=None,
         metavar="PATH",
-        help=f"summaries and every episode (default {DEFAULT_EVALUATE_JSON})",
+        help="summaries and every episode (default <out>/evaluate.json)",
     )
     evaluate.add_argument(
         "--csv", type=Path, default=None, metavar="PATH", help="one row per episode (default: none)"
@@ -84,9 +94,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument(
         "--plot",
         type=Path,
-        default=DEFAULT_EVALUATE_PLOT,
+        default=None,
         metavar="PATH",
-        help=f"bar charts per env (default {DEFAULT_EVALUATE_PLOT})",
+        help="bar charts per env (default <out>/evaluate.png)",
     )
     _add_env_arg(evaluate)
     evaluate.set_defaults(handler=_evaluate)
@@ -148,25 +158,34 @@ def build_parser() -> argparse.ArgumentParser:
 
     benchmark = commands.add_parser(
         "benchmark",
-        help="pan throughput and env steps per second",
-        description="Measure sonar pan throughput and env steps per second (paper agent).",
+        help="steps per second a user gets: random actions, PPO training, sonar pans",
+        description="Measure, in one run: sonar pan throughput; per env random-action steps/s "
+        "and SB3 PPO env-steps/s (n_steps 512, batch 64, 4 epochs, one env, torch on one "
+        "thread) against PPO on CartPole-v1 (measured before and after the envs); the share "
+        "of time per phase. The whole run takes about (2 + 1.5 x envs) x SECONDS plus the pan "
+        "rows (under 4 min for every env at the default).",
     )
     benchmark.add_argument(
         "--env", nargs="+", default=["all"], metavar="ID", help="env ids or 'all' (default)"
     )
     benchmark.add_argument(
-        "--steps",
-        type=_positive_int,
-        default=DEFAULT_BENCHMARK_STEPS,
-        metavar="N",
-        help=f"env steps per env (default {DEFAULT_BENCHMARK_STEPS})",
+        "--seconds",
+        type=_positive_float,
+        default=DEFAULT_BENCHMARK_SECONDS,
+        metavar="S",
+        help=f"PPO wall-time budget per env and per CartPole run; random actions get half "
+        f"(default {DEFAULT_BENCHMARK_SECONDS:g})",
+    )
+    benchmark.add_argument(
+        "--no-pan", action="store_true", help="skip the sonar pan throughput rows"
     )
     benchmark.add_argument(
         "--json",
         type=Path,
-        default=DEFAULT_BENCHMARK_JSON,
+        default=None,
         metavar="PATH",
-        help=f"default {DEFAULT_BENCHMARK_JSON}",
+        help=f"default {DEFAULT_BENCHMARK_ROOT}/<envs>_<seconds>s.json, e.g. "
+        f"{DEFAULT_BENCHMARK_ROOT}/all_20s.json",
     )
     _add_env_arg(benchmark)
     benchmark.set_defaults(handler=_benchmark)
@@ -183,6 +202,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=DEFAULT_REPRODUCE_DIR,
         metavar="DIR",
         help="output directory (one subdirectory per paper)",
+    )
+    reproduce.add_argument(
+        "--verbose",
+        action="store_true",
+        help="print every table (by default only the findings; the tables go to "
+        "<out>/<paper>/report.txt either way)",
     )
     reproduce.set_defaults(handler=_reproduce)
     return parser
@@ -211,6 +236,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def runnable_program() -> str:
+    """How the user's shell can call this command line: ``sonar-gym`` when that name on PATH
+    is this installation's script, else the script's path beside the running Python
+    (relative when under the working directory, e.g. ``.venv/bin/sonar-gym``), else
+    ``<python> -m sonar_gym``."""
+    script = Path(sys.executable).with_name(PROGRAM)
+    found = shutil.which(PROGRAM)
+    if found is not None and (not script.exists() or Path(found).resolve() == script.resolve()):
+        return PROGRAM
+    if script.exists():
+        try:
+            return shlex.quote(str(script.relative_to(Path.cwd())))
+        except ValueError:
+            return shlex.quote(str(script))
+    return f"{shlex.quote(sys.executable)} -m sonar_gym"
+
+
+def runnable_command(command: str) -> str:
+    """``command`` (a ``sonar-gym ...`` line) with the program as :func:`runnable_program`."""
+    if command == PROGRAM or command.startswith(PROGRAM + " "):
+        return runnable_program() + command[len(PROGRAM) :]
+    return command
+
+
 def make_console(stderr: bool = False) -> Console:
     """A rich console; 160 columns wide when writing to a file or pipe (unless COLUMNS is set),
     so the tables do not wrap in logs."""
@@ -228,6 +277,13 @@ def _positive_int(text: str) -> int:
     value = int(text)
     if value < 1:
         raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    value = float(text)
+    if not value > 0.0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
     return value
 
 
@@ -268,6 +324,9 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         f"on {', '.join(env_ids)}",
         markup=False,
     )
+    out_dir = evaluate_output_dir(arguments, env_kwargs)
+    json_path = arguments.json or out_dir / "evaluate.json"
+    plot_path = arguments.plot or out_dir / "evaluate.png"
     started = time.perf_counter()
     with episode_progress(console, total) as advance:
         results = evaluation.evaluate_agents(
@@ -286,13 +345,29 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         "versions": evaluation.software_versions(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    written = [report.write_json(results, arguments.json, meta)]
+    written = [report.write_json(results, json_path, meta)]
     if arguments.csv is not None:
         written.append(report.write_csv(results, arguments.csv))
-    written.append(report.plot_results(results, arguments.plot))
+    written.append(report.plot_results(results, plot_path))
     console.print(
         f"{total} episodes in {elapsed_s:.1f} s. Wrote " + ", ".join(map(str, written)),
         markup=False,
+    )
+
+
+def evaluate_output_dir(arguments: argparse.Namespace, env_kwargs: dict[str, object]) -> Path:
+    """``--out``, else ``results/evaluate/<name>`` with the name made of the arguments
+    (:func:`sonar_gym.train.evaluation.output_folder_name`; docs/outputs.md)."""
+    from sonar_gym.train import evaluation
+
+    if arguments.out is not None:
+        return Path(arguments.out)
+    return DEFAULT_EVALUATE_ROOT / evaluation.output_folder_name(
+        arguments.env or [evaluation.DEFAULT_ENV_ID],
+        arguments.agent,
+        arguments.episodes,
+        arguments.seed,
+        env_kwargs,
     )
 
 
@@ -334,7 +409,12 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
             f"episode reward {result.eval_mean_reward:.3f} ± {result.eval_std_reward:.3f} (std)"
         )
     console.print("Evaluate it against the baselines with:")
-    console.print(f"  {evaluate_command(result)}", highlight=False, markup=False, soft_wrap=True)
+    console.print(
+        f"  {runnable_command(evaluate_command(result))}",
+        highlight=False,
+        markup=False,
+        soft_wrap=True,
+    )
 
 
 def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
@@ -342,27 +422,50 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
     env_ids = evaluation.resolve_env_ids(arguments.env)
-    with console.status("measuring pan throughput") as status:
+    started = time.perf_counter()
+    with console.status("benchmark") as status:
         results = benchmark.run_benchmark(
             env_ids,
-            arguments.steps,
+            arguments.seconds,
             env_kwargs,
-            on_env_start=lambda env_id, agent: status.update(
-                f"{env_id}: {arguments.steps} steps with agent {agent!r}"
-            ),
+            on_stage=lambda text: status.update(f"measuring {text}"),
+            measure_pan=not arguments.no_pan,
         )
+    elapsed_s = time.perf_counter() - started
     for note in results.notes:
         console.print(note, style="yellow", markup=False)
     if results.pan_rows:
         console.print(report.pan_table(results.pan_rows))
     if results.envs:
-        console.print(report.throughput_table(results.envs))
+        console.print(report.speed_table(results))
     for env_id, failure in results.failures.items():
         console.print(f"{env_id} could not run: {failure}", style="red", markup=False)
-    meta = {"env_kwargs": env_kwargs, "created": time.strftime("%Y-%m-%dT%H:%M:%S%z")}
-    arguments.json.parent.mkdir(parents=True, exist_ok=True)
-    arguments.json.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
-    console.print(f"Wrote {arguments.json}", markup=False)
+    meta = {
+        "command": arguments.command_line,
+        "env_kwargs": env_kwargs,
+        "elapsed_s": round(elapsed_s, 3),
+        "versions": evaluation.software_versions(),
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    json_path = arguments.json or DEFAULT_BENCHMARK_ROOT / benchmark_file_name(
+        arguments.env, arguments.seconds, env_kwargs
+    )
+    json_path.parent.mkdir(parents=True, exist_ok=True)
+    json_path.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
+    console.print(f"Benchmark took {elapsed_s:.0f} s. Wrote {json_path}", markup=False)
+
+
+def benchmark_file_name(
+    env_selection: Sequence[str], seconds: float, env_kwargs: dict[str, object]
+) -> str:
+    """``<envs>_<seconds>s[_<key=value>...].json``, named after the arguments like the
+    evaluation folders (:func:`sonar_gym.train.evaluation.output_folder_name`)."""
+    from sonar_gym.train.evaluation import env_selection_label, name_from_arguments
+
+    return (
+        name_from_arguments([env_selection_label(env_selection), f"{seconds:g}s"], env_kwargs)
+        + ".json"
+    )
 
 
 def reproduce_module_name(name: str) -> str:
@@ -409,12 +512,27 @@ def _reproduce(arguments: argparse.Namespace, console: Console) -> None:
         raise UsageError(
             f"no reproduction is available yet; the papers are {list(REPRODUCIBLE_PAPERS)}"
         )
+    from sonar_gym.train.report import CompactConsole
+
     for name in dict.fromkeys(requested):
         module = importlib.import_module(reproduce_module_name(name))
         out_dir = arguments.out / name.replace("-", "_")
         out_dir.mkdir(parents=True, exist_ok=True)
         console.rule(f"reproduce {name} -> {out_dir}")
-        module.run(out_dir, console)
+        paper_console = CompactConsole(
+            compact=not arguments.verbose,
+            file=console.file,
+            width=console.width,
+            color_system=console.color_system,
+        )
+        module.run(out_dir, paper_console)
+        report_path = out_dir / "report.txt"
+        report_path.write_text(paper_console.full_text())
+        if arguments.verbose:
+            line = f"full report: {report_path}"
+        else:
+            line = f"{paper_console.tables_filed} tables in {report_path} (--verbose prints them)"
+        console.print(line, style="dim", markup=False)
 
 
 if __name__ == "__main__":

@@ -21,13 +21,14 @@ Selecting what to run is part of this module too: env ids (``"all"`` = every reg
 from __future__ import annotations
 
 import contextlib
-
 import difflib
+import hashlib
 import importlib.metadata
 import inspect
 import json
 import math
 import platform
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -48,6 +49,7 @@ SUCCESS_STATUS = "ok"
 TRUNCATED_STATUS = "truncated"
 STEP_LIMIT_STATUS = "step_limit"
 DEFAULT_MAX_STEPS_PER_EPISODE = 10_000
+MAX_FOLDER_NAME = 100
 
 EvaluationPlan = dict[str, list[str]]
 """Agent names to evaluate, per env id, in order."""
@@ -232,7 +234,10 @@ def resolve_env_ids(selection: str | Sequence[str], namespace: str = ENV_NAMESPA
 
 
 def _looks_like_model(name: str) -> bool:
-    return name.endswith(".zip") or Path(name).exists()
+    try:
+        return name.endswith(".zip") or Path(name).exists()
+    except OSError:  # e.g. a name too long for the file system is no model either
+        return False
 
 
 def resolve_agent_names(
@@ -240,8 +245,9 @@ def resolve_agent_names(
 ) -> EvaluationPlan:
     """Agent names to run per env: ``requested`` for every env, or all registered ones.
 
-    A requested name is either registered for the env (see :func:`sonar_gym.agents.base.agent_names`)
-    or the path of a saved model (``.zip`` file or run directory).
+    A requested name is either registered for the env (see
+    :func:`sonar_gym.agents.base.agent_names`) or the path of a saved model (``.zip`` file or
+    run directory).
 
     Raises:
         UsageError: a name is neither (the message lists the agents of that env), or a model
@@ -316,6 +322,8 @@ def env_argument_names(env_id: str) -> list[str] | None:
             if isinstance(spec.entry_point, str)
             else spec.entry_point
         )
+        if creator is None:
+            return None
         parameters = inspect.signature(creator).parameters.values()
     except (ImportError, AttributeError, TypeError, ValueError):
         return None  # gym.make will report what is wrong with the entry point
@@ -361,8 +369,8 @@ def make_env(env_id: str, env_kwargs: Mapping[str, Any] | None = None) -> gym.En
 
 
 def make_named_agent(name: str, env: gym.Env) -> agent_registry.Agent:
-    """:func:`sonar_gym.agents.base.make_agent`, with a saved model that does not fit ``env`` (or is not a
-    model at all) reported as a :class:`train.UsageError`."""
+    """:func:`sonar_gym.agents.base.make_agent`, with a saved model that does not fit ``env``
+    (or is not a model at all) reported as a :class:`train.UsageError`."""
     env_id = env.spec.id if env.spec is not None else ""
     if name in agent_registry.agent_names(env_id):
         return agent_registry.make_agent(name, env)
@@ -520,3 +528,74 @@ def evaluate_agents(
 def count_episodes(plan: Mapping[str, Sequence[str]], episodes: int) -> int:
     """Total number of episodes an evaluation of ``plan`` plays."""
     return episodes * sum(len(names) for names in plan.values())
+
+
+# --------------------------------------------------------------------------------------------
+# where a command writes
+
+
+def _name_part(text: str) -> str:
+    """``text`` with every character outside ``[A-Za-z0-9._=+-]`` replaced by ``-``."""
+    return re.sub(r"[^A-Za-z0-9._=+-]+", "-", text).strip("-") or "-"
+
+
+def _env_label(env_id: str) -> str:
+    namespace, _, name = env_id.rpartition("/")
+    return name if namespace == ENV_NAMESPACE else env_id
+
+
+def _agent_label(agent: str) -> str:
+    if not _looks_like_model(agent):
+        return agent
+    path = Path(agent)
+    run = path.parent.name if path.suffix == ".zip" else path.name
+    return f"{run}.{path.stem}" if path.suffix == ".zip" and run else run or path.stem
+
+
+def output_folder_name(
+    env_selection: Sequence[str],
+    agents: Sequence[str] | None,
+    episodes: int,
+    seed: int,
+    env_kwargs: Mapping[str, Any] | None = None,
+) -> str:
+    """The folder name of one evaluation, made of its arguments, so that different commands
+    never overwrite each other's results and the same command always writes the same place.
+
+    ``<envs>_<agents>_<episodes>ep_seed<seed>[_<key=value>...]``: envs as given (``all``, or
+    ids without the ``SonarGym/`` namespace, joined by ``+``); agents joined by ``+``
+    (``all-agents`` when none are named; a saved model as ``<run dir>.<file stem>``); env
+    arguments sorted by key. Characters outside ``[A-Za-z0-9._=+-]`` become ``-``; a name
+    longer than :data:`MAX_FOLDER_NAME` characters is cut and ends in a hash of the whole.
+
+    >>> output_folder_name(["SonarGym/BeaconScan-v0"], None, 50, 0)
+    'BeaconScan-v0_all-agents_50ep_seed0'
+    >>> output_folder_name(["all"], ["paper", "random"], 10, 3, {"max_steps": 20})
+    'all_paper+random_10ep_seed3_max_steps=20'
+    """
+    agent_part = (
+        "+".join(_name_part(_agent_label(agent)) for agent in agents) if agents else "all-agents"
+    )
+    return name_from_arguments(
+        [env_selection_label(env_selection), agent_part, f"{episodes}ep", f"seed{seed}"],
+        env_kwargs,
+    )
+
+
+def env_selection_label(env_selection: Sequence[str]) -> str:
+    """Env ids as given (``all``, or ids without the ``SonarGym/`` namespace) joined by ``+``."""
+    return "+".join(_name_part(_env_label(env_id)) for env_id in env_selection) or "-"
+
+
+def name_from_arguments(parts: Sequence[str], env_kwargs: Mapping[str, Any] | None = None) -> str:
+    """``parts`` and the sorted ``key=value`` env arguments joined by ``_``, made safe for a
+    file name and cut to :data:`MAX_FOLDER_NAME` characters (see :func:`output_folder_name`)."""
+    parts = list(parts) + [
+        _name_part(f"{key}={json.dumps(value) if not isinstance(value, str) else value}")
+        for key, value in sorted((env_kwargs or {}).items())
+    ]
+    name = "_".join(parts)
+    if len(name) > MAX_FOLDER_NAME:
+        digest = hashlib.sha1(name.encode()).hexdigest()[:10]
+        name = f"{name[: MAX_FOLDER_NAME - 11]}-{digest}"
+    return name

@@ -7,6 +7,7 @@ centimetres and E_theta in degrees, the units the papers print (Beom & Cho eq. (
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 from collections.abc import Mapping, Sequence
@@ -15,11 +16,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from rich.console import Console
+from rich.console import Console, RenderableType
 from rich.table import Table
 from rich.text import Text
 
-from sonar_gym.train.benchmark import EnvThroughput
+from sonar_gym.train.benchmark import BenchmarkReport
 from sonar_gym.train.evaluation import AgentResult, AgentSummary
 
 MISSING = "–"
@@ -176,19 +177,40 @@ def _use_log_scale_for_wide_ranges(axis: Any, values: Sequence[float]) -> None:
         axis.set_yscale("log")
 
 
-def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
-    """One figure, one row of bar charts per env: E_xy median and p95 [cm], E_theta median and
-    p95 [deg] (log axes when they span more than two decades), mean sensing time [s]; one group
-    per agent, labelled with its success rate. Missing values leave no bar."""
-    import matplotlib
+THIN_SAMPLE = 10
+"""Error statistics from fewer successful episodes than this are marked ``n=...`` in plots."""
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+ERROR_PANELS = (
+    ("E_xy [cm]", 100.0, "position_error_median_m", "position_error_p95_m"),
+    ("E_θ [deg]", 180.0 / math.pi, "heading_error_median_rad", "heading_error_p95_rad"),
+)
+SENSING_PANEL = "mean sensing time [s]"
+REWARD_PANEL = "episode reward (mean, 95% CI)"
+
+
+def evaluation_panels(env_results: Sequence[AgentResult]) -> list[str]:
+    """The panels of one env's row of :func:`plot_results`, left to right: E_xy, E_theta (only
+    when some agent has a heading error: tasks without a heading get no empty panel), mean
+    sensing time, episode reward."""
+    panels = [ERROR_PANELS[0][0]]
+    if any(result.summary.heading_error_median_rad is not None for result in env_results):
+        panels.append(ERROR_PANELS[1][0])
+    return [*panels, SENSING_PANEL, REWARD_PANEL]
+
+
+def sample_note(successes: int) -> str:
+    """``"n=3"`` for error statistics from fewer than :data:`THIN_SAMPLE` episodes, else ``""``."""
+    return f"n={successes}" if 0 < successes < THIN_SAMPLE else ""
+
+
+def evaluation_figure(results: Sequence[AgentResult]) -> Any:
+    """The matplotlib figure of :func:`plot_results` (Agg; the caller closes it)."""
+    from matplotlib.figure import Figure
 
     grouped = group_by_env(results)
-    figure, axes = plt.subplots(
-        len(grouped), 3, figsize=(13, 3.4 * len(grouped)), squeeze=False, layout="constrained"
-    )
+    columns = max(len(evaluation_panels(env_results)) for env_results in grouped.values())
+    figure = Figure(figsize=(4.2 * columns, 3.6 * len(grouped)), layout="constrained")
+    axes = figure.subplots(len(grouped), columns, squeeze=False)
     width = 0.38
     for row, (env_id, env_results) in enumerate(grouped.items()):
         summaries = [result.summary for result in env_results]
@@ -196,35 +218,67 @@ def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
             f"{short_agent_label(result.agent)}\n{100 * result.summary.success_rate:.0f}% ok"
             for result in env_results
         ]
+        # error statistics from few episodes say so under their bars
+        thin_names = [
+            f"{name} ({note})" if (note := sample_note(result.summary.successes)) else name
+            for name, result in zip(names, env_results, strict=True)
+        ]
         positions = np.arange(len(names))
-        panels = (
-            ("E_xy [cm]", 100.0, "position_error_median_m", "position_error_p95_m"),
-            ("E_θ [deg]", 180.0 / math.pi, "heading_error_median_rad", "heading_error_p95_rad"),
-        )
-        for column, (label, scale, median_key, p95_key) in enumerate(panels):
+        panels = evaluation_panels(env_results)
+        for column, panel in enumerate(panels):
             axis = axes[row][column]
-            medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
-            p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
-            for offset, values, name in (
-                (-width / 2, medians, "median"),
-                (width / 2, p95s, "95th percentile"),
-            ):
-                bars = axis.bar(positions + offset, values, width, label=name)
+            errors = [entry for entry in ERROR_PANELS if entry[0] == panel]
+            if errors:
+                _, scale, median_key, p95_key = errors[0]
+                medians = [_value_or_nan(getattr(s, median_key), scale) for s in summaries]
+                p95s = [_value_or_nan(getattr(s, p95_key), scale) for s in summaries]
+                for offset, values, name in (
+                    (-width / 2, medians, "median"),
+                    (width / 2, p95s, "95th percentile"),
+                ):
+                    bars = axis.bar(positions + offset, values, width, label=name)
+                    axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
+                _use_log_scale_for_wide_ranges(axis, medians + p95s)
+                axis.legend(fontsize="small")
+            elif panel == SENSING_PANEL:
+                times = [_value_or_nan(s.sensing_time_mean_s) for s in summaries]
+                bars = axis.bar(positions, times, 0.6)
                 axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
-            _use_log_scale_for_wide_ranges(axis, medians + p95s)
-            axis.set_ylabel(label)
-            axis.legend(fontsize="small")
-        axis = axes[row][2]
-        bars = axis.bar(positions, [_value_or_nan(s.sensing_time_mean_s) for s in summaries], 0.6)
-        axis.bar_label(bars, fmt="%.3g", fontsize="x-small")
-        axis.set_ylabel("mean sensing time [s]")
-        for column in range(3):
-            axes[row][column].set_xticks(positions, names, rotation=20, ha="right")
-            axes[row][column].set_title(env_id if column == 0 else "", loc="left")
+            else:
+                means = [s.reward.mean for s in summaries]
+                half = [
+                    math.nan if s.reward.half_width is None else s.reward.half_width
+                    for s in summaries
+                ]
+                axis.errorbar(positions, means, yerr=half, fmt="o", capsize=4)
+                axis.axhline(0.0, color="#999999", linewidth=0.8)
+            axis.set_ylabel(panel)
+            axis.margins(y=0.12)
+            axis.set_xticks(positions, thin_names if errors else names, rotation=20, ha="right")
+            axis.set_title(env_id if column == 0 else "", loc="left")
+            axis.set_xlim(-0.6, len(names) - 0.4)
+        for column in range(len(panels), columns):
+            figure.delaxes(axes[row][column])
+    if any(0 < r.summary.successes < THIN_SAMPLE for r in results):
+        figure.supxlabel(
+            f"n=...: error statistics from fewer than {THIN_SAMPLE} successful episodes",
+            fontsize="small",
+            color="#b22222",
+        )
+    return figure
+
+
+def plot_results(results: Sequence[AgentResult], path: str | Path) -> Path:
+    """One figure, one row of charts per env (panels: :func:`evaluation_panels`): E_xy median
+    and p95 [cm], E_theta median and p95 [deg] where the task has a heading (log axes when
+    they span more than two decades; ``n=...`` over agents whose statistics rest on fewer than
+    :data:`THIN_SAMPLE` successful episodes), mean sensing time [s], and the mean episode
+    reward with its 95 % Student-t confidence interval. One group per agent, labelled with its
+    success rate. Missing values leave no bar."""
+    figure = evaluation_figure(results)
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     figure.savefig(target, dpi=110)
-    plt.close(figure)
     return target
 
 
@@ -292,26 +346,64 @@ def pan_table(rows: Sequence[Mapping[str, Any]]) -> Table:
     return table
 
 
-def throughput_table(results: Sequence[EnvThroughput]) -> Table:
-    """Steps per second per env: env time only, whole loop, and the time share per phase."""
-    table = Table(title="env steps per second", title_justify="left", header_style="bold")
+def _shares_text(shares: Mapping[str, float]) -> str:
+    return " · ".join(f"{phase} {100 * share:.0f}%" for phase, share in shares.items()) or MISSING
+
+
+def speed_table(report: BenchmarkReport) -> Table:
+    """Per env: random-action steps/s, PPO env-steps/s and its ratio to PPO on CartPole-v1 in
+    the same run, and the share of wall time per phase of both runs."""
+    reference = report.reference_steps_per_s
+    table = Table(
+        title=f"env steps per second (PPO on CartPole-v1: {reference:.0f} steps/s, "
+        f"after/before {report.reference_drift:.2f})",
+        title_justify="left",
+        header_style="bold",
+    )
     table.add_column("env", no_wrap=True)
-    table.add_column("agent")
-    for column in ("steps", "episodes", "env steps/s", "loop steps/s", "ms/step (env)"):
+    for column in ("random steps/s", "episodes", "PPO steps/s", "PPO vs CartPole"):
         table.add_column(column, justify="right")
-    table.add_column("env time share per phase")
-    for result in results:
-        shares = " · ".join(
-            f"{phase} {100 * share:.0f}%" for phase, share in result.phase_shares.items()
-        )
+    table.add_column("random: time share")
+    table.add_column("PPO: time share")
+    for speed in report.envs:
         table.add_row(
-            result.env_id,
-            result.agent,
-            str(result.steps),
-            str(result.episodes),
-            f"{result.env_steps_per_s:.1f}",
-            f"{result.loop_steps_per_s:.1f}",
-            f"{1e3 * result.env_seconds / result.steps:.2f}",
-            shares or MISSING,
+            speed.env_id,
+            f"{speed.random.steps_per_s:.1f}",
+            str(speed.random.episodes),
+            f"{speed.ppo.steps_per_s:.1f}",
+            f"{speed.ppo_over_reference:.3f}",
+            _shares_text(speed.random.phase_shares),
+            _shares_text(speed.ppo.phase_shares),
         )
     return table
+
+
+# --------------------------------------------------------------------------------------------
+# reproductions
+
+
+class CompactConsole(Console):
+    """A console that prints everything but tables (all of it with ``compact=False``), and
+    keeps every object, tables included, for :meth:`full_text` (the complete report, for a
+    file).
+
+    The papers' reproductions print wide tables; by default the command line shows their
+    prose (setup, verdicts, one line per finding) and files the tables.
+    """
+
+    def __init__(self, *, compact: bool = True, full_width: int = 160, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.compact = compact
+        self.full = Console(file=io.StringIO(), width=full_width, record=True, color_system=None)
+        self.tables_filed = 0
+
+    def print(self, *objects: RenderableType | Any, **kwargs: Any) -> None:  # type: ignore[override]
+        self.full.print(*objects, **kwargs)
+        if self.compact and any(isinstance(item, Table) for item in objects):
+            self.tables_filed += 1
+            return
+        super().print(*objects, **kwargs)
+
+    def full_text(self) -> str:
+        """Everything printed so far, tables included, as plain text."""
+        return self.full.export_text()

@@ -4,17 +4,20 @@ from __future__ import annotations
 
 import doctest
 import importlib
+import importlib.metadata
+import math
 import pickle
 import warnings
 
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import sonar_gym  # noqa: F401  (registers the ids)
-from sonar_gym.registration import ENVIRONMENTS
+from sonar_gym.registration import DEFAULT_EPISODE_STEPS, ENVIRONMENTS
 
 ENV_IDS = sorted(ENVIRONMENTS)
 
@@ -151,3 +154,112 @@ def test_docstring_example_runs_as_written(env_id: str) -> None:
     for test in examples:
         runner.run(test)
     assert runner.failures == 0
+
+
+# --------------------------------------------------------------------------------------------
+# Gymnasium conventions: version, episode limits, spec round trip
+
+# The argument (and the largest value it may take) behind each registered limit, and the
+# smallest invalid value just past it.
+LIMIT_ARGUMENTS = {
+    "SonarGym/BeaconScan-v0": ({"max_steps": 1000}, {"max_steps": 1001}),
+    "SonarGym/SweepLocalization-v0": (
+        {"route_length_m": 50.0, "decision_spacing_m": 0.05},
+        {"decision_spacing_m": 0.049},
+    ),
+    "SonarGym/Trilateration-v0": ({"n_decision_points": 200}, {"n_decision_points": 201}),
+    "SonarGym/BlockExpansion-v0": ({"n_areas": 3}, {"n_areas": 4}),
+    "SonarGym/WallCorrection-v0": ({"n_legs": 100, "transition_m": 0.05}, {"n_legs": 101}),
+}
+LONGEST_EPISODE = {
+    "SonarGym/BeaconScan-v0": 1000,
+    "SonarGym/SweepLocalization-v0": math.ceil(50.0 / 0.05),
+    "SonarGym/Trilateration-v0": 200,
+    "SonarGym/BlockExpansion-v0": 3 - 1,
+    "SonarGym/WallCorrection-v0": 100,
+}
+
+
+def test_version_comes_from_the_package_metadata() -> None:
+    assert isinstance(sonar_gym.__version__, str) and sonar_gym.__version__
+    try:
+        expected = importlib.metadata.version("sonar-gym")
+    except importlib.metadata.PackageNotFoundError:
+        expected = "0.0.0+unknown"
+    assert sonar_gym.__version__ == expected
+
+
+def test_every_id_has_a_limit_argument_table_entry() -> None:
+    assert set(LIMIT_ARGUMENTS) == set(ENV_IDS) == set(LONGEST_EPISODE)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_registered_limit_is_the_longest_episode_valid_arguments_allow(env_id: str) -> None:
+    assert gym.spec(env_id).max_episode_steps == LONGEST_EPISODE[env_id]
+    largest, beyond = LIMIT_ARGUMENTS[env_id]
+    gym.make(env_id, **largest).close()  # the bound itself is valid
+    with pytest.raises(ValueError):
+        gym.make(env_id, **beyond)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_env_ends_its_own_episodes_within_the_default_length(env_id: str) -> None:
+    env = gym.make(env_id)
+    limit = DEFAULT_EPISODE_STEPS[env_id]
+    assert limit < gym.spec(env_id).max_episode_steps or env_id.endswith("BlockExpansion-v0")
+    for seed in range(3):
+        env.reset(seed=seed)
+        env.action_space.seed(seed)
+        for _ in range(limit):
+            _, _, terminated, truncated, info = env.step(env.action_space.sample())
+            if terminated or truncated:
+                break
+        assert terminated or truncated, f"episode still running after {limit} steps"
+        # a truncation comes from the env itself (its status says so), never from TimeLimit
+        assert not truncated or info["status"] == "truncated"
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_spec_survives_a_json_round_trip(env_id: str) -> None:
+    spec = gym.spec(env_id)
+    rebuilt = EnvSpec.from_json(spec.to_json())
+    assert rebuilt == spec
+    env = gym.make(rebuilt)
+    observation, _ = env.reset(seed=0)
+    assert env.observation_space.contains(observation)
+    assert env.spec is not None and env.spec.max_episode_steps == spec.max_episode_steps
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_spec_of_a_configured_env_survives_a_json_round_trip(env_id: str) -> None:
+    """The kwargs recorded in ``env.spec`` (JSON turns tuples into lists) rebuild the env."""
+    largest, _ = LIMIT_ARGUMENTS[env_id]
+    env = gym.make(env_id, **largest)
+    assert env.spec is not None
+    rebuilt = EnvSpec.from_json(env.spec.to_json())
+    again = gym.make(rebuilt)
+    assert again.unwrapped.config == env.unwrapped.config
+    env.close()
+    again.close()
+
+
+# tuple-valued arguments come back from JSON as lists
+TUPLE_ARGUMENTS = {
+    "SonarGym/BeaconScan-v0": {"temperature_range_c": (10.0, 30.0), "increments_deg": (1, 5)},
+    "SonarGym/Trilateration-v0": {"fix_counts": (0, 1, 5)},
+}
+
+
+@pytest.mark.parametrize("env_id", sorted(TUPLE_ARGUMENTS))
+def test_spec_with_tuple_arguments_rebuilds_an_env_that_acts_the_same(env_id: str) -> None:
+    env = gym.make(env_id, **TUPLE_ARGUMENTS[env_id])
+    assert env.spec is not None
+    again = gym.make(EnvSpec.from_json(env.spec.to_json()))
+    assert env.action_space == again.action_space
+    assert env.observation_space == again.observation_space
+    first, second = _rollout(env, seed=3, steps=6), _rollout(again, seed=3, steps=6)
+    assert len(first) == len(second)
+    for a, b in zip(first, second, strict=True):
+        np.testing.assert_array_equal(a[0], b[0])
+        assert a[1:] == b[1:]
