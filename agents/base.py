@@ -22,6 +22,7 @@ from typing import Any, Generic, Protocol, TypeVar, cast, runtime_checkable
 import gymnasium as gym
 
 from sonar_gym.agents.builtin import BUILTIN_AGENTS, GENERIC
+from sonar_gym.agents.rllib_policy import RLlibPolicyAgent, is_rllib_run
 from sonar_gym.envs.base import SonarEnv, unwrap_sonar_env
 
 
@@ -131,13 +132,15 @@ def make_agent(name: str, env: gym.Env[Any, Any], **options: Any) -> Agent:
     factory = _REGISTRY.get(env_id, {}).get(name) or _REGISTRY.get(GENERIC, {}).get(name)
     if factory is not None:
         return _resolve(factory)(env, **options)
+    if is_rllib_run(name):
+        return RLlibPolicyAgent(name, env)
     if name.endswith(".zip") or Path(name).exists():
         from sonar_gym.agents.learned import load_policy_agent
 
         return load_policy_agent(name, env)
     raise ValueError(
         f"unknown agent {name!r} for {env_id or 'this env'}; choose one of "
-        f"{agent_names(env_id)} or give the path of a saved model (.zip)"
+        f"{agent_names(env_id)} or give the path of a saved model (.zip) or RLlib run directory"
     )
 
 

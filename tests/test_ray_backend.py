@@ -18,12 +18,8 @@ import sonar_gym  # noqa: F401
 from sonar_gym.train import UsageError
 from sonar_gym.train.distributed import chunk_seeds
 from sonar_gym.train.evaluation import evaluate_agents
-from sonar_gym.train.rllib_backend import (
-    RUN_FILE,
-    is_rllib_run,
-    require_ray,
-    train_rllib,
-)
+from sonar_gym.agents.rllib_policy import is_rllib_run
+from sonar_gym.train.rllib_backend import RUN_FILE, require_ray, train_rllib
 
 
 def test_chunks_cover_every_seed_once_in_order() -> None:
@@ -73,7 +69,7 @@ def test_ray_evaluation_equals_the_local_run_seed_for_seed(local_ray, env_id: st
 
 @pytest.mark.slow
 def test_rllib_trains_checkpoints_and_the_policy_acts(local_ray, tmp_path: Path) -> None:
-    from sonar_gym.train.rllib_backend import RLlibPolicyAgent
+    from sonar_gym.agents.rllib_policy import RLlibPolicyAgent
 
     run_dir = tmp_path / "tri-rllib"
     result = train_rllib("SonarGym/Trilateration-v0", 1024, run_dir, num_env_runners=1, seed=0)

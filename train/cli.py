@@ -20,6 +20,7 @@ import sys
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from rich.console import Console
 
@@ -98,6 +99,18 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH",
         help="bar charts per env (default <out>/evaluate.png)",
     )
+    evaluate.add_argument(
+        "--ray",
+        action="store_true",
+        help="spread the episodes over a Ray cluster (extra [ray]); same numbers as locally",
+    )
+    evaluate.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="Ray cluster for --ray and --backend rllib ('auto', 'ray://host:10001'); "
+        "default: start Ray on this machine",
+    )
     _add_env_arg(evaluate)
     evaluate.set_defaults(handler=_evaluate)
 
@@ -153,6 +166,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="start afresh in a run directory that holds a model",
     )
     train.add_argument("--no-progress", action="store_true", help="no progress bar")
+    train.add_argument(
+        "--backend",
+        choices=("sb3", "rllib"),
+        default="sb3",
+        help="stable-baselines3 in this process (default), or RLlib PPO on Ray (extra [ray])",
+    )
+    train.add_argument(
+        "--num-env-runners",
+        type=_non_negative_int,
+        default=1,
+        metavar="N",
+        help="RLlib remote env runners (--backend rllib; default 1)",
+    )
+    train.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="Ray cluster for --backend rllib ('auto', 'ray://host:10001'); default: local Ray",
+    )
     _add_env_arg(train)
     train.set_defaults(handler=_train)
 
@@ -330,7 +362,14 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
     started = time.perf_counter()
     with episode_progress(console, total) as advance:
         results = evaluation.evaluate_agents(
-            env_ids, plan, arguments.episodes, arguments.seed, env_kwargs, on_episode=advance
+            env_ids,
+            plan,
+            arguments.episodes,
+            arguments.seed,
+            env_kwargs,
+            on_episode=advance,
+            ray=arguments.ray,
+            ray_address=arguments.address,
         )
     elapsed_s = time.perf_counter() - started
     report.print_summary(results, console)
@@ -376,6 +415,9 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
     from sonar_gym.train.training import evaluate_command, train
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    if arguments.backend == "rllib":
+        _train_rllib(arguments, env_kwargs, console)
+        return
     result = train(
         env_id=arguments.env,
         algo=arguments.algo.lower() if arguments.algo else None,
@@ -411,6 +453,48 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
     console.print("Evaluate it against the baselines with:")
     console.print(
         f"  {runnable_command(evaluate_command(result))}",
+        highlight=False,
+        markup=False,
+        soft_wrap=True,
+    )
+
+
+def _train_rllib(
+    arguments: argparse.Namespace, env_kwargs: dict[str, Any], console: Console
+) -> None:
+    from sonar_gym.train.rllib_backend import train_rllib
+
+    if arguments.env is None:
+        raise UsageError("--backend rllib needs --env ID")
+    if arguments.resume is not None:
+        raise UsageError("--resume continues stable-baselines3 runs only")
+    algo = (arguments.algo or "ppo").lower()
+    out_dir = arguments.out or Path("runs") / f"{arguments.env.split('/')[-1]}-rllib-{algo}"
+    console.print(
+        f"Training RLlib {algo.upper()} on {arguments.env} for {arguments.timesteps} env steps "
+        f"with {arguments.num_env_runners} env runner(s)",
+        markup=False,
+    )
+    result = train_rllib(
+        arguments.env,
+        arguments.timesteps,
+        out_dir,
+        algo=algo,
+        seed=arguments.seed,
+        num_env_runners=arguments.num_env_runners,
+        address=arguments.address,
+        env_kwargs=env_kwargs,
+        overwrite=arguments.overwrite,
+        on_iteration=lambda steps, total: console.print(f"  {steps}/{total} env steps"),
+    )
+    console.print(
+        f"{result.timesteps} env steps in {result.iterations} iterations, {result.seconds:.1f} s. "
+        f"Checkpoint and run info in {result.run_dir}. Evaluate it with:",
+        markup=False,
+    )
+    evaluate = f"sonar-gym evaluate --env {arguments.env} --agent paper {result.run_dir}"
+    console.print(
+        f"  {runnable_command(evaluate)}",
         highlight=False,
         markup=False,
         soft_wrap=True,

@@ -470,6 +470,8 @@ def evaluate_agents(
     *,
     on_episode: EpisodeCallback | None = None,
     max_steps_per_episode: int = DEFAULT_MAX_STEPS_PER_EPISODE,
+    ray: bool = False,
+    ray_address: str | None = None,
 ) -> list[AgentResult]:
     """Evaluate agents on envs; episode ``i`` uses seed ``seed + i`` for every agent.
 
@@ -482,6 +484,9 @@ def evaluate_agents(
         env_kwargs: keyword arguments for every ``gym.make`` (checked per env).
         on_episode: called after each episode (progress display).
         max_steps_per_episode: guard against envs without a time limit.
+        ray: spread the episodes over a Ray cluster (:mod:`sonar_gym.train.distributed`);
+            the records equal the local run's for the same seeds.
+        ray_address: the cluster (``"auto"``, ``"ray://host:10001"``); None starts Ray locally.
 
     Returns:
         One :class:`AgentResult` per (env, agent), envs in the given order, agents in order.
@@ -503,6 +508,28 @@ def evaluate_agents(
     kwargs = dict(env_kwargs or {})
     validate_plan(plan, kwargs)
 
+    if ray:
+        from sonar_gym.train.distributed import evaluate_plan_on_ray
+
+        records_by_key = evaluate_plan_on_ray(
+            plan,
+            episodes,
+            seed,
+            kwargs,
+            max_steps_per_episode,
+            address=ray_address,
+            on_episode=on_episode,
+        )
+        return [
+            AgentResult(
+                env_id=env_id,
+                agent=name,
+                records=tuple(records_by_key[(env_id, name)]),
+                summary=summarize(records_by_key[(env_id, name)]),
+            )
+            for env_id, names in plan.items()
+            for name in names
+        ]
     results: list[AgentResult] = []
     for env_id, names in plan.items():
         for name in names:

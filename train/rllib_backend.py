@@ -13,8 +13,8 @@ The algorithm is PPO, whose RLlib implementation takes every action space the en
 (``Discrete``, ``MultiDiscrete`` and ``Box``). A run directory holds RLlib's checkpoint
 (``rllib_checkpoint.json`` and its components), ``run.json`` (env id, env arguments, seed,
 timesteps, versions, the PPO settings) and ``progress.csv`` (one row per training iteration).
-:class:`RLlibPolicyAgent` loads the policy of such a directory so that ``sonar-gym evaluate``
-runs it like any other agent.
+:class:`sonar_gym.agents.rllib_policy.RLlibPolicyAgent` loads the policy of such a directory, so
+``sonar-gym evaluate --agent DIR`` runs it like any other agent.
 
 Ray and RLlib are an optional extra (``pip install -e ".[ray]"``); nothing here imports them
 until a function needs them.
@@ -33,16 +33,13 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.agents.rllib_policy import RAY_INSTALL_HINT
 from sonar_gym.train import UsageError
 
 RLLIB_ALGORITHMS = ("ppo",)
 """Algorithms ``--backend rllib`` trains (PPO fits every action space of the suite)."""
-RLLIB_CHECKPOINT_FILE = "rllib_checkpoint.json"
-"""The file RLlib writes at the top of every algorithm checkpoint."""
 RUN_FILE = "run.json"
 PROGRESS_FILE = "progress.csv"
-POLICY_SUBDIR = Path("learner_group") / "learner" / "rl_module" / "default_policy"
-"""Where an algorithm checkpoint keeps the single-agent policy (RLlib's new API stack)."""
 
 
 @dataclass(frozen=True)
@@ -69,10 +66,7 @@ def require_ray() -> Any:
     try:
         import ray
     except ImportError as error:
-        raise UsageError(
-            "the rllib backend and --ray need Ray: pip install -e '.[ray]' "
-            f"(in the project's .venv: .venv/bin/pip install -e '.[ray]'); {error}"
-        ) from error
+        raise UsageError(f"the rllib backend and --ray need Ray: {RAY_INSTALL_HINT}") from error
     return ray
 
 
@@ -238,59 +232,3 @@ def _write_run_file(
     }
     (run_dir / RUN_FILE).write_text(json.dumps(record, indent=2) + "\n")
 
-
-def is_rllib_run(path: str | Path) -> bool:
-    """Whether ``path`` is a directory holding an RLlib algorithm checkpoint."""
-    return (Path(path) / RLLIB_CHECKPOINT_FILE).is_file()
-
-
-class RLlibPolicyAgent:
-    """The greedy policy of an RLlib PPO checkpoint, as an agent (``act(observation)``).
-
-    The env the agent is made for must have the observation and action spaces the policy
-    was trained on; a mismatch is refused when the agent is made.
-    """
-
-    def __init__(self, run_dir: str | Path, env: gym.Env) -> None:
-        require_ray()
-        import torch
-        from ray.rllib.core.rl_module.rl_module import RLModule
-
-        path = Path(run_dir)
-        if not is_rllib_run(path):
-            raise ValueError(f"{path} is not an RLlib checkpoint (no {RLLIB_CHECKPOINT_FILE})")
-        self.name = str(path)
-        self._torch = torch
-        self._module = RLModule.from_checkpoint(str((path / POLICY_SUBDIR).resolve()))
-        if self._module.observation_space.shape != env.observation_space.shape:
-            raise ValueError(
-                f"{path}: the policy was trained on observations of shape "
-                f"{self._module.observation_space.shape}; this env gives "
-                f"{env.observation_space.shape}"
-            )
-        if self._module.action_space != env.action_space:
-            raise ValueError(
-                f"{path}: the policy acts in {self._module.action_space}; this env's action "
-                f"space is {env.action_space}"
-            )
-        self._action_space = env.action_space
-        self._distribution = self._module.get_inference_action_dist_cls()
-
-    def reset(self, seed: int | None = None) -> None:
-        """A greedy feed-forward policy keeps no state between episodes."""
-
-    def act(self, observation: Any) -> Any:
-        """The most likely action of the policy for ``observation``."""
-        batch = self._torch.as_tensor(np.asarray(observation, dtype=np.float32)[None])
-        with self._torch.no_grad():
-            output = self._module.forward_inference({"obs": batch})
-        logits = output["action_dist_inputs"]
-        action = self._distribution.from_logits(logits).to_deterministic().sample()
-        value = action.cpu().numpy()[0]
-        space = self._action_space
-        if isinstance(space, gym.spaces.Discrete):
-            return int(value)
-        action_array = np.asarray(value, dtype=space.dtype).reshape(space.shape)
-        if isinstance(space, gym.spaces.Box):
-            return np.clip(action_array, space.low, space.high)  # a Gaussian's mean may overshoot
-        return action_array
