@@ -28,7 +28,6 @@ and rebuilds the space from them.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,8 +35,8 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from sonar_gym.geometry import StaticGeometry, build_static_geometry
-from sonar_gym.pose import Pose, wrap_angle
+from sonar_gym.geometry import StaticGeometry, static_geometry
+from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
 
 TEMPERATURE_RANGE_C = (-40.0, 60.0)
@@ -185,11 +184,28 @@ class World:
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
-        self._box_polygons = tuple(box.corners for box in scenario.boxes)
+        self._box_polygons = np.array(
+            [box.corners for box in scenario.boxes], dtype=np.float64
+        ).reshape(-1, 4, 2)
 
     def rebuild_geometry(self) -> None:
-        """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed)."""
-        self.geometry: StaticGeometry = build_static_geometry(self.scenario)
+        """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).
+
+        Worlds of equal scenarios share one read-only geometry
+        (:func:`~sonar_gym.geometry.static_geometry`), so the analysis runs once per scenario.
+        """
+        self.geometry: StaticGeometry = static_geometry(self.scenario)
+
+    def reset_episode(self, temperature_c: float, robot_pose: Pose | None = None) -> None:
+        """Start a new episode in the same static world: new air temperature and robot pose.
+
+        The pymunk space, its static shapes and :attr:`geometry` are kept; the robot gets a
+        fresh body at ``robot_pose`` (which must be free) or at the default start (see the
+        class docstring), so the result equals a newly built ``World(scenario, temperature_c,
+        robot_pose)``.
+        """
+        self.temperature_c = temperature_c
+        self._place_initial_robot(robot_pose)
 
     def set_scenario(self, scenario: Scenario, robot_pose: Pose | None = None) -> None:
         """Replace the static content by ``scenario``'s and rebuild the geometry cache.
@@ -309,7 +325,7 @@ class World:
             and room.min[1] + inner <= y <= room.max[1] - inner
         ):
             return False
-        if self._box_polygons and _inside_any_convex_polygon((x, y), self._box_polygons):
+        if len(self._box_polygons) and _inside_any_convex_polygon((x, y), self._box_polygons):
             return False
         for info in self.space.point_query((x, y), r, STATIC_ONLY):
             if info.distance < inner:
@@ -503,19 +519,11 @@ def _as_region(region: Region) -> Region:
     return ((float(array[0, 0]), float(array[0, 1])), (float(array[1, 0]), float(array[1, 1])))
 
 
-def _inside_any_convex_polygon(
-    point: tuple[float, float], polygons: Sequence[Sequence[tuple[float, float]]]
-) -> bool:
-    """Whether ``point`` lies strictly inside any of the counter-clockwise convex polygons."""
+def _inside_any_convex_polygon(point: tuple[float, float], polygons: FloatArray) -> bool:
+    """Whether ``point`` lies strictly inside any of the ``(P, K, 2)`` counter-clockwise convex
+    polygons: left of every one of its edges."""
     px, py = point
-    for polygon in polygons:
-        previous = polygon[-1]
-        for corner in polygon:
-            if (corner[0] - previous[0]) * (py - previous[1]) - (corner[1] - previous[1]) * (
-                px - previous[0]
-            ) <= 0.0:
-                break
-            previous = corner
-        else:
-            return True
-    return False
+    previous = np.roll(polygons, 1, axis=1)
+    edge = polygons - previous
+    cross = edge[..., 0] * (py - previous[..., 1]) - edge[..., 1] * (px - previous[..., 0])
+    return bool(np.any(np.all(cross > 0.0, axis=1)))
