@@ -47,8 +47,9 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -117,6 +118,11 @@ REFLECTOR_DISTANCE_M = 0.515
 _EXTENT_TOLERANCE_RAD = 1e-9
 """Slack on the angular-extent bounds and on "equal extents", so that an extent of exactly
 18 or 26 increments survives the rounding of angle differences."""
+
+_UNSCALED_EXPONENT = 100
+"""Eqs (8)-(14) run on the lengths as given while they all lie within ``2**+-100`` m (their
+squares, and the ``1/cos psi`` factors, stay far from overflow and underflow); beyond, the
+lengths are scaled by a power of two first."""
 
 _PAPER_FORMULA_MIN_COS_PSI = 0.05
 """Eqs (10)-(12) divide by ``x_L - x_S`` and lose about ``2 log10|tan psi|`` significant digits;
@@ -375,7 +381,8 @@ class TwoCircleSolution:
     """Outcome of eqs (8)-(14).
 
     Attributes:
-        status: ``"ok"`` or ``"no_intersection"`` (``D < 0``).
+        status: ``"ok"``, ``"no_intersection"`` (``D < 0``) or ``"out_of_float_range"``
+            (the circles meet, but a meeting point lies beyond the largest float, 1.8e308 m).
         position: the intersection chosen by the sign rule, ``(x, y)`` metres in {W};
             ``None`` unless ok.
         other_position: the mirror intersection the sign rule rejected; ``None`` unless ok.
@@ -424,19 +431,119 @@ def solve_two_circles(
         small_distance, large_distance: ``d_S = delta_S + r_S`` and ``d_L = delta_L + r_L``,
             metres, > 0.
         bearing_difference: ``delta-beta = beta_S - beta_L``, radians.
+
+    Every finite input (centres, distances > 0, any bearing) gives a solution with a status
+    and no NaN, at any magnitude: inputs beyond ``2**+-100`` m are solved scaled by a power of
+    two. Non-finite input raises ``ValueError`` naming the argument.
     """
     small_xy = _point("small_center", small_center)
     large_xy = _point("large_center", large_center)
     _require_positive("small_distance", small_distance)
     _require_positive("large_distance", large_distance)
     _require_finite("bearing_difference", bearing_difference)
-    beacon_distance = math.dist(small_xy, large_xy)
-    if beacon_distance <= 0.0:
+    if small_xy == large_xy:
         raise ValueError("small_center and large_center must be distinct points")
+    lengths = (*small_xy, *large_xy, float(small_distance), float(large_distance))
+    exponent = math.frexp(max(abs(v) for v in lengths))[1]
+    if -_UNSCALED_EXPONENT <= exponent <= _UNSCALED_EXPONENT:
+        return _solve_guarded(small_xy, large_xy, *lengths[4:], bearing_difference)
+    # Scaling by a power of two is exact: the same solution, computed where no square
+    # overflows or underflows, then scaled back.
+    x_s, y_s, x_l, y_l, d_s, d_l = (math.ldexp(v, -exponent) for v in lengths)
+    scaled = _solve_guarded((x_s, y_s), (x_l, y_l), d_s, d_l, bearing_difference)
+    # D is in m^2: beyond the float range it saturates at the largest float, keeping its sign.
+    discriminant = max(
+        -sys.float_info.max,
+        min(_ldexp_saturated(scaled.discriminant, 2 * exponent), sys.float_info.max),
+    )
+    if scaled.position is None or scaled.other_position is None:
+        return replace(scaled, discriminant=discriminant)
+    chosen, other = (
+        (_ldexp_saturated(x, exponent), _ldexp_saturated(y, exponent))
+        for x, y in (scaled.position, scaled.other_position)
+    )
+    if not all(math.isfinite(v) for v in (*chosen, *other)):
+        return TwoCircleSolution(
+            "out_of_float_range", None, None, discriminant, scaled.used_paper_formula
+        )
+    return replace(scaled, position=chosen, other_position=other, discriminant=discriminant)
 
+
+def _solve_guarded(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14); where they overflow (ranges vastly longer than the beacon distance), the
+    factored construction of :func:`_solve_factored`, which cannot."""
+    try:
+        solution = _solve_two_circles(small_xy, large_xy, d_s, d_l, bearing_difference)
+    except (OverflowError, ZeroDivisionError):
+        return _solve_factored(small_xy, large_xy, d_s, d_l, bearing_difference)
+    values = [solution.discriminant, *(solution.position or ()), *(solution.other_position or ())]
+    if all(math.isfinite(v) for v in values):
+        return solution
+    return _solve_factored(small_xy, large_xy, d_s, d_l, bearing_difference)
+
+
+def _solve_factored(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """The two intersections with every square factored, for lengths of magnitude <= 1.
+
+    Foot of the chord along the line of centres from the large beacon:
+    ``a = ((d_L - d_S)(d_L + d_S) / d_0 + d_0) / 2``; squared half-chord
+    ``h^2 = (d_L - a)(d_L + a)``. An ``a`` beyond the float range means ``|d_L - d_S|`` far
+    exceeds ``d_0``: no intersection (``h^2 = -inf``, reported as the most negative float).
+    """
+    beacon_distance = math.dist(small_xy, large_xy)
+    if beacon_distance == 0.0:  # the centres merged in the scaling: no single intersection
+        return TwoCircleSolution("no_intersection", None, None, -sys.float_info.max, False)
+    along = ((d_l - d_s) * (d_l + d_s) / beacon_distance + beacon_distance) / 2.0
+    half_chord_sq = (d_l - along) * (d_l + along)
+    if not half_chord_sq >= 0.0:
+        return TwoCircleSolution(
+            "no_intersection", None, None, max(half_chord_sq, -sys.float_info.max), False
+        )
+    half_chord = math.sqrt(half_chord_sq)
+    unit = (
+        (small_xy[0] - large_xy[0]) / beacon_distance,
+        (small_xy[1] - large_xy[1]) / beacon_distance,
+    )
+    foot = (large_xy[0] + along * unit[0], large_xy[1] + along * unit[1])
+    first, second = (
+        (foot[0] - sign * half_chord * unit[1], foot[1] + sign * half_chord * unit[0])
+        for sign in (1.0, -1.0)
+    )
+    chosen, other = _apply_sign_rule(first, second, small_xy, large_xy, bearing_difference)
+    return TwoCircleSolution(OK, chosen, other, min(half_chord_sq, sys.float_info.max), False)
+
+
+def _ldexp_saturated(value: float, exponent: int) -> float:
+    """``value * 2**exponent``, infinite (with the sign of ``value``) beyond the float range."""
+    try:
+        return math.ldexp(value, exponent)
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+def _solve_two_circles(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14) on validated lengths whose magnitudes lie within ``2**+-100`` m."""
+    beacon_distance = math.dist(small_xy, large_xy)
     x_s, y_s = small_xy
     x_l, y_l = large_xy
-    d_s, d_l = float(small_distance), float(large_distance)
     if abs(x_l - x_s) >= _PAPER_FORMULA_MIN_COS_PSI * beacon_distance:
         tan_psi = (y_l - y_s) / (x_l - x_s)
         offset_l = (d_s**2 - d_l**2 + x_l**2 - x_s**2 + y_l**2 - y_s**2) / (2.0 * (x_l - x_s))
@@ -464,8 +571,21 @@ def solve_two_circles(
         ]
         used_paper_formula = False
 
-    measured = wrap_angle(bearing_difference)
     first, second = candidates
+    chosen, other = _apply_sign_rule(first, second, small_xy, large_xy, bearing_difference)
+    return TwoCircleSolution(OK, chosen, other, discriminant, used_paper_formula)
+
+
+def _apply_sign_rule(
+    first: tuple[float, float],
+    second: tuple[float, float],
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    bearing_difference: float,
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """``(chosen, other)``: the root whose ``delta-phi`` (eqs (13)-(14)) has the sign of the
+    measured ``delta-beta``, or, when the sign does not decide, lies nearer it."""
+    measured = wrap_angle(bearing_difference)
     delta_phi_first = _bearing_difference_at(first, small_xy, large_xy)
     delta_phi_second = _bearing_difference_at(second, small_xy, large_xy)
     first_sign_ok = delta_phi_first * measured > 0.0
@@ -476,8 +596,7 @@ def solve_two_circles(
         choose_first = abs(angle_difference(delta_phi_first, measured)) <= abs(
             angle_difference(delta_phi_second, measured)
         )
-    chosen, other = (first, second) if choose_first else (second, first)
-    return TwoCircleSolution(OK, chosen, other, discriminant, used_paper_formula)
+    return (first, second) if choose_first else (second, first)
 
 
 def heading_from_large_beacon(
@@ -661,11 +780,12 @@ def localize_rcds(
         "discriminant": solution.discriminant,
     }
     if solution.position is None:
-        return BeaconLocalization(
-            "no_intersection",
-            message=f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)",
-            **found,
+        reason = (
+            f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)"
+            if solution.status == "no_intersection"
+            else "the beacon circles meet beyond the float range"
         )
+        return BeaconLocalization(solution.status, message=reason, **found)
     heading = heading_from_large_beacon(solution.position, large_xy, large_rcd.beta)
     sensor_pose = Pose(solution.position[0], solution.position[1], heading)
 
