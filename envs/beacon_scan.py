@@ -179,6 +179,8 @@ class _Episode:
     estimate: Pose | None = None
     result: BeaconLocalization | None = None
     scans: list[Scan] = field(default_factory=list)  # kept for rendering only
+    prior_features: np.ndarray = field(default_factory=lambda: np.zeros(10, dtype=np.float32))
+    scan_features: np.ndarray | None = None  # cached until the next pan or calibration
 
 
 class BeaconScanEnv(SonarEnv):
@@ -423,7 +425,13 @@ class BeaconScanEnv(SonarEnv):
             true_pose.theta + rng.normal(0.0, math.radians(config.prior_heading_std_deg)),
         )
         self._episode = _Episode(
-            room, world, true_pose, prior, sonar, ScanMemory(math.radians(1.0))
+            room,
+            world,
+            true_pose,
+            prior,
+            sonar,
+            ScanMemory(math.radians(1.0)),
+            prior_features=self._prior_features(room, prior, sonar.transducer.max_range_m),
         )
         return self._info("sensing")
 
@@ -478,6 +486,7 @@ class BeaconScanEnv(SonarEnv):
                 self.np_random,
             )
         episode.memory.add(scan, episode.sonar.assumed_speed_of_sound_mps)
+        episode.scan_features = None
         episode.sensing_time_s += scan.duration_s
         episode.scans.append(scan)
         return scan.duration_s
@@ -487,6 +496,7 @@ class BeaconScanEnv(SonarEnv):
             calibration = episode.sonar.calibrate(episode.world, episode.true_pose, self.np_random)
         if self.config.allow_calibration:
             episode.sonar = episode.sonar.with_assumed_speed(calibration.estimated_speed_mps)
+            episode.scan_features = None
             episode.calibrated = True
         episode.sensing_time_s += calibration.duration_s
         return calibration.duration_s
@@ -522,46 +532,56 @@ class BeaconScanEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
         config = self.config
-        max_range = episode.sonar.transducer.max_range_m
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+        if episode.scan_features is None:  # pans and calibrations change it, nothing else
+            episode.scan_features = self._scan_features(episode)
+        progress = np.array(
+            [
+                min(episode.sensing_time_s / config.time_budget_s, 1.0),
+                float(episode.calibrated),
+                min(episode.steps / config.max_steps, 1.0),
+                float(config.allow_calibration),
+                episode.memory.coverage,
+            ],
+            dtype=np.float32,
+        )
+        return np.concatenate([episode.scan_features, episode.prior_features, progress])
 
+    def _scan_features(self, episode: _Episode) -> np.ndarray:
+        """``bin_ranges`` and ``bin_scanned`` of the observation (float32)."""
+        n_bins = self.config.n_bins
         memory = episode.memory
+        max_range = episode.sonar.transducer.max_range_m
         ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
         normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
-        observation[layout["bin_ranges"]] = _per_bin(normalised, config.n_bins, np.minimum)
-        observation[layout["bin_scanned"]] = _per_bin(
-            memory.scanned.astype(np.float64), config.n_bins, np.maximum
-        )
+        features = np.empty(2 * n_bins, dtype=np.float32)
+        features[:n_bins] = _per_bin(normalised, n_bins, np.minimum)
+        features[n_bins:] = _per_bin(memory.scanned.astype(np.float64), n_bins, np.maximum)
+        return features
 
-        room = episode.room
+    def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
+        """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
         (x_min, y_min), (x_max, y_max) = room.bounds
-        prior = episode.prior
-        observation[layout["prior_xy"]] = np.clip(
-            [
-                2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0,
-                2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0,
-            ],
-            -1.0,
-            1.0,
-        )
-        observation[layout["prior_heading"]] = [math.cos(prior.theta), math.sin(prior.theta)]
-        for role, (x, y) in zip(BEACON_ROLES, room.beacon_centres.tolist(), strict=True):
+        features = [
+            *np.clip(
+                [
+                    2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0,
+                    2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0,
+                ],
+                -1.0,
+                1.0,
+            ),
+            math.cos(prior.theta),
+            math.sin(prior.theta),
+        ]
+        for x, y in room.beacon_centres.tolist():
             dx, dy = x - prior.x, y - prior.y
             bearing = wrap_angle(math.atan2(dy, dx) - prior.theta)
-            observation[layout[role]] = [
+            features += [
                 math.cos(bearing),
                 math.sin(bearing),
                 min(math.hypot(dx, dy) / max_range, 1.0),
             ]
-        observation[layout["sensing_time"]] = min(
-            episode.sensing_time_s / config.time_budget_s, 1.0
-        )
-        observation[layout["calibrated"]] = float(episode.calibrated)
-        observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
-        observation[layout["calibration_allowed"]] = float(config.allow_calibration)
-        observation[layout["coverage"]] = memory.coverage
-        return observation
+        return np.array(features, dtype=np.float32)
 
     def _info(self, status: str) -> dict[str, Any]:
         episode = self._require_episode()

@@ -184,9 +184,8 @@ class World:
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
-        self._box_polygons = np.array(
-            [box.corners for box in scenario.boxes], dtype=np.float64
-        ).reshape(-1, 4, 2)
+        corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+        self._box_polygons = _ConvexPolygons(corners.reshape(-1, 4, 2))
 
     def rebuild_geometry(self) -> None:
         """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).
@@ -325,7 +324,7 @@ class World:
             and room.min[1] + inner <= y <= room.max[1] - inner
         ):
             return False
-        if len(self._box_polygons) and _inside_any_convex_polygon((x, y), self._box_polygons):
+        if self._box_polygons.contain_strictly(x, y):
             return False
         for info in self.space.point_query((x, y), r, STATIC_ONLY):
             if info.distance < inner:
@@ -519,11 +518,18 @@ def _as_region(region: Region) -> Region:
     return ((float(array[0, 0]), float(array[0, 1])), (float(array[1, 0]), float(array[1, 1])))
 
 
-def _inside_any_convex_polygon(point: tuple[float, float], polygons: FloatArray) -> bool:
-    """Whether ``point`` lies strictly inside any of the ``(P, K, 2)`` counter-clockwise convex
-    polygons: left of every one of its edges."""
-    px, py = point
-    previous = np.roll(polygons, 1, axis=1)
-    edge = polygons - previous
-    cross = edge[..., 0] * (py - previous[..., 1]) - edge[..., 1] * (px - previous[..., 0])
-    return bool(np.any(np.all(cross > 0.0, axis=1)))
+class _ConvexPolygons:
+    """Counter-clockwise convex polygons ``(P, K, 2)`` (metres, {W}), edges precomputed."""
+
+    def __init__(self, corners: FloatArray) -> None:
+        self._count = len(corners)
+        self._previous = np.roll(corners, 1, axis=1)
+        self._edges = corners - self._previous
+
+    def contain_strictly(self, x: float, y: float) -> bool:
+        """Whether ``(x, y)`` lies strictly inside any polygon: left of every one of its edges."""
+        if not self._count:
+            return False
+        previous, edges = self._previous, self._edges
+        cross = edges[..., 0] * (y - previous[..., 1]) - edges[..., 1] * (x - previous[..., 0])
+        return bool((cross > 0.0).all(axis=1).any())

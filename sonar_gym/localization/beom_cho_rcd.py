@@ -254,16 +254,28 @@ def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) 
         delta = float(ranges_m[indices[count // 2]])
     else:
         delta = float(0.5 * (ranges_m[indices[count // 2 - 1]] + ranges_m[indices[count // 2]]))
-    return RCD(
-        delta=delta,
-        beta=0.5 * (beta_start + beta_end),
-        eta=float(beta_end - beta_start),
-        gamma=_symmetry(np.unwrap(angles_rad[indices]), ranges_m[indices]),
-        start_index=start,
-        end_index=end,
-        indices=tuple(int(i) for i in indices),
-        sample_ranges=tuple(float(r) for r in ranges_m[indices]),
-    )
+    rcd_angles = angles_rad[indices]
+    if end < start:  # the RCD wraps across +-180 deg
+        rcd_angles = np.unwrap(rcd_angles)
+    rcd_ranges = ranges_m[indices]
+    gamma = _symmetry(rcd_angles, rcd_ranges)
+    if not (math.isfinite(delta) and math.isfinite(gamma)):  # a dropout inside: RCD's checks
+        return RCD(delta, 0.5 * (beta_start + beta_end), float(beta_end - beta_start), gamma)
+    # Built without RCD's checks: every value here is finite and in range by construction.
+    rcd = object.__new__(RCD)
+    for name, value in (
+        ("delta", delta),
+        ("beta", wrap_angle(float(0.5 * (beta_start + beta_end)))),
+        ("eta", float(beta_end - beta_start)),
+        ("gamma", gamma),
+        ("start_index", start),
+        ("end_index", end),
+        ("indices", tuple(indices.tolist())),
+        ("sample_ranges", tuple(rcd_ranges.tolist())),
+        ("role", None),
+    ):
+        object.__setattr__(rcd, name, value)
+    return rcd
 
 
 def _covers_full_turn(angles_rad: np.ndarray, increment_rad: float) -> bool:

@@ -794,3 +794,25 @@ def test_every_finite_input_gives_a_status_and_no_nan(
 def test_non_finite_input_is_a_value_error_naming_it(arguments: tuple, name: str) -> None:
     with pytest.raises(ValueError, match=name):
         solve_two_circles(*arguments)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_extracted_rcds_equal_ones_built_through_the_checked_constructor(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    ranges = np.repeat(rng.uniform(0.5, 4.0, 40), 9) + rng.normal(0.0, 0.004, 360)
+    ranges[rng.random(360) < 0.05] = np.nan
+    for rcd in extract_rcds(FULL_TURN_1DEG, ranges):
+        angles = np.unwrap(FULL_TURN_1DEG[list(rcd.indices)])
+        count = len(rcd.indices)
+        middle = ranges[list(rcd.indices)][(count - 1) // 2 : count // 2 + 1]
+        checked = RCD(
+            delta=float(np.mean(middle)) if count % 2 == 0 else float(middle[0]),
+            beta=0.5 * (angles[0] + angles[-1]),
+            eta=float(angles[-1] - angles[0]),
+            gamma=symmetry_measure(FULL_TURN_1DEG, ranges, rcd.indices),
+            start_index=rcd.indices[0],
+            end_index=rcd.indices[-1],
+            indices=rcd.indices,
+            sample_ranges=tuple(ranges[list(rcd.indices)]),
+        )
+        assert rcd == checked
