@@ -145,6 +145,7 @@ class World:
         self._commanded_velocity: tuple[float, float] = (0.0, 0.0)
         self._commanded_angular_velocity = 0.0
         self._robot_body, self._robot_shape = self._new_robot()
+        self._robot_is_fresh = True  # not stepped by the space since it was made
         space.add(self._robot_body, self._robot_shape)
         self.rebuild_geometry()
 
@@ -293,13 +294,20 @@ class World:
 
     def _teleport(self, pose: Pose) -> None:
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
-        # happens next depends only on the pose, never on the history of the space.
+        # happens next depends only on the pose, never on the history of the space. A body
+        # the space has not stepped since it was made is still in that state: it only moves.
+        if self._robot_is_fresh:
+            self._robot_body.position = (pose.x, pose.y)
+            self._robot_body.angle = pose.theta
+            self.space.reindex_shapes_for_body(self._robot_body)
+            return
         self.space.remove(self._robot_body, self._robot_shape)
         body, shape = self._new_robot()
         body.position = (pose.x, pose.y)
         body.angle = pose.theta
         self.space.add(body, shape)
         self._robot_body, self._robot_shape = body, shape
+        self._robot_is_fresh = True
 
     # --- queries -------------------------------------------------------------------------
 
@@ -440,6 +448,7 @@ class World:
         zero = np.zeros(3)
         # The velocity imposed in step k moves the body in step k + 1: one extra step applies the
         # last command, a settle step lets the contact bias remove any residual overlap.
+        self._robot_is_fresh = False
         for k in range(len(steps) + 1 + _SETTLE_STEPS):
             vx, vy, omega = velocities[k] if k < len(steps) else zero
             self._commanded_velocity = (float(vx), float(vy))
@@ -519,17 +528,29 @@ def _as_region(region: Region) -> Region:
 
 
 class _ConvexPolygons:
-    """Counter-clockwise convex polygons ``(P, K, 2)`` (metres, {W}), edges precomputed."""
+    """Counter-clockwise convex polygons ``(P, K, 2)`` (metres, {W}), edges precomputed.
+
+    A point is outside most polygons by its first or second edge, so a plain loop that stops
+    there beats array arithmetic for the few boxes of a room.
+    """
 
     def __init__(self, corners: FloatArray) -> None:
-        self._count = len(corners)
-        self._previous = np.roll(corners, 1, axis=1)
-        self._edges = corners - self._previous
+        previous = np.roll(corners, 1, axis=1)
+        edges = corners - previous
+        self._polygons = [
+            [
+                (float(p[0]), float(p[1]), float(e[0]), float(e[1]))
+                for p, e in zip(ps, es, strict=True)
+            ]
+            for ps, es in zip(previous, edges, strict=True)
+        ]
 
     def contain_strictly(self, x: float, y: float) -> bool:
         """Whether ``(x, y)`` lies strictly inside any polygon: left of every one of its edges."""
-        if not self._count:
-            return False
-        previous, edges = self._previous, self._edges
-        cross = edges[..., 0] * (y - previous[..., 1]) - edges[..., 1] * (x - previous[..., 0])
-        return bool((cross > 0.0).all(axis=1).any())
+        for polygon in self._polygons:
+            for start_x, start_y, edge_x, edge_y in polygon:
+                if edge_x * (y - start_y) - edge_y * (x - start_x) <= 0.0:
+                    break
+            else:
+                return True
+        return False

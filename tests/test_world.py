@@ -414,3 +414,16 @@ def test_box_interiors_are_not_free_even_for_a_point() -> None:
         corner = np.array(box.corners[0])
         outward = corner - np.array(box.center)
         assert world.is_free(corner + 0.05 * outward / np.linalg.norm(outward), radius=0.0)
+
+
+def test_a_teleported_robot_that_never_moved_drives_like_a_new_one() -> None:
+    drive = np.tile([0.015, 0.01, 0.03], (60, 1))  # into the box corner above: a collision
+    start = Pose(0.9, 0.3, 0.2)
+    moved = World(CLUTTERED, robot_pose=Pose(-1.5, -1.0, 0.5))
+    moved.set_robot_pose(Pose(1.5, -1.0, 0.0))  # teleports that never step the space
+    moved.set_robot_pose(start)
+    expected = World(CLUTTERED, robot_pose=start).move_robot(drive)
+    assert expected.collided
+    assert moved.move_robot(drive) == expected
+    moved.set_robot_pose(start)  # after a motion, a teleport gives a fresh body again
+    assert moved.move_robot(drive) == expected

@@ -295,15 +295,15 @@ def _validated_scan_arrays(
         raise ValueError(
             f"ranges must have the shape of angles {angles_rad.shape}, got {ranges_m.shape}"
         )
-    if not np.all(np.isfinite(angles_rad)):
+    if not np.isfinite(angles_rad).all():
         raise ValueError("angles must be finite")
     if len(angles_rad) >= 2:
-        steps = np.diff(angles_rad)
+        steps = angles_rad[1:] - angles_rad[:-1]
         increment = (angles_rad[-1] - angles_rad[0]) / (len(angles_rad) - 1)
-        if increment <= 0.0 or np.any(np.abs(steps - increment) > 1e-4 * increment):
+        if increment <= 0.0 or (np.abs(steps - increment) > 1e-4 * increment).any():
             raise ValueError("angles must be strictly ascending and equally spaced")
         if angles_rad[-1] - angles_rad[0] >= 2.0 * math.pi:
             raise ValueError("angles must span less than a full turn (2 pi)")
-    if np.any(ranges_m[np.isfinite(ranges_m)] < 0.0):
+    if ((ranges_m < 0.0) & (ranges_m > -math.inf)).any():  # NaN and -inf are not checked
         raise ValueError("ranges must be non-negative or NaN")
     return angles_rad, ranges_m
