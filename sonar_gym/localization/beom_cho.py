@@ -970,11 +970,11 @@ def localize_scans(
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     pans = []
-    for scan in scans:
-        ranges_m = np.asarray(scan.ranges, dtype=np.float64).copy()
-        with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore"):
+        for scan in scans:
+            ranges_m = np.array(scan.ranges, dtype=np.float64)
             ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
-        pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+            pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
     rcds = [
         rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
     ]

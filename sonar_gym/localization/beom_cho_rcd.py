@@ -161,7 +161,7 @@ def extract_rcds(angles: npt.ArrayLike, ranges: npt.ArrayLike, eps: float = 0.02
 
     finite = np.isfinite(ranges_m)
     with np.errstate(invalid="ignore"):
-        close_to_next = finite[:-1] & finite[1:] & (np.abs(np.diff(ranges_m)) < eps)
+        close_to_next = finite[:-1] & finite[1:] & (np.abs(ranges_m[1:] - ranges_m[:-1]) < eps)
     if not _covers_full_turn(angles_rad, increment_rad):
         runs = _runs_of_links(close_to_next)
         return [make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
@@ -224,7 +224,7 @@ def _symmetry(rcd_angles: np.ndarray, rcd_ranges: np.ndarray) -> float:
     offsets = np.arange(1, half_count + 1) * eta / (2 * half_count)
     above = np.interp(beta + offsets, rcd_angles, rcd_ranges)
     below = np.interp(beta - offsets, rcd_angles, rcd_ranges)
-    return float(np.mean(np.abs(above - below)))
+    return float(np.abs(above - below).sum() / half_count)  # the mean, as np.mean rounds it
 
 
 def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
@@ -233,11 +233,12 @@ def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
     ``links[k]`` says whether samples ``k`` and ``k + 1`` are close; a run of links
     ``k0..k1`` makes the RCD of samples ``k0..k1 + 1``.
     """
-    padded = np.concatenate(([False], links, [False])).astype(np.int8)
-    edges = np.diff(padded)
-    starts = np.flatnonzero(edges == 1)
-    stops = np.flatnonzero(edges == -1)
-    return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
+    padded = np.zeros(len(links) + 2, dtype=np.int8)
+    padded[1:-1] = links
+    edges = padded[1:] - padded[:-1]
+    starts = np.nonzero(edges == 1)[0].tolist()
+    stops = np.nonzero(edges == -1)[0].tolist()
+    return list(zip(starts, stops, strict=True))
 
 
 def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:
