@@ -922,6 +922,16 @@ class ScenarioLike(Protocol):
     def beacon(self, name: str) -> BeaconLike: ...
 
 
+def _short_pans_are_valid(pans: Sequence[tuple[np.ndarray, np.ndarray]]) -> bool:
+    """Whether pans of at most one ping pass :func:`extract_rcds`'s checks: one-dimensional,
+    ranges shaped like angles, finite angles, ranges non-negative or NaN."""
+    if any(angles.ndim != 1 or ranges.shape != angles.shape for angles, ranges in pans):
+        return False
+    angles = np.concatenate([pan[0] for pan in pans])
+    ranges = np.concatenate([pan[1] for pan in pans])
+    return bool(np.isfinite(angles).all() and not ((ranges < 0.0) & (ranges > -math.inf)).any())
+
+
 def localize_scan(
     scan: Scan,
     scenario: ScenarioLike,
@@ -975,6 +985,12 @@ def localize_scans(
             ranges_m = np.array(scan.ranges, dtype=np.float64)
             ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
             pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    # A pan of fewer than two pings holds no RCD; such pans are only checked, all at once.
+    short = [pan for pan in pans if len(pan[0]) < MIN_RCD_SAMPLES]
+    if short and not _short_pans_are_valid(short):
+        for angles, ranges_m in short:
+            extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
+    pans = [pan for pan in pans if len(pan[0]) >= MIN_RCD_SAMPLES]
     rcds = [
         rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
     ]

@@ -19,6 +19,7 @@ from sonar_gym.localization.beom_cho import (
     heading_from_large_beacon,
     localize_rcds,
     localize_scan,
+    localize_scans,
     pair_distance_error,
     range_from_tof,
     solve_two_circles,
@@ -816,3 +817,15 @@ def test_extracted_rcds_equal_ones_built_through_the_checked_constructor(seed: i
             sample_ranges=tuple(ranges[list(rcd.indices)]),
         )
         assert rcd == checked
+
+
+def test_single_ping_pans_add_nothing_but_are_still_checked() -> None:
+    scenario = _StandInScenario((0.0, 0.0))
+    pan = _beacon_pan(Pose(0.4, 0.3, 0.2))
+    alone = localize_scans([pan], scenario)
+    singles = [Scan(np.array([a]), np.array([2.0]), np.ones(1), 0.01) for a in (0.1, 0.2)]
+    assert localize_scans([singles[0], pan, singles[1]], scenario) == alone
+    assert localize_scans(singles, scenario).status == "no_candidates"
+    unknown_angle = Scan(np.array([math.nan]), np.array([2.0]), np.ones(1), 0.01)
+    with pytest.raises(ValueError, match="angles"):
+        localize_scans([pan, unknown_angle], scenario)
