@@ -922,13 +922,29 @@ class ScenarioLike(Protocol):
     def beacon(self, name: str) -> BeaconLike: ...
 
 
-def _short_pans_are_valid(pans: Sequence[tuple[np.ndarray, np.ndarray]]) -> bool:
-    """Whether pans of at most one ping pass :func:`extract_rcds`'s checks: one-dimensional,
-    ranges shaped like angles, finite angles, ranges non-negative or NaN."""
-    if any(angles.ndim != 1 or ranges.shape != angles.shape for angles, ranges in pans):
+def _ranges_in_window(
+    scans: Sequence[Scan], params: BeomChoParameters
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(angles, ranges)`` of each scan, ranges outside ``[r_min, r_max]`` made dropouts."""
+    pans = []
+    with np.errstate(invalid="ignore"):
+        for scan in scans:
+            ranges_m = np.array(scan.ranges, dtype=np.float64)
+            ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
+            pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    return pans
+
+
+def _short_pans_are_valid(scans: Sequence[Scan], params: BeomChoParameters) -> bool:
+    """Whether scans of at most one ping pass :func:`extract_rcds`'s checks once their ranges
+    are windowed: one-dimensional, ranges shaped like angles, finite angles, ranges
+    non-negative or NaN."""
+    if any(np.ndim(s.angles) != 1 or np.shape(s.ranges) != np.shape(s.angles) for s in scans):
         return False
-    angles = np.concatenate([pan[0] for pan in pans])
-    ranges = np.concatenate([pan[1] for pan in pans])
+    angles = np.concatenate([np.asarray(s.angles, dtype=np.float64) for s in scans])
+    ranges = np.concatenate([np.asarray(s.ranges, dtype=np.float64) for s in scans])
+    with np.errstate(invalid="ignore"):
+        ranges[(ranges < params.r_min_m) | (ranges > params.r_max_m)] = np.nan
     return bool(np.isfinite(angles).all() and not ((ranges < 0.0) & (ranges > -math.inf)).any())
 
 
@@ -979,18 +995,12 @@ def localize_scans(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    pans = []
-    with np.errstate(invalid="ignore"):
-        for scan in scans:
-            ranges_m = np.array(scan.ranges, dtype=np.float64)
-            ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
-            pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
     # A pan of fewer than two pings holds no RCD; such pans are only checked, all at once.
-    short = [pan for pan in pans if len(pan[0]) < MIN_RCD_SAMPLES]
-    if short and not _short_pans_are_valid(short):
-        for angles, ranges_m in short:
+    pans = _ranges_in_window([s for s in scans if len(s.angles) >= MIN_RCD_SAMPLES], params)
+    short = [s for s in scans if len(s.angles) < MIN_RCD_SAMPLES]
+    if short and not _short_pans_are_valid(short, params):
+        for angles, ranges_m in _ranges_in_window(short, params):
             extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
-    pans = [pan for pan in pans if len(pan[0]) >= MIN_RCD_SAMPLES]
     rcds = [
         rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
     ]
