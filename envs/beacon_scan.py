@@ -116,13 +116,11 @@ class BeaconScanConfig:
 
 
 def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
-    """Reduce ``values`` over ``n_bins`` equal, consecutive angular bins (``reduce``: a ufunc)."""
-    n = len(values)
-    if n % n_bins == 0:
-        return reduce.reduce(values.reshape(n_bins, n // n_bins), axis=1)
-    out = np.full(n_bins, values[0])  # the first slot always lies in the first bin
-    reduce.at(out, (np.arange(n) * n_bins) // n, values)
-    return out
+    """Reduce ``values`` over ``n_bins`` equal, consecutive angular bins (``reduce``: a ufunc).
+
+    The scan memory has 360 slots and ``n_bins`` divides 360 (checked by the config).
+    """
+    return reduce.reduce(values.reshape(n_bins, len(values) // n_bins), axis=1)
 
 
 def _pair(name: str, value: object) -> tuple[float, float]:
@@ -181,6 +179,7 @@ class _Episode:
     scans: list[Scan] = field(default_factory=list)  # kept for rendering only
     prior_features: np.ndarray = field(default_factory=lambda: np.zeros(10, dtype=np.float32))
     scan_features: np.ndarray | None = None  # cached until the next pan or calibration
+    coverage: float = 0.0  # of the memory, cached with scan_features
 
 
 class BeaconScanEnv(SonarEnv):
@@ -534,13 +533,14 @@ class BeaconScanEnv(SonarEnv):
         config = self.config
         if episode.scan_features is None:  # pans and calibrations change it, nothing else
             episode.scan_features = self._scan_features(episode)
+            episode.coverage = episode.memory.coverage
         progress = np.array(
             [
                 min(episode.sensing_time_s / config.time_budget_s, 1.0),
                 float(episode.calibrated),
                 min(episode.steps / config.max_steps, 1.0),
                 float(config.allow_calibration),
-                episode.memory.coverage,
+                episode.coverage,
             ],
             dtype=np.float32,
         )
@@ -555,7 +555,7 @@ class BeaconScanEnv(SonarEnv):
         normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
         features = np.empty(2 * n_bins, dtype=np.float32)
         features[:n_bins] = _per_bin(normalised, n_bins, np.minimum)
-        features[n_bins:] = _per_bin(memory.scanned.astype(np.float64), n_bins, np.maximum)
+        features[n_bins:] = _per_bin(memory.scanned, n_bins, np.logical_or)
         return features
 
     def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
