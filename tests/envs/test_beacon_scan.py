@@ -7,6 +7,7 @@ import math
 import tomllib
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -241,3 +242,58 @@ def test_seeded_episodes_do_not_depend_on_the_episodes_before() -> None:
     for key in ("true_pose", "estimated_pose"):
         np.testing.assert_array_equal(reused[key], fresh[key])
     assert reused["temperature_c"] == fresh["temperature_c"]
+
+
+def reference_observation(env: Any) -> np.ndarray:
+    """The observation as the env docstring's table defines it, slot by slot."""
+    episode, config = env._episode, env.config
+    memory, max_range = episode.memory, episode.sonar.transducer.max_range_m
+    layout = env.observation_layout
+    observation = np.zeros(env.observation_space.shape, dtype=np.float32)
+    ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
+    bins = (np.arange(memory.n_slots) * config.n_bins) // memory.n_slots
+    bin_ranges, bin_scanned = np.ones(config.n_bins), np.zeros(config.n_bins)
+    for slot, bin_index in enumerate(bins):
+        if np.isfinite(ranges[slot]):
+            bin_ranges[bin_index] = min(bin_ranges[bin_index], min(ranges[slot] / max_range, 1.0))
+        bin_scanned[bin_index] = max(bin_scanned[bin_index], float(memory.scanned[slot]))
+    observation[layout["bin_ranges"]] = bin_ranges
+    observation[layout["bin_scanned"]] = bin_scanned
+    (x_min, y_min), (x_max, y_max) = env.world.scenario.bounds
+    prior = episode.prior
+    observation[layout["prior_xy"]] = np.clip(
+        [2 * (prior.x - x_min) / (x_max - x_min) - 1, 2 * (prior.y - y_min) / (y_max - y_min) - 1],
+        -1.0,
+        1.0,
+    )
+    observation[layout["prior_heading"]] = [math.cos(prior.theta), math.sin(prior.theta)]
+    for role in ("small_beacon", "large_beacon"):
+        beacon = env.world.scenario.beacon(role)
+        dx, dy = beacon.center[0] - prior.x, beacon.center[1] - prior.y
+        bearing = math.remainder(math.atan2(dy, dx) - prior.theta, 2 * math.pi)
+        observation[layout[role]] = [
+            math.cos(bearing),
+            math.sin(bearing),
+            min(math.hypot(dx, dy) / max_range, 1.0),
+        ]
+    observation[layout["sensing_time"]] = min(episode.sensing_time_s / config.time_budget_s, 1.0)
+    observation[layout["calibrated"]] = float(episode.calibrated)
+    observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
+    observation[layout["calibration_allowed"]] = float(config.allow_calibration)
+    observation[layout["coverage"]] = memory.scanned.mean()
+    return observation
+
+
+@pytest.mark.parametrize("n_bins", [72, 360, 8])
+def test_observation_equals_its_slot_by_slot_definition(n_bins: int) -> None:
+    env = gym.make(ENV_ID, temperature_c=30.0, n_bins=n_bins).unwrapped
+    observation, _ = env.reset(seed=11)
+    np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)
+    for action in (
+        env.encode_action("pan", 90, 90, 2),
+        env.encode_action("calibrate"),
+        env.encode_action("pan", 200, 60, 5),
+        env.encode_action("pan", 0, 360, 1),
+    ):
+        observation = env.step(action)[0]
+        np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)
