@@ -560,16 +560,10 @@ class BeaconScanEnv(SonarEnv):
 
     def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
         """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
-        (x_min, y_min), (x_max, y_max) = room.bounds
+        x_min, y_min, x_max, y_max = (float(v) for v in room.bounds.ravel())
         features = [
-            *np.clip(
-                [
-                    2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0,
-                    2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0,
-                ],
-                -1.0,
-                1.0,
-            ),
+            min(max(2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0, -1.0), 1.0),
+            min(max(2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0, -1.0), 1.0),
             math.cos(prior.theta),
             math.sin(prior.theta),
         ]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from sonar_gym.pose import Pose
+from sonar_gym.scenario import Scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.world import World
 
@@ -29,16 +30,27 @@ def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
     """
     sensor = pose.transform_point(world.scenario.robot.sensor_offset)
     transducer = sonar.transducer
-    for role in BEACON_ROLES:
-        beacon = world.scenario.beacon(role)
-        centre = np.asarray(beacon.center)
-        distance = float(np.linalg.norm(centre - sensor)) - beacon.radius
+    for centre, radius in _beacons_of(world.scenario):
+        distance = float(np.linalg.norm(centre - sensor)) - radius
         if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
             return False
-        echo_point = centre + (sensor - centre) * beacon.radius / (distance + beacon.radius)
+        echo_point = centre + (sensor - centre) * radius / (distance + radius)
         if not world.line_of_sight(sensor, echo_point):
             return False
     return True
+
+
+_last_beacons: tuple[Scenario, list[tuple[np.ndarray, float]]] | None = None
+
+
+def _beacons_of(scenario: Scenario) -> list[tuple[np.ndarray, float]]:
+    """``(centre, radius)`` of the small then the large beacon (metres, {W}); the last
+    scenario's are kept, as start poses are drawn many times in one scenario."""
+    global _last_beacons
+    if _last_beacons is None or _last_beacons[0] is not scenario:
+        beacons = [scenario.beacon(role) for role in BEACON_ROLES]
+        _last_beacons = (scenario, [(np.asarray(b.center), b.radius) for b in beacons])
+    return _last_beacons[1]
 
 
 def sample_start_pose(

@@ -505,11 +505,14 @@ class World:
 
 
 def _as_point(value: Any, name: str) -> tuple[float, float]:
-    try:
-        x, y = value
-        point = (float(x), float(y))
-    except (TypeError, ValueError):
-        point = (math.nan, math.nan)
+    if isinstance(value, np.ndarray) and value.shape == (2,) and value.dtype == np.float64:
+        point = tuple(value.tolist())  # the common case, without numpy scalars
+    else:
+        try:
+            x, y = value
+            point = (float(x), float(y))
+        except (TypeError, ValueError):
+            point = (math.nan, math.nan)
     if not (math.isfinite(point[0]) and math.isfinite(point[1])):
         raise ValueError(
             f"argument '{name}' must be a finite point [x, y] in metres; got {value!r}"
