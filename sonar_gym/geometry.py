@@ -244,15 +244,14 @@ def _merge_vertices(walls: _SegmentIndex) -> tuple[FloatArray, FloatArray]:
             gap = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
             for i, j in np.sort(pairs[gap < _MERGE_TOLERANCE_M], axis=1):
                 earlier.setdefault(int(j), []).append(int(i))
-    owner = np.arange(2 * n)
+    owner = list(range(2 * n))
     for j, before in sorted(earlier.items()):
-        roots = [i for i in before if owner[i] == i]
-        if roots:
-            owner[j] = min(roots)
-    roots = np.flatnonzero(owner == np.arange(2 * n))
-    members: dict[int, list[int]] = {int(r): [] for r in roots}
+        joinable = [i for i in before if owner[i] == i]
+        if joinable:
+            owner[j] = min(joinable)
+    members: dict[int, list[int]] = {k: [] for k in range(2 * n) if owner[k] == k}
     for k, root in enumerate(owner):
-        members[int(root)].append(k)
+        members[root].append(k)
     lonely = [r for r in members if len(members[r]) == 1]
     hosts = dict(zip(lonely, walls.near(points[lonely], _MERGE_TOLERANCE_M), strict=True))
     vertex_points: list[FloatArray] = []

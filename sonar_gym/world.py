@@ -185,8 +185,8 @@ class World:
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
-        corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
-        self._box_polygons = _ConvexPolygons(corners.reshape(-1, 4, 2))
+        box_corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+        self._box_polygons = _ConvexPolygons(box_corners.reshape(-1, 4, 2))
 
     def rebuild_geometry(self) -> None:
         """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).

@@ -50,7 +50,7 @@ import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -772,7 +772,7 @@ def localize_rcds(
                 pair_error_m=pair_error,
                 candidates=candidates,
             )
-    found = {
+    found: dict[str, Any] = {
         "small_rcd": small_rcd,
         "large_rcd": large_rcd,
         "pair_error_m": pair_error,
