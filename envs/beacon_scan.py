@@ -351,6 +351,9 @@ class BeaconScanEnv(SonarEnv):
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(2 * n + 15,), dtype=np.float32)
         self._episode: _Episode | None = None
         self._room: _Room | None = None
+        # bin_ranges and bin_scanned before the first pan: no echo, nothing scanned
+        self._unscanned_features = np.concatenate([np.ones(n), np.zeros(n)]).astype(np.float32)
+        self._unscanned_features.setflags(write=False)
 
     @property
     def world(self) -> World:
@@ -431,6 +434,7 @@ class BeaconScanEnv(SonarEnv):
             sonar,
             ScanMemory(math.radians(1.0)),
             prior_features=self._prior_features(room, prior, sonar.transducer.max_range_m),
+            scan_features=self._unscanned_features,
         )
         return self._info("sensing")
 
