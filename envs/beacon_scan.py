@@ -15,6 +15,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_bool, check_choice, check_number
 from sonar_gym.localization.beom_cho import (
@@ -34,6 +35,8 @@ from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.sonar.scan import Scan
 from sonar_gym.world import World
+
+__all__ = ["BeaconScanConfig", "BeaconScanEnv", "PanCommand", "beacons_visible"]
 
 PAN, CALIBRATE, LOCALIZE = 0, 1, 2
 ACTION_KINDS = ("pan", "calibrate", "localize")
@@ -112,6 +115,14 @@ class BeaconScanConfig:
         check_number("time_budget_s", self.time_budget_s, low=0.0, low_inclusive=False, high=1e5)
 
 
+def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
+    """Reduce ``values`` over ``n_bins`` equal, consecutive angular bins (``reduce``: a ufunc).
+
+    The scan memory has 360 slots and ``n_bins`` divides 360 (checked by the config).
+    """
+    return reduce.reduce(values.reshape(n_bins, len(values) // n_bins), axis=1)
+
+
 def _pair(name: str, value: object) -> tuple[float, float]:
     if not isinstance(value, (tuple, list)) or len(value) != 2:
         raise ValueError(f"argument {name!r} must be a pair (low, high); got {value!r}")
@@ -132,27 +143,6 @@ def _check_degree_set(name: str, values: object, allowed: tuple[int, ...] | None
         )
 
 
-def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
-    """Whether both beacons are in the sonar's range and in line of sight from ``pose``.
-
-    In range: the beacon's surface lies between 5 cm beyond the sensor's minimum range and
-    0.2 m short of its maximum. In sight: no shape blocks the segment from the pan axis to the
-    point of the beacon nearest it. ``pose`` is the robot pose in {W}; metres throughout.
-    """
-    sensor = pose.transform_point(world.scenario.robot.sensor_offset)
-    transducer = sonar.transducer
-    for role in ("small_beacon", "large_beacon"):
-        beacon = world.scenario.beacon(role)
-        centre = np.asarray(beacon.center)
-        distance = float(np.linalg.norm(centre - sensor)) - beacon.radius
-        if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
-            return False
-        echo_point = centre + (sensor - centre) * beacon.radius / (distance + beacon.radius)
-        if not world.line_of_sight(sensor, echo_point):
-            return False
-    return True
-
-
 @dataclass(frozen=True)
 class PanCommand:
     """A decoded action. Angles in degrees in the robot frame {R}."""
@@ -163,8 +153,19 @@ class PanCommand:
     increment_deg: int = 0
 
 
+@dataclass(frozen=True)
+class _Room:
+    """What stays the same between episodes in one scenario ({W}, metres)."""
+
+    world: World
+    sonar: RotatingSonar  # assuming 20 deg C, before any calibration
+    bounds: np.ndarray  # (2, 2) scenario bounds, [min, max]
+    beacon_centres: np.ndarray  # (2, 2) small then large beacon
+
+
 @dataclass
 class _Episode:
+    room: _Room
     world: World
     true_pose: Pose
     prior: Pose
@@ -175,7 +176,10 @@ class _Episode:
     steps: int = 0
     estimate: Pose | None = None
     result: BeaconLocalization | None = None
-    scan_points: list[np.ndarray] = field(default_factory=list)
+    scans: list[Scan] = field(default_factory=list)  # kept for rendering only
+    prior_features: np.ndarray = field(default_factory=lambda: np.zeros(10, dtype=np.float32))
+    scan_features: np.ndarray | None = None  # cached until the next pan or calibration
+    coverage: float = 0.0  # of the memory, cached with scan_features
 
 
 class BeaconScanEnv(SonarEnv):
@@ -215,11 +219,11 @@ class BeaconScanEnv(SonarEnv):
 
     | slice | meaning | range |
     |---|---|---|
-    | ``[0, n_bins)`` | nearest range per angular bin / max range (1 = no echo or not scanned) | [0, 1] |
+    | ``[0, n_bins)`` | nearest range per bin / max range (1: no echo or not scanned) | [0, 1] |
     | ``[n_bins, 2 n_bins)`` | 1 where the bin has been scanned | {0, 1} |
     | ``+0, +1`` | prior position x, y, scaled to the scenario bounds | [-1, 1] |
     | ``+2, +3`` | cos, sin of the prior heading | [-1, 1] |
-    | ``+4 .. +6`` | small beacon seen from the prior: cos, sin of bearing in {R}, range / max range | [-1, 1] |
+    | ``+4 .. +6`` | small beacon from the prior: cos, sin of bearing ({R}), range / max | [-1, 1] |
     | ``+7 .. +9`` | the same for the large beacon | [-1, 1] |
     | ``+10`` | sensing time so far / ``time_budget_s`` (clipped) | [0, 1] |
     | ``+11`` | 1 once the speed of sound is calibrated | {0, 1} |
@@ -275,9 +279,11 @@ class BeaconScanEnv(SonarEnv):
     | max_steps | 12 | decisions before truncation |
     | start_pose | ``"beacons_visible"`` | or ``"any"`` |
     | localization_method | ``"paper"`` | or ``"least_squares"`` (refinement beside the paper's) |
-    | pair_assignment | ``"extent"`` | the paper's large/small rule, or ``"best_fit"`` (both tried) |
-    | rcd_extraction | ``"paper"`` | or ``"occlusion_aware"``: when no pair is found, retry with beacons rebuilt from RCDs a nearer echo cut (not in the paper) |
-    | prior_gate_m | None | not in the paper: keep the best beacon pair whose pose lies this close (m) to the odometry prior |
+    | pair_assignment | ``"extent"`` | the paper's large/small rule, or ``"best_fit"`` (both) |
+    | rcd_extraction | ``"paper"`` | or ``"occlusion_aware"`` (not in the paper): with no pair, |
+    | | | retry with beacons rebuilt from RCDs a nearer echo cut |
+    | prior_gate_m | None | not in the paper: keep the best beacon pair whose pose lies this |
+    | | | close (m) to the odometry prior |
     | action_type | ``"multi_discrete"`` | or ``"discrete"`` (for DQN) |
     | time_budget_s | 60 | sensing time that fills the time feature |
 
@@ -344,6 +350,16 @@ class BeaconScanEnv(SonarEnv):
         }
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(2 * n + 15,), dtype=np.float32)
         self._episode: _Episode | None = None
+        self._room: _Room | None = None
+        # bin_ranges and bin_scanned before the first pan: no echo, nothing scanned
+        self._unscanned_features = np.concatenate([np.ones(n), np.zeros(n)]).astype(np.float32)
+        self._unscanned_features.setflags(write=False)
+
+    @property
+    def world(self) -> World:
+        """The :class:`~sonar_gym.world.World` of the current episode (reused between
+        episodes while the scenario stays the same)."""
+        return self._require_episode().world
 
     # --- actions -----------------------------------------------------------------------
     def encode_action(
@@ -398,32 +414,48 @@ class BeaconScanEnv(SonarEnv):
             temperature_c = float(config.temperature_c)
         else:
             temperature_c = float(rng.uniform(*config.temperature_range_c))
-        world = World(scenario, temperature_c=temperature_c)
-        sonar = RotatingSonar.preset(scenario.sensor.preset).with_assumed_speed(
-            speed_of_sound_mps(ASSUMED_TEMPERATURE_C)
+        room = self._room_for(scenario, temperature_c)
+        world = room.world
+        sonar = room.sonar
+        true_pose = sample_start_pose(
+            world, sonar, rng, require_beacons=config.start_pose == "beacons_visible"
         )
-        true_pose = self._sample_start_pose(world, sonar, rng)
         world.set_robot_pose(true_pose)
         prior = Pose(
             true_pose.x + rng.normal(0.0, config.prior_position_std_m),
             true_pose.y + rng.normal(0.0, config.prior_position_std_m),
             true_pose.theta + rng.normal(0.0, math.radians(config.prior_heading_std_deg)),
         )
-        self._episode = _Episode(world, true_pose, prior, sonar, ScanMemory(math.radians(1.0)))
+        self._episode = _Episode(
+            room,
+            world,
+            true_pose,
+            prior,
+            sonar,
+            ScanMemory(math.radians(1.0)),
+            prior_features=self._prior_features(room, prior, sonar.transducer.max_range_m),
+            scan_features=self._unscanned_features,
+        )
         return self._info("sensing")
 
-    def _sample_start_pose(
-        self, world: World, sonar: RotatingSonar, rng: np.random.Generator
-    ) -> Pose:
-        clearance = 0.05
-        for _ in range(2000):
-            pose = world.sample_free_pose(rng, clearance=clearance)
-            if self.config.start_pose == "any" or beacons_visible(world, sonar, pose):
-                return pose
-        raise RuntimeError(
-            f"scenario {world.scenario.name!r}: found no free pose from which both beacons are "
-            "visible; use start_pose='any' or check the scenario"
+    def _room_for(self, scenario: Scenario, temperature_c: float) -> _Room:
+        """The static part of an episode, built once per scenario and reused while it lasts."""
+        room = self._room
+        if room is not None and room.world.scenario is scenario:
+            room.world.temperature_c = temperature_c
+            return room
+        world = World(scenario, temperature_c=temperature_c)
+        sonar = RotatingSonar.preset(scenario.sensor.preset).with_assumed_speed(
+            speed_of_sound_mps(ASSUMED_TEMPERATURE_C)
         )
+        beacons = [scenario.beacon(role) for role in BEACON_ROLES]
+        self._room = _Room(
+            world,
+            sonar,
+            np.array(scenario.bounds, dtype=np.float64),
+            np.array([beacon.center for beacon in beacons], dtype=np.float64),
+        )
+        return self._room
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
@@ -457,8 +489,9 @@ class BeaconScanEnv(SonarEnv):
                 self.np_random,
             )
         episode.memory.add(scan, episode.sonar.assumed_speed_of_sound_mps)
+        episode.scan_features = None
         episode.sensing_time_s += scan.duration_s
-        episode.scan_points.append(self._scan_points_world(episode, scan))
+        episode.scans.append(scan)
         return scan.duration_s
 
     def _calibrate(self, episode: _Episode) -> float:
@@ -466,6 +499,7 @@ class BeaconScanEnv(SonarEnv):
             calibration = episode.sonar.calibrate(episode.world, episode.true_pose, self.np_random)
         if self.config.allow_calibration:
             episode.sonar = episode.sonar.with_assumed_speed(calibration.estimated_speed_mps)
+            episode.scan_features = None
             episode.calibrated = True
         episode.sensing_time_s += calibration.duration_s
         return calibration.duration_s
@@ -501,49 +535,51 @@ class BeaconScanEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
         config = self.config
-        max_range = episode.sonar.transducer.max_range_m
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
-
-        memory = episode.memory
-        ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
-        bin_of_slot = (np.arange(memory.n_slots) * config.n_bins) // memory.n_slots
-        normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
-        bin_ranges = np.ones(config.n_bins)
-        np.minimum.at(bin_ranges, bin_of_slot, normalised)
-        bin_scanned = np.zeros(config.n_bins)
-        np.maximum.at(bin_scanned, bin_of_slot, memory.scanned.astype(np.float64))
-        observation[layout["bin_ranges"]] = bin_ranges
-        observation[layout["bin_scanned"]] = bin_scanned
-
-        (x_min, y_min), (x_max, y_max) = episode.world.scenario.bounds
-        prior = episode.prior
-        observation[layout["prior_xy"]] = np.clip(
+        if episode.scan_features is None:  # pans and calibrations change it, nothing else
+            episode.scan_features = self._scan_features(episode)
+            episode.coverage = episode.memory.coverage
+        progress = np.array(
             [
-                2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0,
-                2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0,
+                min(episode.sensing_time_s / config.time_budget_s, 1.0),
+                float(episode.calibrated),
+                min(episode.steps / config.max_steps, 1.0),
+                float(config.allow_calibration),
+                episode.coverage,
             ],
-            -1.0,
-            1.0,
+            dtype=np.float32,
         )
-        observation[layout["prior_heading"]] = [math.cos(prior.theta), math.sin(prior.theta)]
-        for role in ("small_beacon", "large_beacon"):
-            beacon = episode.world.scenario.beacon(role)
-            dx, dy = beacon.center[0] - prior.x, beacon.center[1] - prior.y
+        return np.concatenate([episode.scan_features, episode.prior_features, progress])
+
+    def _scan_features(self, episode: _Episode) -> np.ndarray:
+        """``bin_ranges`` and ``bin_scanned`` of the observation (float32)."""
+        n_bins = self.config.n_bins
+        memory = episode.memory
+        max_range = episode.sonar.transducer.max_range_m
+        ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
+        normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
+        features = np.empty(2 * n_bins, dtype=np.float32)
+        features[:n_bins] = _per_bin(normalised, n_bins, np.minimum)
+        features[n_bins:] = _per_bin(memory.scanned, n_bins, np.logical_or)
+        return features
+
+    def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
+        """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
+        x_min, y_min, x_max, y_max = (float(v) for v in room.bounds.ravel())
+        features = [
+            min(max(2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0, -1.0), 1.0),
+            min(max(2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0, -1.0), 1.0),
+            math.cos(prior.theta),
+            math.sin(prior.theta),
+        ]
+        for x, y in room.beacon_centres.tolist():
+            dx, dy = x - prior.x, y - prior.y
             bearing = wrap_angle(math.atan2(dy, dx) - prior.theta)
-            observation[layout[role]] = [
+            features += [
                 math.cos(bearing),
                 math.sin(bearing),
                 min(math.hypot(dx, dy) / max_range, 1.0),
             ]
-        observation[layout["sensing_time"]] = min(
-            episode.sensing_time_s / config.time_budget_s, 1.0
-        )
-        observation[layout["calibrated"]] = float(episode.calibrated)
-        observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
-        observation[layout["calibration_allowed"]] = float(config.allow_calibration)
-        observation[layout["coverage"]] = memory.coverage
-        return observation
+        return np.array(features, dtype=np.float32)
 
     def _info(self, status: str) -> dict[str, Any]:
         episode = self._require_episode()
@@ -564,7 +600,11 @@ class BeaconScanEnv(SonarEnv):
         from sonar_gym.render import render_topdown
 
         episode = self._require_episode()
-        points = np.concatenate(episode.scan_points) if episode.scan_points else None
+        points = (
+            np.concatenate([self._scan_points_world(episode, scan) for scan in episode.scans])
+            if episode.scans
+            else None
+        )
         return render_topdown(
             episode.world.scenario,
             true_pose=episode.true_pose,

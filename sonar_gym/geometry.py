@@ -17,15 +17,19 @@ Primitives:
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Scenario
 
 _MERGE_TOLERANCE_M = 1e-6
 _FLUSH_TOLERANCE_M = 1e-3
+GEOMETRY_CACHE_SIZE = 32
+"""How many scenarios' geometries :func:`static_geometry` keeps."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,7 +84,11 @@ class StaticGeometry:
 
 
 def build_static_geometry(scenario: Scenario) -> StaticGeometry:
-    """Flatten a scenario's room, walls, boxes and cylinders into :class:`StaticGeometry`."""
+    """Flatten a scenario's room, walls, boxes and cylinders into :class:`StaticGeometry`.
+
+    The corner analysis finds coincident end points and segments through a point with k-d
+    trees (:class:`_SegmentIndex`), so the build takes O(n log n) in the number of segments.
+    """
     starts: list[tuple[float, float]] = []
     ends: list[tuple[float, float]] = []
     mapped: list[bool] = []
@@ -104,18 +112,17 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
 
     segment_starts = np.array(starts, dtype=np.float64).reshape(-1, 2)
     segment_ends = np.array(ends, dtype=np.float64).reshape(-1, 2)
-    vertices, arms = _merge_vertices(
-        segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls]
-    )
+    walls = _SegmentIndex(segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls])
+    vertices, arms = _merge_vertices(walls)
     box_corners, box_arms = _box_corner_arms(
-        scenario, segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls]
+        segment_starts[n_room_and_walls:].reshape(-1, 4, 2), walls
     )
     vertices = np.concatenate([vertices, box_corners])
     arms = np.concatenate([arms, box_arms])
     circles = np.array(
         [[c.center[0], c.center[1], c.radius] for c in scenario.cylinders], dtype=np.float64
     ).reshape(-1, 3)
-    return StaticGeometry(
+    geometry = StaticGeometry(
         segment_starts=segment_starts,
         segment_ends=segment_ends,
         segment_mapped=np.array(mapped, dtype=bool),
@@ -124,12 +131,61 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
         vertices=vertices,
         vertex_arms=arms,
     )
+    for array in vars(geometry).values():
+        array.setflags(write=False)  # shared between worlds by static_geometry()
+    return geometry
+
+
+@functools.lru_cache(maxsize=GEOMETRY_CACHE_SIZE)
+def static_geometry(scenario: Scenario) -> StaticGeometry:
+    """The :class:`StaticGeometry` of ``scenario``, built once per scenario content.
+
+    Equal scenarios (frozen dataclasses, compared by value) share one read-only geometry, so
+    the sonar's per-geometry tables (:mod:`sonar_gym.sonar.echo_tables`) are reused too. The
+    last :data:`GEOMETRY_CACHE_SIZE` scenarios are kept.
+    """
+    return build_static_geometry(scenario)
+
+
+class _SegmentIndex:
+    """Segments looked up by the points near them, in O(log n) per query.
+
+    A k-d tree holds points sampled along every segment at most ``spacing`` apart, so a point
+    within ``tolerance`` of a segment lies within ``spacing / 2 + tolerance`` of one of its
+    samples. ``spacing`` is the median segment length, but never so short that the samples
+    outnumber eight per segment on average.
+    """
+
+    def __init__(self, starts: FloatArray, ends: FloatArray) -> None:
+        self.starts, self.ends = starts, ends
+        self.spans = ends - starts
+        self.lengths = _norms(self.spans)
+        n = len(starts)
+        if n == 0:
+            self._tree: cKDTree | None = None
+            return
+        spacing = max(float(np.median(self.lengths)), float(self.lengths.sum()) / (8 * n))
+        pieces = np.maximum(np.ceil(self.lengths / spacing).astype(np.int64), 1)
+        per_segment = pieces + 1
+        self._owner = np.repeat(np.arange(n), per_segment)
+        first = np.repeat(np.cumsum(per_segment) - per_segment, per_segment)
+        fraction = (np.arange(len(self._owner)) - first) / np.repeat(pieces, per_segment)
+        samples = starts[self._owner] + self.spans[self._owner] * fraction[:, None]
+        self._tree = cKDTree(samples)
+        self._reach = float(np.max(self.lengths / pieces)) / 2.0 * (1.0 + 1e-9) + 1e-12
+
+    def near(self, points: FloatArray, tolerance_m: float) -> list[np.ndarray]:
+        """Per point, the ascending indices of the segments that may pass within ``tolerance_m``."""
+        if self._tree is None or len(points) == 0:
+            return [np.zeros(0, dtype=np.int64) for _ in range(len(points))]
+        hits = self._tree.query_ball_point(points, self._reach + tolerance_m)
+        return [np.unique(self._owner[np.asarray(h, dtype=np.int64)]) for h in hits]
 
 
 def _box_corner_arms(
-    scenario: Scenario, wall_starts: FloatArray, wall_ends: FloatArray
+    box_corners: FloatArray, walls: _SegmentIndex
 ) -> tuple[FloatArray, FloatArray]:
-    """Corners of every box with their arms.
+    """Corners of every box with their arms; ``box_corners`` is ``(B, 4, 2)``, counter-clockwise.
 
     A free-standing box corner faces free space with an opening of 270 deg: always a convex
     edge, which equal arms encode. A corner standing on a wall (a table pushed against it)
@@ -137,73 +193,84 @@ def _box_corner_arms(
     dihedral there, which the arms ``(side away from the wall, wall away from the box)``
     encode.
     """
-    points: list[FloatArray] = []
-    arms: list[list[FloatArray]] = []
-    for box in scenario.boxes:
-        corners = np.array(box.corners, dtype=np.float64)
-        for i, corner in enumerate(corners):
-            to_next = corners[(i + 1) % 4] - corner
-            to_previous = corners[(i - 1) % 4] - corner
-            to_next /= np.linalg.norm(to_next)
-            to_previous /= np.linalg.norm(to_previous)
-            wall = _segment_containing(corner, wall_starts, wall_ends, _FLUSH_TOLERANCE_M)
-            points.append(corner)
-            if wall is None:
-                arms.append([to_next, to_next])
-                continue
-            along_wall_next = abs(float(wall @ to_next)) > 0.99
-            leaving = to_previous if along_wall_next else to_next
-            flush_side = to_next if along_wall_next else to_previous
-            arms.append([leaving, -flush_side])
-    return (
-        np.array(points, dtype=np.float64).reshape(-1, 2),
-        np.array(arms, dtype=np.float64).reshape(-1, 2, 2),
-    )
+    points = box_corners.reshape(-1, 2)
+    to_next = (np.roll(box_corners, -1, axis=1) - box_corners).reshape(-1, 2)
+    to_previous = (np.roll(box_corners, 1, axis=1) - box_corners).reshape(-1, 2)
+    to_next /= _norms(to_next)[:, None]
+    to_previous /= _norms(to_previous)[:, None]
+    arms = np.stack([to_next, to_next], axis=1)
+    candidates = walls.near(points, _FLUSH_TOLERANCE_M)
+    for k, point in enumerate(points):
+        wall = _segment_containing(point, walls, candidates[k], _FLUSH_TOLERANCE_M)
+        if wall is None:
+            continue
+        along_wall_next = abs(float(wall @ to_next[k])) > 0.99
+        leaving = to_previous[k] if along_wall_next else to_next[k]
+        flush_side = to_next[k] if along_wall_next else to_previous[k]
+        arms[k] = [leaving, -flush_side]
+    return points.copy(), arms
 
 
 def _segment_containing(
-    point: FloatArray, starts: FloatArray, ends: FloatArray, tolerance_m: float
+    point: FloatArray, walls: _SegmentIndex, candidates: np.ndarray, tolerance_m: float
 ) -> FloatArray | None:
-    """Unit direction of a segment passing within ``tolerance_m`` of ``point`` (ends included)."""
-    for start, end in zip(starts, ends, strict=True):
-        span = end - start
-        length = float(np.linalg.norm(span))
-        t = float((point - start) @ span) / length
-        if -tolerance_m <= t <= length + tolerance_m:
-            if np.linalg.norm(point - (start + span * t / length)) <= tolerance_m:
-                return span / length
+    """Unit direction of the first segment passing within ``tolerance_m`` of ``point`` (ends
+    included), among the ascending ``candidates``."""
+    for i in candidates:
+        span, length = walls.spans[i], walls.lengths[i]
+        t = float((point - walls.starts[i]) @ span) / length
+        if -tolerance_m <= t <= length + tolerance_m and (
+            np.linalg.norm(point - (walls.starts[i] + span * t / length)) <= tolerance_m
+        ):
+            return span / length
     return None
 
 
-def _merge_vertices(starts: FloatArray, ends: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Merge coincident segment end points; keep up to two arms per vertex."""
-    points: list[FloatArray] = []
-    arm_lists: list[list[FloatArray]] = []
-    for start, end in zip(starts, ends, strict=True):
-        direction = (end - start) / np.linalg.norm(end - start)
-        for point, arm in ((start, direction), (end, -direction)):
-            for k, existing in enumerate(points):
-                if np.linalg.norm(existing - point) < _MERGE_TOLERANCE_M:
-                    arm_lists[k].append(arm)
-                    break
-            else:
-                points.append(point.copy())
-                arm_lists.append([arm])
+def _merge_vertices(walls: _SegmentIndex) -> tuple[FloatArray, FloatArray]:
+    """Merge coincident segment end points; keep up to two arms per vertex.
+
+    End points are taken in order (start then end of each segment); each joins the earliest
+    vertex closer than the merge tolerance, else starts a new vertex. A vertex with one arm
+    is a free end, or a T-junction when it lies inside another segment.
+    """
+    n = len(walls.starts)
+    points = np.stack([walls.starts, walls.ends], axis=1).reshape(-1, 2)
+    directions = walls.spans / walls.lengths[:, None]
+    point_arms = np.stack([directions, -directions], axis=1).reshape(-1, 2)
+    earlier: dict[int, list[int]] = {}
+    if n:
+        pairs = cKDTree(points).query_pairs(_MERGE_TOLERANCE_M, output_type="ndarray")
+        if len(pairs):
+            gap = np.linalg.norm(points[pairs[:, 0]] - points[pairs[:, 1]], axis=1)
+            for i, j in np.sort(pairs[gap < _MERGE_TOLERANCE_M], axis=1):
+                earlier.setdefault(int(j), []).append(int(i))
+    owner = list(range(2 * n))
+    for j, before in sorted(earlier.items()):
+        joinable = [i for i in before if owner[i] == i]
+        if joinable:
+            owner[j] = min(joinable)
+    members: dict[int, list[int]] = {k: [] for k in range(2 * n) if owner[k] == k}
+    for k, root in enumerate(owner):
+        members[root].append(k)
+    lonely = [r for r in members if len(members[r]) == 1]
+    hosts = dict(zip(lonely, walls.near(points[lonely], _MERGE_TOLERANCE_M), strict=True))
     vertex_points: list[FloatArray] = []
     vertex_arms: list[list[FloatArray]] = []
-    for point, arms in zip(points, arm_lists, strict=True):
-        if len(arms) > 1:
+    for root, joined in members.items():
+        point = points[root]
+        if len(joined) > 1:
             vertex_points.append(point)
-            vertex_arms.append(arms[:2])
+            vertex_arms.append([point_arms[joined[0]], point_arms[joined[1]]])
             continue
-        host = _segment_through_interior(point, starts, ends)
+        arm = point_arms[root]
+        host = _segment_through_interior(point, walls, hosts[root])
         if host is None:  # a free end: an edge from every side
             vertex_points.append(point)
-            vertex_arms.append([arms[0], arms[0]])
+            vertex_arms.append([arm, arm])
         else:  # a T-junction: two concave corners, one on each side of the free wall
             for along in (host, -host):
                 vertex_points.append(point)
-                vertex_arms.append([arms[0], along])
+                vertex_arms.append([arm, along])
     return (
         np.array(vertex_points, dtype=np.float64).reshape(-1, 2),
         np.array(vertex_arms, dtype=np.float64).reshape(-1, 2, 2),
@@ -211,11 +278,11 @@ def _merge_vertices(starts: FloatArray, ends: FloatArray) -> tuple[FloatArray, F
 
 
 def _segment_through_interior(
-    point: FloatArray, starts: FloatArray, ends: FloatArray
+    point: FloatArray, walls: _SegmentIndex, candidates: np.ndarray
 ) -> FloatArray | None:
-    """Unit direction of a segment whose interior contains ``point``, if any."""
-    for start, end in zip(starts, ends, strict=True):
-        span = end - start
+    """Unit direction of the first of the ascending ``candidates`` with ``point`` inside it."""
+    for i in candidates:
+        start, span = walls.starts[i], walls.spans[i]
         length_sq = float(span @ span)
         t = float((point - start) @ span) / length_sq
         if _MERGE_TOLERANCE_M < t * np.sqrt(length_sq) < np.sqrt(length_sq) - _MERGE_TOLERANCE_M:
@@ -223,3 +290,12 @@ def _segment_through_interior(
             if np.linalg.norm(point - foot) < _MERGE_TOLERANCE_M:
                 return span / np.sqrt(length_sq)
     return None
+
+
+def _norms(vectors: FloatArray) -> FloatArray:
+    """``(N,)`` Euclidean lengths of ``(N, 2)`` vectors, rounded as ``np.linalg.norm`` of each.
+
+    A batched matrix product rounds like the dot product ``np.linalg.norm`` uses, so the
+    geometry stays bit-identical to a per-vector build.
+    """
+    return np.sqrt(np.matmul(vectors[:, None, :], vectors[:, :, None])[:, 0, 0])

@@ -28,7 +28,6 @@ and rebuilds the space from them.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,8 +35,8 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from sonar_gym.geometry import StaticGeometry, build_static_geometry
-from sonar_gym.pose import Pose, wrap_angle
+from sonar_gym.geometry import StaticGeometry, static_geometry
+from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
 
 TEMPERATURE_RANGE_C = (-40.0, 60.0)
@@ -146,6 +145,7 @@ class World:
         self._commanded_velocity: tuple[float, float] = (0.0, 0.0)
         self._commanded_angular_velocity = 0.0
         self._robot_body, self._robot_shape = self._new_robot()
+        self._robot_is_fresh = True  # not stepped by the space since it was made
         space.add(self._robot_body, self._robot_shape)
         self.rebuild_geometry()
 
@@ -185,11 +185,27 @@ class World:
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
-        self._box_polygons = tuple(box.corners for box in scenario.boxes)
+        box_corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+        self._box_polygons = _ConvexPolygons(box_corners.reshape(-1, 4, 2))
 
     def rebuild_geometry(self) -> None:
-        """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed)."""
-        self.geometry: StaticGeometry = build_static_geometry(self.scenario)
+        """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).
+
+        Worlds of equal scenarios share one read-only geometry
+        (:func:`~sonar_gym.geometry.static_geometry`), so the analysis runs once per scenario.
+        """
+        self.geometry: StaticGeometry = static_geometry(self.scenario)
+
+    def reset_episode(self, temperature_c: float, robot_pose: Pose | None = None) -> None:
+        """Start a new episode in the same static world: new air temperature and robot pose.
+
+        The pymunk space, its static shapes and :attr:`geometry` are kept; the robot gets a
+        fresh body at ``robot_pose`` (which must be free) or at the default start (see the
+        class docstring), so the result equals a newly built ``World(scenario, temperature_c,
+        robot_pose)``.
+        """
+        self.temperature_c = temperature_c
+        self._place_initial_robot(robot_pose)
 
     def set_scenario(self, scenario: Scenario, robot_pose: Pose | None = None) -> None:
         """Replace the static content by ``scenario``'s and rebuild the geometry cache.
@@ -278,13 +294,20 @@ class World:
 
     def _teleport(self, pose: Pose) -> None:
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
-        # happens next depends only on the pose, never on the history of the space.
+        # happens next depends only on the pose, never on the history of the space. A body
+        # the space has not stepped since it was made is still in that state: it only moves.
+        if self._robot_is_fresh:
+            self._robot_body.position = (pose.x, pose.y)
+            self._robot_body.angle = pose.theta
+            self.space.reindex_shapes_for_body(self._robot_body)
+            return
         self.space.remove(self._robot_body, self._robot_shape)
         body, shape = self._new_robot()
         body.position = (pose.x, pose.y)
         body.angle = pose.theta
         self.space.add(body, shape)
         self._robot_body, self._robot_shape = body, shape
+        self._robot_is_fresh = True
 
     # --- queries -------------------------------------------------------------------------
 
@@ -309,7 +332,7 @@ class World:
             and room.min[1] + inner <= y <= room.max[1] - inner
         ):
             return False
-        if self._box_polygons and _inside_any_convex_polygon((x, y), self._box_polygons):
+        if self._box_polygons.contain_strictly(x, y):
             return False
         for info in self.space.point_query((x, y), r, STATIC_ONLY):
             if info.distance < inner:
@@ -425,6 +448,7 @@ class World:
         zero = np.zeros(3)
         # The velocity imposed in step k moves the body in step k + 1: one extra step applies the
         # last command, a settle step lets the contact bias remove any residual overlap.
+        self._robot_is_fresh = False
         for k in range(len(steps) + 1 + _SETTLE_STEPS):
             vx, vy, omega = velocities[k] if k < len(steps) else zero
             self._commanded_velocity = (float(vx), float(vy))
@@ -481,11 +505,14 @@ class World:
 
 
 def _as_point(value: Any, name: str) -> tuple[float, float]:
-    try:
-        x, y = value
-        point = (float(x), float(y))
-    except (TypeError, ValueError):
-        point = (math.nan, math.nan)
+    if isinstance(value, np.ndarray) and value.shape == (2,) and value.dtype == np.float64:
+        point = tuple(value.tolist())  # the common case, without numpy scalars
+    else:
+        try:
+            x, y = value
+            point = (float(x), float(y))
+        except (TypeError, ValueError):
+            point = (math.nan, math.nan)
     if not (math.isfinite(point[0]) and math.isfinite(point[1])):
         raise ValueError(
             f"argument '{name}' must be a finite point [x, y] in metres; got {value!r}"
@@ -503,19 +530,30 @@ def _as_region(region: Region) -> Region:
     return ((float(array[0, 0]), float(array[0, 1])), (float(array[1, 0]), float(array[1, 1])))
 
 
-def _inside_any_convex_polygon(
-    point: tuple[float, float], polygons: Sequence[Sequence[tuple[float, float]]]
-) -> bool:
-    """Whether ``point`` lies strictly inside any of the counter-clockwise convex polygons."""
-    px, py = point
-    for polygon in polygons:
-        previous = polygon[-1]
-        for corner in polygon:
-            if (corner[0] - previous[0]) * (py - previous[1]) - (corner[1] - previous[1]) * (
-                px - previous[0]
-            ) <= 0.0:
-                break
-            previous = corner
-        else:
-            return True
-    return False
+class _ConvexPolygons:
+    """Counter-clockwise convex polygons ``(P, K, 2)`` (metres, {W}), edges precomputed.
+
+    A point is outside most polygons by its first or second edge, so a plain loop that stops
+    there beats array arithmetic for the few boxes of a room.
+    """
+
+    def __init__(self, corners: FloatArray) -> None:
+        previous = np.roll(corners, 1, axis=1)
+        edges = corners - previous
+        self._polygons = [
+            [
+                (float(p[0]), float(p[1]), float(e[0]), float(e[1]))
+                for p, e in zip(ps, es, strict=True)
+            ]
+            for ps, es in zip(previous, edges, strict=True)
+        ]
+
+    def contain_strictly(self, x: float, y: float) -> bool:
+        """Whether ``(x, y)`` lies strictly inside any polygon: left of every one of its edges."""
+        for polygon in self._polygons:
+            for start_x, start_y, edge_x, edge_y in polygon:
+                if edge_x * (y - start_y) - edge_y * (x - start_x) <= 0.0:
+                    break
+            else:
+                return True
+        return False

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from sonar_gym.geometry import build_static_geometry
-from sonar_gym.scenario import load_scenario, scenario_from_dict
+from sonar_gym.geometry import build_static_geometry, static_geometry
+from sonar_gym.random_room import random_scenario
+from sonar_gym.scenario import Scenario, builtin_names, load_scenario, scenario_from_dict
 
 ROOM = {"room": {"min": [0.0, 0.0], "max": [4.0, 3.0]}}
 
@@ -137,3 +140,132 @@ def test_box_corner_against_a_wall_is_a_concave_dihedral_not_an_edge() -> None:
     assert geometry.is_concave_from(beside_the_table)[flush_right]
     assert not geometry.is_concave_from(np.array([0.0, 0.0]))[flush_right]  # behind the table face
     assert not geometry.is_concave_from(beside_the_table)[free_right]
+
+
+# --- the k-d tree build against the direct, quadratic reference ------------------------------
+
+
+def reference_corner_analysis(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and arms by direct pairwise search (the definition, O(n^2))."""
+    geometry = build_static_geometry(scenario)
+    n_walls = geometry.n_segments - 4 * len(scenario.boxes)
+    starts, ends = geometry.segment_starts[:n_walls], geometry.segment_ends[:n_walls]
+    points: list[np.ndarray] = []
+    arm_lists: list[list[np.ndarray]] = []
+    for start, end in zip(starts, ends, strict=True):
+        direction = (end - start) / np.linalg.norm(end - start)
+        for point, arm in ((start, direction), (end, -direction)):
+            for k, existing in enumerate(points):
+                if np.linalg.norm(existing - point) < 1e-6:
+                    arm_lists[k].append(arm)
+                    break
+            else:
+                points.append(point.copy())
+                arm_lists.append([arm])
+    vertices: list[np.ndarray] = []
+    arms: list[list[np.ndarray]] = []
+    for point, point_arms in zip(points, arm_lists, strict=True):
+        if len(point_arms) > 1:
+            vertices.append(point)
+            arms.append(point_arms[:2])
+            continue
+        host = None
+        for start, end in zip(starts, ends, strict=True):
+            span = end - start
+            length = np.sqrt(span @ span)
+            t = float((point - start) @ span) / (span @ span)
+            if (
+                1e-6 < t * length < length - 1e-6
+                and np.linalg.norm(start + t * span - point) < 1e-6
+            ):
+                host = span / length
+                break
+        if host is None:
+            vertices.append(point)
+            arms.append([point_arms[0], point_arms[0]])
+        else:
+            for along in (host, -host):
+                vertices.append(point)
+                arms.append([point_arms[0], along])
+    for box in scenario.boxes:
+        corners = np.array(box.corners)
+        for i, corner in enumerate(corners):
+            to_next = corners[(i + 1) % 4] - corner
+            to_previous = corners[(i - 1) % 4] - corner
+            to_next /= np.linalg.norm(to_next)
+            to_previous /= np.linalg.norm(to_previous)
+            wall = None
+            for start, end in zip(starts, ends, strict=True):
+                span = end - start
+                length = float(np.linalg.norm(span))
+                t = float((corner - start) @ span) / length
+                foot = start + span * t / length
+                if -1e-3 <= t <= length + 1e-3 and np.linalg.norm(corner - foot) <= 1e-3:
+                    wall = span / length
+                    break
+            vertices.append(corner)
+            if wall is None:
+                arms.append([to_next, to_next])
+            elif abs(float(wall @ to_next)) > 0.99:
+                arms.append([to_previous, -to_next])
+            else:
+                arms.append([to_next, -to_previous])
+    return np.array(vertices).reshape(-1, 2), np.array(arms).reshape(-1, 2, 2)
+
+
+def cluttered_walls(seed: int, n_walls: int) -> Scenario:
+    """A room with short free walls, some chained end to end, some ending on the room walls,
+    and boxes, some pushed against the walls."""
+    rng = np.random.default_rng(seed)
+    walls: list[dict[str, object]] = []
+    for _ in range(n_walls):
+        x, y = rng.uniform(-2.8, 2.8), rng.uniform(-1.8, 1.8)
+        if rng.random() < 0.3 and walls:  # continue the previous wall
+            x, y = walls[-1]["b"]  # type: ignore[misc]
+        if rng.random() < 0.1:  # a stub from the bottom wall (a T-junction)
+            x, y = round(float(x), 2), -2.0
+        angle = rng.uniform(0.0, math.pi)
+        length = rng.uniform(0.02, 0.3)
+        walls.append(
+            {"a": [x, y], "b": [x + length * math.cos(angle), y + length * math.sin(angle)]}
+        )
+    boxes = [
+        {"center": [0.0, 1.7], "size": [1.0, 0.6]},
+        {"center": [-2.5, 0.0], "size": [0.2, 0.4], "angle_deg": 30.0},
+        {"center": [1.0, -1.0], "size": [0.3, 0.3]},
+    ]
+    return scenario_from_dict(
+        {"room": {"min": [-3, -2], "max": [3, 2]}, "walls": walls, "boxes": boxes}
+    )
+
+
+@pytest.mark.parametrize(
+    "scenario",
+    [
+        *(load_scenario(name) for name in builtin_names()),
+        *(cluttered_walls(seed, 60) for seed in range(4)),
+        *(random_scenario(np.random.default_rng(seed)) for seed in range(6)),
+    ],
+)
+def test_fast_corner_analysis_equals_the_pairwise_reference(scenario: Scenario) -> None:
+    geometry = build_static_geometry(scenario)
+    vertices, arms = reference_corner_analysis(scenario)
+    np.testing.assert_array_equal(geometry.vertices, vertices)
+    np.testing.assert_array_equal(geometry.vertex_arms, arms)
+
+
+def test_hundreds_of_walls_build_like_the_reference() -> None:
+    scenario = cluttered_walls(7, 250)
+    geometry = build_static_geometry(scenario)
+    assert geometry.n_segments == 4 + 250 + 4 * 3
+    vertices, arms = reference_corner_analysis(scenario)
+    np.testing.assert_array_equal(geometry.vertices, vertices)
+    np.testing.assert_array_equal(geometry.vertex_arms, arms)
+
+
+def test_equal_scenarios_share_one_read_only_geometry() -> None:
+    first = static_geometry(cluttered_walls(3, 20))
+    assert static_geometry(cluttered_walls(3, 20)) is first
+    assert static_geometry(cluttered_walls(4, 20)) is not first
+    with pytest.raises(ValueError, match="read-only"):
+        first.vertices[0, 0] = 1.0

@@ -380,3 +380,50 @@ def test_set_scenario_with_a_blocked_pose_changes_nothing() -> None:
 
 def build_count(scenario: Scenario) -> int:
     return (4 if scenario.room else 0) + len(scenario.walls) + 4 * len(scenario.boxes)
+
+
+def test_reset_episode_equals_a_newly_built_world() -> None:
+    world = World(CLUTTERED, temperature_c=5.0, robot_pose=Pose(-1.5, -1.0, 0.5))
+    world.move_robot(np.tile([0.01, 0.0, 0.02], (30, 1)))
+    space, geometry = world.space, world.geometry
+    world.reset_episode(temperature_c=31.0, robot_pose=Pose(1.5, 0.0, -2.0))
+    fresh = World(CLUTTERED, temperature_c=31.0, robot_pose=Pose(1.5, 0.0, -2.0))
+    assert world.space is space and world.geometry is geometry
+    assert world.temperature_c == fresh.temperature_c == 31.0
+    assert world.robot_pose == fresh.robot_pose
+    drive = np.tile([0.0, 0.02, 0.01], (80, 1))  # into the box above: both slide alike
+    assert world.move_robot(drive) == fresh.move_robot(drive)
+    world.reset_episode(temperature_c=12.0)
+    assert world.robot_pose == World(CLUTTERED).robot_pose
+    with pytest.raises(ValueError, match="temperature_c"):
+        world.reset_episode(temperature_c=99.0)
+    with pytest.raises(ValueError, match="pose"):
+        world.reset_episode(temperature_c=12.0, robot_pose=Pose(-1.0, 0.6, 0.0))
+
+
+def test_worlds_of_equal_scenarios_share_the_geometry() -> None:
+    first = World(load_scenario("beom_cho_lab"))
+    assert World(load_scenario("beom_cho_lab")).geometry is first.geometry
+    assert World(CLUTTERED).geometry is not first.geometry
+
+
+def test_box_interiors_are_not_free_even_for_a_point() -> None:
+    world = World(CLUTTERED)
+    for box in CLUTTERED.boxes:
+        assert not world.is_free(box.center, radius=0.0)
+        corner = np.array(box.corners[0])
+        outward = corner - np.array(box.center)
+        assert world.is_free(corner + 0.05 * outward / np.linalg.norm(outward), radius=0.0)
+
+
+def test_a_teleported_robot_that_never_moved_drives_like_a_new_one() -> None:
+    drive = np.tile([0.015, 0.01, 0.03], (60, 1))  # into the box corner above: a collision
+    start = Pose(0.9, 0.3, 0.2)
+    moved = World(CLUTTERED, robot_pose=Pose(-1.5, -1.0, 0.5))
+    moved.set_robot_pose(Pose(1.5, -1.0, 0.0))  # teleports that never step the space
+    moved.set_robot_pose(start)
+    expected = World(CLUTTERED, robot_pose=start).move_robot(drive)
+    assert expected.collided
+    assert moved.move_robot(drive) == expected
+    moved.set_robot_pose(start)  # after a motion, a teleport gives a fresh body again
+    assert moved.move_robot(drive) == expected

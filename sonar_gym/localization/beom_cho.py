@@ -47,21 +47,38 @@ from __future__ import annotations
 
 import itertools
 import math
+import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Protocol
+from dataclasses import dataclass, replace
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.localization.beom_cho_occlusion import occlusion_aware_rcds
+from sonar_gym.localization.beom_cho_rcd import (
+    LARGE_BEACON_NAME,
+    MIN_RCD_SAMPLES,
+    RCD,
+    SMALL_BEACON_NAME,
+    _require_finite,
+    _require_non_negative,
+    _require_positive,
+    extract_rcds,
+    make_rcd,
+    symmetry_measure,
+)
 from sonar_gym.localization.beom_cho_refine import central_range_estimate, refine_two_beacon_pose
 from sonar_gym.localization.result import OK, Localization
 from sonar_gym.pose import Pose, angle_difference, wrap_angle
 from sonar_gym.sonar.scan import Scan
 
 __all__ = [
+    "LARGE_BEACON_NAME",
     "METHODS",
+    "MIN_RCD_SAMPLES",
     "RCD",
+    "SMALL_BEACON_NAME",
     "BeaconLike",
     "BeaconLocalization",
     "BeomChoParameters",
@@ -92,20 +109,20 @@ ASSIGNMENTS = ("extent", "best_fit")
 """Values of :attr:`BeomChoParameters.assignment`: the paper's rule, or both tried."""
 EXTRACTIONS = ("paper", "occlusion_aware")
 """Values of :attr:`BeomChoParameters.extraction`: the paper's RCDs only, or a second try with
-beacons rebuilt from RCDs that nearer echoes cut (:mod:`sonar_gym.localization.beom_cho_occlusion`)."""
-
-SMALL_BEACON_NAME = "small_beacon"
-LARGE_BEACON_NAME = "large_beacon"
+beacons rebuilt from RCDs that nearer echoes cut
+(:mod:`sonar_gym.localization.beom_cho_occlusion`)."""
 
 REFLECTOR_DISTANCE_M = 0.515
 """``d_c`` of section II.A: distance from the rotating sonar to the calibration reflector."""
 
-MIN_RCD_SAMPLES = 2
-"""An RCD needs at least two samples (one pair of neighbours closer than ``eps``)."""
-
 _EXTENT_TOLERANCE_RAD = 1e-9
 """Slack on the angular-extent bounds and on "equal extents", so that an extent of exactly
 18 or 26 increments survives the rounding of angle differences."""
+
+_UNSCALED_EXPONENT = 100
+"""Eqs (8)-(14) run on the lengths as given while they all lie within ``2**+-100`` m (their
+squares, and the ``1/cos psi`` factors, stay far from overflow and underflow); beyond, the
+lengths are scaled by a power of two first."""
 
 _PAPER_FORMULA_MIN_COS_PSI = 0.05
 """Eqs (10)-(12) divide by ``x_L - x_S`` and lose about ``2 log10|tan psi|`` significant digits;
@@ -116,23 +133,6 @@ intersection points are computed with the rotation-invariant construction instea
 # --------------------------------------------------------------------------------------------
 # Argument checks
 # --------------------------------------------------------------------------------------------
-
-
-def _require_finite(name: str, value: float) -> None:
-    if not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number, got {value!r}")
-
-
-def _require_positive(name: str, value: float) -> None:
-    _require_finite(name, value)
-    if value <= 0.0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-
-
-def _require_non_negative(name: str, value: float) -> None:
-    _require_finite(name, value)
-    if value < 0.0:
-        raise ValueError(f"{name} must be >= 0, got {value!r}")
 
 
 def _point(name: str, value: tuple[float, float] | npt.ArrayLike) -> tuple[float, float]:
@@ -209,11 +209,13 @@ class BeomChoParameters:
     def __post_init__(self) -> None:
         if self.assignment not in ASSIGNMENTS:
             raise ValueError(
-                f"BeomChoParameters.assignment must be one of {ASSIGNMENTS}; got {self.assignment!r}"
+                f"BeomChoParameters.assignment must be one of {ASSIGNMENTS}; "
+                f"got {self.assignment!r}"
             )
         if self.extraction not in EXTRACTIONS:
             raise ValueError(
-                f"BeomChoParameters.extraction must be one of {EXTRACTIONS}; got {self.extraction!r}"
+                f"BeomChoParameters.extraction must be one of {EXTRACTIONS}; "
+                f"got {self.extraction!r}"
             )
         extents = self.expected_extents_rad
         if (
@@ -251,75 +253,6 @@ class BeomChoParameters:
             )
 
 
-@dataclass(frozen=True)
-class RCD:
-    """A region of constant distance: the geometric parameter set ``chi = {delta, beta, eta}``
-    of section III.A plus the symmetry measure of eq. (6).
-
-    Attributes:
-        delta: range of the RCD in metres, the range at ``beta`` (the centre sample, or the
-            mean of the two central samples when the RCD has an even number of samples).
-        beta: centre angle ``(beta_s + beta_e) / 2`` in radians in the robot frame {R},
-            wrapped to (-pi, pi].
-        eta: angular extent ``beta_e - beta_s`` in radians, ``beta_s`` and ``beta_e`` being the
-            angles of the first and last samples.
-        gamma: symmetry measure of eq. (6), metres.
-        start_index, end_index: indices into the scan arrays of the first and last samples;
-            on an RCD that wraps across +-180 deg, ``start_index > end_index``. ``-1`` for an
-            RCD not taken from a scan (e.g. typed in from Table II).
-        indices: every index the RCD spans, in angular order (empty when not from a scan).
-        sample_ranges: the ranges of those samples in metres, same order (empty when not from
-            a scan). Used by the least-squares refinement; the paper's method needs only
-            ``delta``.
-        role: ``None`` for an RCD seen in a pan, whose beacon section III.D assigns by
-            extent; ``"small_beacon"`` or ``"large_beacon"`` for an RCD rebuilt as that beacon
-            by the occlusion-aware extraction (not in the paper), which pairs only in that role.
-    """
-
-    delta: float
-    beta: float
-    eta: float
-    gamma: float = 0.0
-    start_index: int = -1
-    end_index: int = -1
-    indices: tuple[int, ...] = ()
-    sample_ranges: tuple[float, ...] = ()
-    role: str | None = None
-
-    def __post_init__(self) -> None:
-        for name in ("delta", "beta", "eta", "gamma"):
-            value = float(getattr(self, name))
-            if not math.isfinite(value):
-                raise ValueError(f"RCD.{name} must be finite, got {value!r}")
-            object.__setattr__(self, name, value)
-        for name in ("delta", "eta", "gamma"):
-            _require_non_negative(f"RCD.{name}", getattr(self, name))
-        object.__setattr__(self, "beta", wrap_angle(self.beta))
-        object.__setattr__(self, "indices", tuple(int(i) for i in self.indices))
-        object.__setattr__(self, "sample_ranges", tuple(float(r) for r in self.sample_ranges))
-        if self.role not in (None, SMALL_BEACON_NAME, LARGE_BEACON_NAME):
-            raise ValueError(
-                f"RCD.role must be None, {SMALL_BEACON_NAME!r} or {LARGE_BEACON_NAME!r}; got {self.role!r}"
-            )
-        if self.sample_ranges and len(self.sample_ranges) != len(self.indices):
-            raise ValueError(
-                "RCD.sample_ranges must have one range per entry of RCD.indices "
-                f"(got {len(self.sample_ranges)} and {len(self.indices)})"
-            )
-
-    @classmethod
-    def from_degrees(
-        cls, delta_m: float, beta_deg: float, eta_deg: float, gamma_m: float = 0.0
-    ) -> RCD:
-        """Build an RCD from a row as the paper prints it (Table II: m, deg, deg, m)."""
-        return cls(
-            delta=delta_m,
-            beta=math.radians(beta_deg),
-            eta=math.radians(eta_deg),
-            gamma=gamma_m,
-        )
-
-
 # --------------------------------------------------------------------------------------------
 # Section II.A: time of flight and speed-of-sound self-calibration
 # --------------------------------------------------------------------------------------------
@@ -353,174 +286,6 @@ def speed_of_sound_from_reflector(
     _require_positive("round_trip_tof_s", round_trip_tof_s)
     _require_positive("reflector_distance_m", reflector_distance_m)
     return 2.0 * float(reflector_distance_m) / float(round_trip_tof_s)
-
-
-# --------------------------------------------------------------------------------------------
-# Section III.A: RCD extraction, eqs (3)-(5); section III.C: symmetry, eq. (6)
-# --------------------------------------------------------------------------------------------
-
-
-def extract_rcds(angles: npt.ArrayLike, ranges: npt.ArrayLike, eps: float = 0.02) -> list[RCD]:
-    """All RCDs of a pan, eqs (3)-(5), each with its symmetry measure, eq. (6).
-
-    A sample starts an RCD when it differs from its predecessor by at least ``eps`` and from
-    its successor by less (eq. (3)); it ends one in the mirrored case (eq. (4)); inside, both
-    neighbours are closer than ``eps`` (eq. (5)). So an RCD is a maximal run of at least
-    :data:`MIN_RCD_SAMPLES` (two) consecutive samples whose neighbouring ranges differ by less
-    than ``eps``. A single isolated sample is no RCD.
-
-    A NaN range (dropout) breaks an RCD. When the angles cover a full turn (their span plus
-    one increment is 2 pi) the sample after the last is the first, and an RCD may wrap across
-    +-180 deg (then ``start_index > end_index``); otherwise the ends of the pan break RCDs.
-    If every neighbouring pair of a full turn is close, the whole pan is one RCD, not wrapped.
-
-    Args:
-        angles: pan angles in radians in the robot frame {R}, one-dimensional, equally spaced
-            and strictly ascending.
-        ranges: ranges in metres, same length; NaN for dropouts.
-        eps: ``epsilon`` of eqs (3)-(5), metres, > 0 (Table I: 0.02 m).
-
-    Returns:
-        The RCDs in the order of their first sample in the arrays (a wrapped RCD comes last).
-    """
-    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges)
-    _require_positive("eps", eps)
-    sample_count = len(angles_rad)
-    if sample_count < MIN_RCD_SAMPLES:
-        return []
-    increment_rad = (angles_rad[-1] - angles_rad[0]) / (sample_count - 1)
-
-    finite = np.isfinite(ranges_m)
-    with np.errstate(invalid="ignore"):
-        close_to_next = finite[:-1] & finite[1:] & (np.abs(np.diff(ranges_m)) < eps)
-    if not _covers_full_turn(angles_rad, increment_rad):
-        runs = _runs_of_links(close_to_next)
-        return [make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
-
-    wrap_link = bool(finite[-1] and finite[0] and abs(ranges_m[0] - ranges_m[-1]) < eps)
-    links = np.append(close_to_next, wrap_link)
-    if links.all():
-        return [make_rcd(angles_rad, ranges_m, np.arange(sample_count))]
-    first_break = int(np.flatnonzero(~links)[0])
-    order = np.roll(np.arange(sample_count), -(first_break + 1))
-    rotated_links = np.roll(links, -(first_break + 1))[:-1]
-    rcds = [
-        make_rcd(angles_rad, ranges_m, order[a : b + 1]) for a, b in _runs_of_links(rotated_links)
-    ]
-    return sorted(rcds, key=lambda rcd: (rcd.start_index > rcd.end_index, rcd.start_index))
-
-
-def symmetry_measure(
-    angles: npt.ArrayLike, ranges: npt.ArrayLike, rcd_indices: Sequence[int] | npt.ArrayLike
-) -> float:
-    """Eq. (6): ``gamma = (1/M) sum_{i=1..M} |delta(beta + i eta/2M) - delta(beta - i eta/2M)|``.
-
-    ``M = INT(N/2)`` with ``N`` the number of samples of the RCD. With ``eta`` measured between
-    the first and last samples, an RCD of odd ``N`` has its samples exactly at
-    ``beta +- i eta / (2M)``, so eq. (6) pairs samples symmetric about the centre. For even
-    ``N`` those angles fall between samples and the ranges there are interpolated linearly
-    (the outermost pair, ``i = M``, is still the first and last sample).
-
-    Args:
-        angles: pan angles in radians, as for :func:`extract_rcds`.
-        ranges: ranges in metres, same length.
-        rcd_indices: indices of the RCD's samples in angular order (may wrap across +-180 deg),
-            at least two, with finite ranges.
-
-    Returns:
-        ``gamma`` in metres; 0 for a profile symmetric about ``beta``.
-    """
-    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges)
-    indices = np.asarray(rcd_indices, dtype=np.int64).reshape(-1)
-    if len(indices) < MIN_RCD_SAMPLES:
-        raise ValueError(
-            f"rcd_indices must name at least {MIN_RCD_SAMPLES} samples, got {len(indices)}"
-        )
-    if indices.min() < 0 or indices.max() >= len(angles_rad):
-        raise ValueError(f"rcd_indices must lie in [0, {len(angles_rad) - 1}]")
-    rcd_ranges = ranges_m[indices]
-    if not np.all(np.isfinite(rcd_ranges)):
-        raise ValueError("ranges at rcd_indices must be finite (an RCD holds no dropout)")
-    rcd_angles = np.unwrap(angles_rad[indices])
-    if np.any(np.diff(rcd_angles) <= 0.0):
-        raise ValueError("rcd_indices must be in ascending angular order")
-    beta = 0.5 * (rcd_angles[0] + rcd_angles[-1])
-    eta = rcd_angles[-1] - rcd_angles[0]
-    half_count = len(indices) // 2
-    offsets = np.arange(1, half_count + 1) * eta / (2 * half_count)
-    above = np.interp(beta + offsets, rcd_angles, rcd_ranges)
-    below = np.interp(beta - offsets, rcd_angles, rcd_ranges)
-    return float(np.mean(np.abs(above - below)))
-
-
-def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
-    """``(first, last)`` sample positions of each maximal run of true links.
-
-    ``links[k]`` says whether samples ``k`` and ``k + 1`` are close; a run of links
-    ``k0..k1`` makes the RCD of samples ``k0..k1 + 1``.
-    """
-    padded = np.concatenate(([False], links, [False])).astype(np.int8)
-    edges = np.diff(padded)
-    starts = np.flatnonzero(edges == 1)
-    stops = np.flatnonzero(edges == -1)
-    return [(int(a), int(b)) for a, b in zip(starts, stops, strict=True)]
-
-
-def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:
-    """The parameter set of the RCD made of ``indices`` (angular order), section III.A.
-
-    ``angles_rad`` and ``ranges_m`` are the whole pan (radians in {R}, metres); ``indices``
-    may wrap across +-180 deg on a full turn.
-    """
-    start, end = int(indices[0]), int(indices[-1])
-    beta_start = angles_rad[start]
-    beta_end = angles_rad[end] + (2.0 * math.pi if end < start else 0.0)
-    count = len(indices)
-    if count % 2 == 1:
-        delta = float(ranges_m[indices[count // 2]])
-    else:
-        delta = float(0.5 * (ranges_m[indices[count // 2 - 1]] + ranges_m[indices[count // 2]]))
-    return RCD(
-        delta=delta,
-        beta=0.5 * (beta_start + beta_end),
-        eta=float(beta_end - beta_start),
-        gamma=symmetry_measure(angles_rad, ranges_m, indices),
-        start_index=start,
-        end_index=end,
-        indices=tuple(int(i) for i in indices),
-        sample_ranges=tuple(float(r) for r in ranges_m[indices]),
-    )
-
-
-def _covers_full_turn(angles_rad: np.ndarray, increment_rad: float) -> bool:
-    """Whether the pan is a full turn: span plus one increment equals 2 pi (to 1e-3 step)."""
-    span_rad = angles_rad[-1] - angles_rad[0]
-    return bool(abs(span_rad + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad)
-
-
-def _validated_scan_arrays(
-    angles: npt.ArrayLike, ranges: npt.ArrayLike
-) -> tuple[np.ndarray, np.ndarray]:
-    angles_rad = np.asarray(angles, dtype=np.float64)
-    ranges_m = np.asarray(ranges, dtype=np.float64)
-    if angles_rad.ndim != 1:
-        raise ValueError(f"angles must be one-dimensional, got shape {angles_rad.shape}")
-    if ranges_m.shape != angles_rad.shape:
-        raise ValueError(
-            f"ranges must have the shape of angles {angles_rad.shape}, got {ranges_m.shape}"
-        )
-    if not np.all(np.isfinite(angles_rad)):
-        raise ValueError("angles must be finite")
-    if len(angles_rad) >= 2:
-        steps = np.diff(angles_rad)
-        increment = (angles_rad[-1] - angles_rad[0]) / (len(angles_rad) - 1)
-        if increment <= 0.0 or np.any(np.abs(steps - increment) > 1e-4 * increment):
-            raise ValueError("angles must be strictly ascending and equally spaced")
-        if angles_rad[-1] - angles_rad[0] >= 2.0 * math.pi:
-            raise ValueError("angles must span less than a full turn (2 pi)")
-    if np.any(ranges_m[np.isfinite(ranges_m)] < 0.0):
-        raise ValueError("ranges must be non-negative or NaN")
-    return angles_rad, ranges_m
 
 
 # --------------------------------------------------------------------------------------------
@@ -616,7 +381,8 @@ class TwoCircleSolution:
     """Outcome of eqs (8)-(14).
 
     Attributes:
-        status: ``"ok"`` or ``"no_intersection"`` (``D < 0``).
+        status: ``"ok"``, ``"no_intersection"`` (``D < 0``) or ``"out_of_float_range"``
+            (the circles meet, but a meeting point lies beyond the largest float, 1.8e308 m).
         position: the intersection chosen by the sign rule, ``(x, y)`` metres in {W};
             ``None`` unless ok.
         other_position: the mirror intersection the sign rule rejected; ``None`` unless ok.
@@ -665,19 +431,119 @@ def solve_two_circles(
         small_distance, large_distance: ``d_S = delta_S + r_S`` and ``d_L = delta_L + r_L``,
             metres, > 0.
         bearing_difference: ``delta-beta = beta_S - beta_L``, radians.
+
+    Every finite input (centres, distances > 0, any bearing) gives a solution with a status
+    and no NaN, at any magnitude: inputs beyond ``2**+-100`` m are solved scaled by a power of
+    two. Non-finite input raises ``ValueError`` naming the argument.
     """
     small_xy = _point("small_center", small_center)
     large_xy = _point("large_center", large_center)
     _require_positive("small_distance", small_distance)
     _require_positive("large_distance", large_distance)
     _require_finite("bearing_difference", bearing_difference)
-    beacon_distance = math.dist(small_xy, large_xy)
-    if beacon_distance <= 0.0:
+    if small_xy == large_xy:
         raise ValueError("small_center and large_center must be distinct points")
+    lengths = (*small_xy, *large_xy, float(small_distance), float(large_distance))
+    exponent = math.frexp(max(abs(v) for v in lengths))[1]
+    if -_UNSCALED_EXPONENT <= exponent <= _UNSCALED_EXPONENT:
+        return _solve_guarded(small_xy, large_xy, *lengths[4:], bearing_difference)
+    # Scaling by a power of two is exact: the same solution, computed where no square
+    # overflows or underflows, then scaled back.
+    x_s, y_s, x_l, y_l, d_s, d_l = (math.ldexp(v, -exponent) for v in lengths)
+    scaled = _solve_guarded((x_s, y_s), (x_l, y_l), d_s, d_l, bearing_difference)
+    # D is in m^2: beyond the float range it saturates at the largest float, keeping its sign.
+    discriminant = max(
+        -sys.float_info.max,
+        min(_ldexp_saturated(scaled.discriminant, 2 * exponent), sys.float_info.max),
+    )
+    if scaled.position is None or scaled.other_position is None:
+        return replace(scaled, discriminant=discriminant)
+    chosen, other = (
+        (_ldexp_saturated(x, exponent), _ldexp_saturated(y, exponent))
+        for x, y in (scaled.position, scaled.other_position)
+    )
+    if not all(math.isfinite(v) for v in (*chosen, *other)):
+        return TwoCircleSolution(
+            "out_of_float_range", None, None, discriminant, scaled.used_paper_formula
+        )
+    return replace(scaled, position=chosen, other_position=other, discriminant=discriminant)
 
+
+def _solve_guarded(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14); where they overflow (ranges vastly longer than the beacon distance), the
+    factored construction of :func:`_solve_factored`, which cannot."""
+    try:
+        solution = _solve_two_circles(small_xy, large_xy, d_s, d_l, bearing_difference)
+    except (OverflowError, ZeroDivisionError):
+        return _solve_factored(small_xy, large_xy, d_s, d_l, bearing_difference)
+    values = [solution.discriminant, *(solution.position or ()), *(solution.other_position or ())]
+    if all(math.isfinite(v) for v in values):
+        return solution
+    return _solve_factored(small_xy, large_xy, d_s, d_l, bearing_difference)
+
+
+def _solve_factored(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """The two intersections with every square factored, for lengths of magnitude <= 1.
+
+    Foot of the chord along the line of centres from the large beacon:
+    ``a = ((d_L - d_S)(d_L + d_S) / d_0 + d_0) / 2``; squared half-chord
+    ``h^2 = (d_L - a)(d_L + a)``. An ``a`` beyond the float range means ``|d_L - d_S|`` far
+    exceeds ``d_0``: no intersection (``h^2 = -inf``, reported as the most negative float).
+    """
+    beacon_distance = math.dist(small_xy, large_xy)
+    if beacon_distance == 0.0:  # the centres merged in the scaling: no single intersection
+        return TwoCircleSolution("no_intersection", None, None, -sys.float_info.max, False)
+    along = ((d_l - d_s) * (d_l + d_s) / beacon_distance + beacon_distance) / 2.0
+    half_chord_sq = (d_l - along) * (d_l + along)
+    if not half_chord_sq >= 0.0:
+        return TwoCircleSolution(
+            "no_intersection", None, None, max(half_chord_sq, -sys.float_info.max), False
+        )
+    half_chord = math.sqrt(half_chord_sq)
+    unit = (
+        (small_xy[0] - large_xy[0]) / beacon_distance,
+        (small_xy[1] - large_xy[1]) / beacon_distance,
+    )
+    foot = (large_xy[0] + along * unit[0], large_xy[1] + along * unit[1])
+    first, second = (
+        (foot[0] - sign * half_chord * unit[1], foot[1] + sign * half_chord * unit[0])
+        for sign in (1.0, -1.0)
+    )
+    chosen, other = _apply_sign_rule(first, second, small_xy, large_xy, bearing_difference)
+    return TwoCircleSolution(OK, chosen, other, min(half_chord_sq, sys.float_info.max), False)
+
+
+def _ldexp_saturated(value: float, exponent: int) -> float:
+    """``value * 2**exponent``, infinite (with the sign of ``value``) beyond the float range."""
+    try:
+        return math.ldexp(value, exponent)
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+def _solve_two_circles(
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    d_s: float,
+    d_l: float,
+    bearing_difference: float,
+) -> TwoCircleSolution:
+    """Eqs (8)-(14) on validated lengths whose magnitudes lie within ``2**+-100`` m."""
+    beacon_distance = math.dist(small_xy, large_xy)
     x_s, y_s = small_xy
     x_l, y_l = large_xy
-    d_s, d_l = float(small_distance), float(large_distance)
     if abs(x_l - x_s) >= _PAPER_FORMULA_MIN_COS_PSI * beacon_distance:
         tan_psi = (y_l - y_s) / (x_l - x_s)
         offset_l = (d_s**2 - d_l**2 + x_l**2 - x_s**2 + y_l**2 - y_s**2) / (2.0 * (x_l - x_s))
@@ -705,8 +571,21 @@ def solve_two_circles(
         ]
         used_paper_formula = False
 
-    measured = wrap_angle(bearing_difference)
     first, second = candidates
+    chosen, other = _apply_sign_rule(first, second, small_xy, large_xy, bearing_difference)
+    return TwoCircleSolution(OK, chosen, other, discriminant, used_paper_formula)
+
+
+def _apply_sign_rule(
+    first: tuple[float, float],
+    second: tuple[float, float],
+    small_xy: tuple[float, float],
+    large_xy: tuple[float, float],
+    bearing_difference: float,
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    """``(chosen, other)``: the root whose ``delta-phi`` (eqs (13)-(14)) has the sign of the
+    measured ``delta-beta``, or, when the sign does not decide, lies nearer it."""
+    measured = wrap_angle(bearing_difference)
     delta_phi_first = _bearing_difference_at(first, small_xy, large_xy)
     delta_phi_second = _bearing_difference_at(second, small_xy, large_xy)
     first_sign_ok = delta_phi_first * measured > 0.0
@@ -717,8 +596,7 @@ def solve_two_circles(
         choose_first = abs(angle_difference(delta_phi_first, measured)) <= abs(
             angle_difference(delta_phi_second, measured)
         )
-    chosen, other = (first, second) if choose_first else (second, first)
-    return TwoCircleSolution(OK, chosen, other, discriminant, used_paper_formula)
+    return (first, second) if choose_first else (second, first)
 
 
 def heading_from_large_beacon(
@@ -866,7 +744,10 @@ def localize_rcds(
         if gated is None:
             return BeaconLocalization(
                 "no_pair_near_prior",
-                message=f"no beacon pair within tolerance puts the robot within {prior_gate_m} m of the prior",
+                message=(
+                    "no beacon pair within tolerance puts the robot within "
+                    f"{prior_gate_m} m of the prior"
+                ),
                 pair_error_m=pairs[0][0],
                 candidates=candidates,
             )
@@ -891,7 +772,7 @@ def localize_rcds(
                 pair_error_m=pair_error,
                 candidates=candidates,
             )
-    found = {
+    found: dict[str, Any] = {
         "small_rcd": small_rcd,
         "large_rcd": large_rcd,
         "pair_error_m": pair_error,
@@ -899,11 +780,12 @@ def localize_rcds(
         "discriminant": solution.discriminant,
     }
     if solution.position is None:
-        return BeaconLocalization(
-            "no_intersection",
-            message=f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)",
-            **found,
+        reason = (
+            f"the beacon circles do not intersect (D = {solution.discriminant:.3g} m^2)"
+            if solution.status == "no_intersection"
+            else "the beacon circles meet beyond the float range"
         )
+        return BeaconLocalization(solution.status, message=reason, **found)
     heading = heading_from_large_beacon(solution.position, large_xy, large_rcd.beta)
     sensor_pose = Pose(solution.position[0], solution.position[1], heading)
 
@@ -940,7 +822,8 @@ def _ranked_pairs(
     large_radius: float,
     beacon_distance: float,
 ) -> list[tuple[float, RCD, RCD]]:
-    """Every assigned pair ``(Delta d_0, small, large)`` of candidates, smallest eq. (7) error first."""
+    """Every assigned pair ``(Delta d_0, small, large)`` of candidates, smallest eq. (7) error
+    first."""
     pairs: list[tuple[float, RCD, RCD]] = []
     for rcd_a, rcd_b in itertools.combinations(candidates, 2):
         if rcd_a.role is not None or rcd_b.role is not None:
@@ -1039,6 +922,32 @@ class ScenarioLike(Protocol):
     def beacon(self, name: str) -> BeaconLike: ...
 
 
+def _ranges_in_window(
+    scans: Sequence[Scan], params: BeomChoParameters
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(angles, ranges)`` of each scan, ranges outside ``[r_min, r_max]`` made dropouts."""
+    pans = []
+    with np.errstate(invalid="ignore"):
+        for scan in scans:
+            ranges_m = np.array(scan.ranges, dtype=np.float64)
+            ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
+            pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    return pans
+
+
+def _short_pans_are_valid(scans: Sequence[Scan], params: BeomChoParameters) -> bool:
+    """Whether scans of at most one ping pass :func:`extract_rcds`'s checks once their ranges
+    are windowed: one-dimensional, ranges shaped like angles, finite angles, ranges
+    non-negative or NaN."""
+    if any(np.ndim(s.angles) != 1 or np.shape(s.ranges) != np.shape(s.angles) for s in scans):
+        return False
+    angles = np.concatenate([np.asarray(s.angles, dtype=np.float64) for s in scans])
+    ranges = np.concatenate([np.asarray(s.ranges, dtype=np.float64) for s in scans])
+    with np.errstate(invalid="ignore"):
+        ranges[(ranges < params.r_min_m) | (ranges > params.r_max_m)] = np.nan
+    return bool(np.isfinite(angles).all() and not ((ranges < 0.0) & (ranges > -math.inf)).any())
+
+
 def localize_scan(
     scan: Scan,
     scenario: ScenarioLike,
@@ -1086,12 +995,12 @@ def localize_scans(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    pans = []
-    for scan in scans:
-        ranges_m = np.asarray(scan.ranges, dtype=np.float64).copy()
-        with np.errstate(invalid="ignore"):
-            ranges_m[(ranges_m < params.r_min_m) | (ranges_m > params.r_max_m)] = np.nan
-        pans.append((np.asarray(scan.angles, dtype=np.float64), ranges_m))
+    # A pan of fewer than two pings holds no RCD; such pans are only checked, all at once.
+    pans = _ranges_in_window([s for s in scans if len(s.angles) >= MIN_RCD_SAMPLES], params)
+    short = [s for s in scans if len(s.angles) < MIN_RCD_SAMPLES]
+    if short and not _short_pans_are_valid(short, params):
+        for angles, ranges_m in _ranges_in_window(short, params):
+            extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
     rcds = [
         rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
     ]
@@ -1116,9 +1025,6 @@ def localize_scans(
 
     result = localize(rcds)
     if params.extraction == "occlusion_aware" and result.status in ("no_candidates", "no_pair"):
-        # Imported here: that module builds on this one's RCD and extraction.
-        from sonar_gym.localization.beom_cho_occlusion import occlusion_aware_rcds
-
         rebuilt = [
             rcd
             for angles, ranges_m in pans

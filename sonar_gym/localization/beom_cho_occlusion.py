@@ -1,4 +1,6 @@
-"""Occlusion-aware RCDs for Beom & Cho (1995): beacons whose RCD a nearer echo cut (not in the paper).
+"""Occlusion-aware RCDs for Beom & Cho (1995): beacons whose RCD a nearer echo cut.
+
+Not in the paper.
 
 A first-echo sonar reports the earliest echo above threshold. When a wall, a corner or the other
 beacon is heard at a shorter range while the beam still covers a beacon, that echo replaces the
@@ -45,7 +47,7 @@ from enum import Enum
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.localization.beom_cho import (
+from sonar_gym.localization.beom_cho_rcd import (
     LARGE_BEACON_NAME,
     RCD,
     SMALL_BEACON_NAME,

@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -170,6 +175,125 @@ def test_localize_without_scanning_fails_with_the_penalty() -> None:
 def test_random_scenario_changes_the_room_per_episode() -> None:
     env = gym.make(ENV_ID, scenario="random").unwrapped
     env.reset(seed=1)
-    first = env._episode.world.scenario
+    first = env.world.scenario
     env.reset(seed=2)
-    assert env._episode.world.scenario != first
+    assert env.world.scenario != first
+
+
+def comb_lab(path: Path, n_teeth: int = 1500) -> Path:
+    """The paper lab with ``n_teeth`` extra 1 cm walls standing on its four walls, as JSON.
+
+    The teeth run inwards from the room's walls, 1.5 cm apart, so they add 1,500 segments
+    and 1,500 T-junctions without changing where the robot fits or what it sees of the
+    beacons.
+    """
+    with open(resources.files("sonar_gym") / "scenarios" / "beom_cho_lab.toml", "rb") as file:
+        data = tomllib.load(file)
+    (x0, y0), (x1, y1) = data["room"]["min"], data["room"]["max"]
+    inward = {
+        "bottom": (0.0, 0.01),
+        "top": (0.0, -0.01),
+        "left": (0.01, 0.0),
+        "right": (-0.01, 0.0),
+    }
+    feet = []
+    for k in range(n_teeth):
+        side = ("bottom", "top", "left", "right")[k % 4]
+        along = 0.05 + 0.015 * (k // 4)
+        if side in ("bottom", "top"):
+            feet.append((side, (x0 + along, y0 if side == "bottom" else y1)))
+        else:
+            feet.append((side, (x0 if side == "left" else x1, y0 + along * (y1 - y0) / (x1 - x0))))
+    data["walls"] = data.get("walls", []) + [
+        {"a": list(foot), "b": [foot[0] + inward[side][0], foot[1] + inward[side][1]]}
+        for side, foot in feet
+    ]
+    data["meta"]["name"] = "comb_lab"
+    target = path / "comb_lab.json"
+    target.write_text(json.dumps(data), encoding="utf-8")
+    return target
+
+
+def test_a_large_room_is_built_once_and_reset_only_places_the_robot(tmp_path: Path) -> None:
+    path = comb_lab(tmp_path)
+    env = gym.make(ENV_ID, scenario=str(path)).unwrapped
+    env.reset(seed=0)
+    world = env.world
+    assert world.geometry.n_segments == 4 + 5 + 1500 + 4 * len(world.scenario.boxes)
+    for seed in (1, 2, 3):
+        observation, info = env.reset(seed=seed)
+        assert env.world is world  # the pymunk space and geometry are reused
+        fresh_env = gym.make(ENV_ID, scenario=str(path)).unwrapped
+        fresh_observation, fresh_info = fresh_env.reset(seed=seed)
+        assert fresh_env.world is not world
+        np.testing.assert_array_equal(observation, fresh_observation)
+        np.testing.assert_array_equal(info["true_pose"], fresh_info["true_pose"])
+        assert info["temperature_c"] == fresh_info["temperature_c"]
+        pan = env.encode_action("pan", 0, 90, 2)
+        np.testing.assert_array_equal(env.step(pan)[0], fresh_env.step(pan)[0])
+
+
+def test_seeded_episodes_do_not_depend_on_the_episodes_before() -> None:
+    env = gym.make(ENV_ID)
+    for seed in (0, 1, 2):
+        run_episode(env, "paper", seed)
+    _, reused = run_episode(env, "paper", 3)
+    _, fresh = run_episode(gym.make(ENV_ID), "paper", 3)
+    for key in ("true_pose", "estimated_pose"):
+        np.testing.assert_array_equal(reused[key], fresh[key])
+    assert reused["temperature_c"] == fresh["temperature_c"]
+
+
+def reference_observation(env: Any) -> np.ndarray:
+    """The observation as the env docstring's table defines it, slot by slot."""
+    episode, config = env._episode, env.config
+    memory, max_range = episode.memory, episode.sonar.transducer.max_range_m
+    layout = env.observation_layout
+    observation = np.zeros(env.observation_space.shape, dtype=np.float32)
+    ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
+    bins = (np.arange(memory.n_slots) * config.n_bins) // memory.n_slots
+    bin_ranges, bin_scanned = np.ones(config.n_bins), np.zeros(config.n_bins)
+    for slot, bin_index in enumerate(bins):
+        if np.isfinite(ranges[slot]):
+            bin_ranges[bin_index] = min(bin_ranges[bin_index], min(ranges[slot] / max_range, 1.0))
+        bin_scanned[bin_index] = max(bin_scanned[bin_index], float(memory.scanned[slot]))
+    observation[layout["bin_ranges"]] = bin_ranges
+    observation[layout["bin_scanned"]] = bin_scanned
+    (x_min, y_min), (x_max, y_max) = env.world.scenario.bounds
+    prior = episode.prior
+    observation[layout["prior_xy"]] = np.clip(
+        [2 * (prior.x - x_min) / (x_max - x_min) - 1, 2 * (prior.y - y_min) / (y_max - y_min) - 1],
+        -1.0,
+        1.0,
+    )
+    observation[layout["prior_heading"]] = [math.cos(prior.theta), math.sin(prior.theta)]
+    for role in ("small_beacon", "large_beacon"):
+        beacon = env.world.scenario.beacon(role)
+        dx, dy = beacon.center[0] - prior.x, beacon.center[1] - prior.y
+        bearing = math.remainder(math.atan2(dy, dx) - prior.theta, 2 * math.pi)
+        observation[layout[role]] = [
+            math.cos(bearing),
+            math.sin(bearing),
+            min(math.hypot(dx, dy) / max_range, 1.0),
+        ]
+    observation[layout["sensing_time"]] = min(episode.sensing_time_s / config.time_budget_s, 1.0)
+    observation[layout["calibrated"]] = float(episode.calibrated)
+    observation[layout["steps"]] = min(episode.steps / config.max_steps, 1.0)
+    observation[layout["calibration_allowed"]] = float(config.allow_calibration)
+    observation[layout["coverage"]] = memory.scanned.mean()
+    return observation
+
+
+@pytest.mark.parametrize("n_bins", [72, 360, 8])
+def test_observation_equals_its_slot_by_slot_definition(n_bins: int) -> None:
+    env = gym.make(ENV_ID, temperature_c=30.0, n_bins=n_bins).unwrapped
+    observation, _ = env.reset(seed=11)
+    np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)
+    for action in (
+        env.encode_action("pan", 90, 90, 2),
+        env.encode_action("calibrate"),
+        env.encode_action("pan", 200, 60, 5),
+        env.encode_action("pan", 0, 360, 1),
+    ):
+        observation = env.step(action)[0]
+        np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)

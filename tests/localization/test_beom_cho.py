@@ -19,6 +19,7 @@ from sonar_gym.localization.beom_cho import (
     heading_from_large_beacon,
     localize_rcds,
     localize_scan,
+    localize_scans,
     pair_distance_error,
     range_from_tof,
     solve_two_circles,
@@ -713,3 +714,118 @@ def test_prior_gate_rejects_a_coincidental_pair_that_matches_eq_7_better() -> No
 def test_bad_assignment_name_is_rejected() -> None:
     with pytest.raises(ValueError, match="assignment"):
         BeomChoParameters(assignment="coin_flip")
+
+
+# ------------------------------------------------------------------------------------------
+# solve_two_circles at every magnitude
+# ------------------------------------------------------------------------------------------
+
+LAB_SENSOR = (0.4, 0.9)
+
+
+def _lab_geometry_scaled(scale: float) -> tuple[tuple[float, float], float, tuple, float, float]:
+    """The paper lab's beacon pair seen from ``LAB_SENSOR``, every length times ``scale``."""
+    small = (SMALL_CENTER[0] * scale, SMALL_CENTER[1] * scale)
+    large = (LARGE_CENTER[0] * scale, LARGE_CENTER[1] * scale)
+    sensor = (LAB_SENSOR[0] * scale, LAB_SENSOR[1] * scale)
+    bearing = angle_difference(
+        math.atan2(SMALL_CENTER[1] - LAB_SENSOR[1], SMALL_CENTER[0] - LAB_SENSOR[0]),
+        math.atan2(LARGE_CENTER[1] - LAB_SENSOR[1], LARGE_CENTER[0] - LAB_SENSOR[0]),
+    )
+    d_s = math.dist(SMALL_CENTER, LAB_SENSOR) * scale
+    d_l = math.dist(LARGE_CENTER, LAB_SENSOR) * scale
+    return small, d_s, large, d_l, bearing, sensor  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize("scale", [1e-300, 1e-200, 1e-120, 1e120, 1e200, 1e250, 1e300])
+def test_two_circles_scale_with_their_lengths_at_extreme_magnitudes(scale: float) -> None:
+    small, d_s, large, d_l, bearing, sensor = _lab_geometry_scaled(scale)
+    solution = solve_two_circles(small, d_s, large, d_l, bearing)
+    assert solution.status == "ok" and solution.position is not None
+    np.testing.assert_allclose(solution.position, sensor, rtol=1e-9)
+    assert math.isfinite(solution.discriminant) and solution.discriminant >= 0.0
+
+
+def test_circles_meeting_beyond_the_float_range_say_so() -> None:
+    # the circles meet at (2.5e308, 0) and (0.9e308, 0): one point is beyond the largest float
+    small, large = (1.7e308, 0.0), (1.7e308, 0.5e308)
+    solution = solve_two_circles(small, 0.8e308, large, math.hypot(0.8e308, 0.5e308), 1.0)
+    assert solution.status == "out_of_float_range" and solution.position is None
+    assert math.isfinite(solution.discriminant)
+
+
+_ANY_LENGTH = st.floats(min_value=-1.7e308, max_value=1.7e308, allow_nan=False)
+_ANY_DISTANCE = st.floats(min_value=5e-324, max_value=1.7e308, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.tuples(_ANY_LENGTH, _ANY_LENGTH),
+    _ANY_DISTANCE,
+    st.tuples(_ANY_LENGTH, _ANY_LENGTH),
+    _ANY_DISTANCE,
+    st.floats(min_value=-1e300, max_value=1e300, allow_nan=False),
+)
+def test_every_finite_input_gives_a_status_and_no_nan(
+    small: tuple[float, float],
+    d_s: float,
+    large: tuple[float, float],
+    d_l: float,
+    bearing: float,
+) -> None:
+    assume(small != large)
+    solution = solve_two_circles(small, d_s, large, d_l, bearing)
+    assert solution.status in ("ok", "no_intersection", "out_of_float_range")
+    assert not math.isnan(solution.discriminant)
+    assert (solution.status == "ok") == (solution.position is not None)
+    if solution.position is not None and solution.other_position is not None:
+        assert all(math.isfinite(v) for v in (*solution.position, *solution.other_position))
+
+
+@pytest.mark.parametrize(
+    ("arguments", "name"),
+    [
+        (((math.nan, 0.0), 1.0, (1.0, 0.0), 1.0, 0.1), "small_center"),
+        (((0.0, 0.0), 1.0, (1.0, math.inf), 1.0, 0.1), "large_center"),
+        (((0.0, 0.0), math.inf, (1.0, 0.0), 1.0, 0.1), "small_distance"),
+        (((0.0, 0.0), 1.0, (1.0, 0.0), math.nan, 0.1), "large_distance"),
+        (((0.0, 0.0), 1.0, (1.0, 0.0), 1.0, -math.inf), "bearing_difference"),
+    ],
+)
+def test_non_finite_input_is_a_value_error_naming_it(arguments: tuple, name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        solve_two_circles(*arguments)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_extracted_rcds_equal_ones_built_through_the_checked_constructor(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    ranges = np.repeat(rng.uniform(0.5, 4.0, 40), 9) + rng.normal(0.0, 0.004, 360)
+    ranges[rng.random(360) < 0.05] = np.nan
+    for rcd in extract_rcds(FULL_TURN_1DEG, ranges):
+        angles = np.unwrap(FULL_TURN_1DEG[list(rcd.indices)])
+        count = len(rcd.indices)
+        middle = ranges[list(rcd.indices)][(count - 1) // 2 : count // 2 + 1]
+        checked = RCD(
+            delta=float(np.mean(middle)) if count % 2 == 0 else float(middle[0]),
+            beta=0.5 * (angles[0] + angles[-1]),
+            eta=float(angles[-1] - angles[0]),
+            gamma=symmetry_measure(FULL_TURN_1DEG, ranges, rcd.indices),
+            start_index=rcd.indices[0],
+            end_index=rcd.indices[-1],
+            indices=rcd.indices,
+            sample_ranges=tuple(ranges[list(rcd.indices)]),
+        )
+        assert rcd == checked
+
+
+def test_single_ping_pans_add_nothing_but_are_still_checked() -> None:
+    scenario = _StandInScenario((0.0, 0.0))
+    pan = _beacon_pan(Pose(0.4, 0.3, 0.2))
+    alone = localize_scans([pan], scenario)
+    singles = [Scan(np.array([a]), np.array([2.0]), np.ones(1), 0.01) for a in (0.1, 0.2)]
+    assert localize_scans([singles[0], pan, singles[1]], scenario) == alone
+    assert localize_scans(singles, scenario).status == "no_candidates"
+    unknown_angle = Scan(np.array([math.nan]), np.array([2.0]), np.ones(1), 0.01)
+    with pytest.raises(ValueError, match="angles"):
+        localize_scans([pan, unknown_angle], scenario)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import ast
+import importlib
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -27,7 +30,8 @@ FULL_PAN_DEG = np.arange(-180.0, 180.0, 1.0)
 
 
 def _pan(segments: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray]:
-    """A full 1-deg pan: NaN everywhere but ``(first_deg, last_deg, range_m)`` segments, later ones on top."""
+    """A full 1-deg pan: NaN everywhere but ``(first_deg, last_deg, range_m)`` segments, later
+    ones on top."""
     ranges = np.full(len(FULL_PAN_DEG), np.nan)
     for first, last, range_m in segments:
         ranges[(first <= FULL_PAN_DEG) & (last >= FULL_PAN_DEG)] = range_m
@@ -189,3 +193,29 @@ def test_pairs_that_disagree_on_the_place_give_no_pose_when_agreement_is_asked()
     # with the paper's tolerance only the right assignment passes, and agreement changes nothing
     paper = localize_rcds([small, large], small_c, r_s, large_c, r_l, agreement_m=0.1)
     assert paper.ok and paper.pose == chosen.pose
+
+
+def _imported_modules(module: str) -> set[str]:
+    source = Path(importlib.import_module(module).__file__ or "").read_text(encoding="utf-8")
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(source)):  # deferred imports inside functions included
+        if isinstance(node, ast.ImportFrom) and node.module:
+            found.add(node.module)
+        elif isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+    return found
+
+
+def test_rcd_module_is_shared_without_an_import_cycle() -> None:
+    for module in (
+        "sonar_gym.localization.beom_cho_rcd",
+        "sonar_gym.localization.beom_cho_occlusion",
+    ):
+        assert "sonar_gym.localization.beom_cho" not in _imported_modules(module)
+    assert "sonar_gym.localization.beom_cho_rcd" in _imported_modules(
+        "sonar_gym.localization.beom_cho_occlusion"
+    )
+    from sonar_gym.localization import beom_cho, beom_cho_rcd
+
+    for name in ("RCD", "extract_rcds", "make_rcd", "symmetry_measure", "MIN_RCD_SAMPLES"):
+        assert getattr(beom_cho, name) is getattr(beom_cho_rcd, name)
