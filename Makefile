@@ -9,7 +9,13 @@ TORCH_SPEC ?= torch==2.13.0
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install evaluate test test-slow lint benchmark reproduce clean
+.PHONY: install install-extras evaluate test test-slow lint benchmark reproduce clean
+
+# The slow group also covers the optional extras (RLlib on Ray, RL Zoo, video), installed in an
+# environment of their own: ray[rllib] pins an older gymnasium than the main set-up installs.
+EXTRAS_VENV ?= .venv-extras
+EXTRAS_BIN := $(EXTRAS_VENV)/bin
+EXTRAS_STAMP := $(EXTRAS_VENV)/.installed
 
 # pip's own progress shows on the long steps (torch, then the dependencies); the editable link
 # is made last and quietly, with setuptools' "Editable installation." notice (information,
@@ -33,14 +39,26 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
+$(EXTRAS_STAMP): pyproject.toml
+	@echo "==> creating $(EXTRAS_VENV) for the slow tests and the optional extras"
+	$(PYTHON) -m venv $(EXTRAS_VENV)
+	$(EXTRAS_BIN)/python -m pip --disable-pip-version-check install --quiet --upgrade pip
+	$(EXTRAS_BIN)/python -m pip --disable-pip-version-check install $(PIP_PROGRESS) "$(TORCH_SPEC)"
+	$(EXTRAS_BIN)/python -m pip --disable-pip-version-check install $(PIP_PROGRESS) ".[dev,ray,zoo,video]"
+	PYTHONWARNINGS="ignore:Editable installation" $(EXTRAS_BIN)/python -m pip \
+		--disable-pip-version-check install --quiet --no-deps -e .
+	touch $(EXTRAS_STAMP)
+
+install-extras: $(EXTRAS_STAMP)
+
 evaluate: $(STAMP)
 	$(BIN)/sonar-gym evaluate
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -n 2 -q -m "not slow"
 
-test-slow: $(STAMP)
-	$(BIN)/python -m pytest -n 2 -q -m slow
+test-slow: $(EXTRAS_STAMP)
+	$(EXTRAS_BIN)/python -m pytest -n 2 -q -m slow
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
@@ -52,4 +70,4 @@ reproduce: $(STAMP)
 	$(BIN)/sonar-gym reproduce all
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache
+	rm -rf $(VENV) $(EXTRAS_VENV) runs .pytest_cache

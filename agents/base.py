@@ -22,7 +22,6 @@ from typing import Any, Generic, Protocol, TypeVar, cast, runtime_checkable
 import gymnasium as gym
 
 from sonar_gym.agents.builtin import BUILTIN_AGENTS, GENERIC
-from sonar_gym.agents.rllib_policy import RLlibPolicyAgent, is_rllib_run
 from sonar_gym.envs.base import SonarEnv, unwrap_sonar_env
 
 
@@ -132,6 +131,8 @@ def make_agent(name: str, env: gym.Env[Any, Any], **options: Any) -> Agent:
     factory = _REGISTRY.get(env_id, {}).get(name) or _REGISTRY.get(GENERIC, {}).get(name)
     if factory is not None:
         return _resolve(factory)(env, **options)
+    from sonar_gym.agents.rllib_policy import RLlibPolicyAgent, is_rllib_run
+
     if is_rllib_run(name):
         return RLlibPolicyAgent(name, env)
     if name.endswith(".zip") or Path(name).exists():

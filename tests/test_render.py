@@ -229,8 +229,8 @@ def test_legend_is_drawn_in_the_lower_right_corner() -> None:
     assert greens.any() and oranges.any()
 
 
+@pytest.mark.slow  # needs the [video] extra, which make test-slow installs
 def test_record_video_writes_a_video_for_every_env(tmp_path: Path) -> None:
-    pytest.importorskip("moviepy", reason="the [video] extra (moviepy) is not installed")
     import gymnasium as gym
     from gymnasium.wrappers import RecordVideo
 
