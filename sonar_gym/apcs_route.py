@@ -1,0 +1,299 @@
+"""Driving an APCS route leg by leg: the robot, its side sonars and the on-line APCS together.
+
+One :class:`APCSRoute` holds what an APCS run needs in the world (the pymunk robot, its side
+sonars, the two random streams) and the tracker
+(:class:`~sonar_gym.localization.apcs_online.APCSTracker`)
+that runs the paper's Fig. 2 loop. :meth:`APCSRoute.drive_to` drives towards a target in
+straight commands, steering from the estimate every few commands; between two steering
+corrections the commands, the readings taken along them and the tracker's work are arrays:
+:func:`~sonar_gym.straight_drive.drive_straight_run` for the motion,
+:meth:`~sonar_gym.sonar.swept.SideSonars.sample_along` for the readings and
+:meth:`~sonar_gym.localization.apcs_online.APCSTracker.run` for dead reckoning, ERPs, walls and
+corrections.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sonar_gym.localization.apcs import DetectedWall, MatchResult
+from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
+from sonar_gym.pose import FloatArray, Pose, angle_difference
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.sonar.swept import SideSonars
+from sonar_gym.straight_drive import drive_straight_run
+from sonar_gym.world import World
+
+REAIM_TOLERANCE_RAD = math.radians(0.05)
+"""Smallest heading correction the path follower commands (radians)."""
+
+
+@dataclass(frozen=True)
+class WallDetection:
+    """One detected wall and what APCS did with it (Fig. 2).
+
+    Attributes:
+        leg: index of the leg during which the wall was detected.
+        side: ``"left"`` or ``"right"``.
+        wall: the detected wall (in the frame of the estimate at detection time).
+        erp_points: ``(n, 2)`` the ERPs of its group, metres.
+        match: the matching against the map (sec. 4.3).
+        reason: ``None`` when matched, else why not
+            (:func:`~sonar_gym.localization.apcs_online.rejection_reason`).
+        correction_status: ``"ok"`` when the pose was corrected, else the reason.
+        pose_before, pose_after: the estimate before and after (equal without a correction).
+        true_pose: the true pose at detection time.
+    """
+
+    leg: int
+    side: str
+    wall: DetectedWall
+    erp_points: FloatArray
+    match: MatchResult
+    reason: str | None
+    correction_status: str
+    pose_before: Pose
+    pose_after: Pose
+    true_pose: Pose
+
+    @property
+    def matched(self) -> bool:
+        """Whether exactly one map wall matched."""
+        return self.match.matched
+
+
+@dataclass
+class LegSummary:
+    """What happened during one leg, per side (``left``, ``right``)."""
+
+    detected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    matched: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    rejected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    dropped_groups: int = 0
+    corrections: int = 0
+    collided: bool = False
+    sensing_time_s: float = 0.0
+    samples: int = 0
+
+    def add(self, other: LegSummary) -> None:
+        """Add ``other``'s counts and times to these (``collided`` is left alone)."""
+        for side in SIDE_NAMES:
+            self.detected[side] += other.detected[side]
+            self.matched[side] += other.matched[side]
+            self.rejected[side] += other.rejected[side]
+        self.dropped_groups += other.dropped_groups
+        self.corrections += other.corrections
+        self.sensing_time_s += other.sensing_time_s
+        self.samples += other.samples
+
+
+@dataclass
+class EpisodeTrace:
+    """Everything a route did, for rendering and the reproduction's plots.
+
+    Attributes:
+        true_path, estimated_path, odometry_path: ``[x, y, theta]`` after every command.
+        erps: ``(x, y)`` of every ERP with its side, in the frame of the estimate when computed.
+        detections: every detected wall with its match and correction.
+        corrections: ``(true, before, after)`` poses of every correction made.
+    """
+
+    true_path: list[FloatArray] = field(default_factory=list)
+    estimated_path: list[FloatArray] = field(default_factory=list)
+    odometry_path: list[FloatArray] = field(default_factory=list)
+    erps: list[tuple[float, float, str]] = field(default_factory=list)
+    detections: list[WallDetection] = field(default_factory=list)
+    corrections: list[tuple[Pose, Pose, Pose]] = field(default_factory=list)
+
+
+class APCSRoute:
+    """A robot with side sonars driving through ``world`` while APCS corrects its estimate.
+
+    Args:
+        world: the world (its robot body is the true robot).
+        robot: the differential drive (its odometry pose is plain dead reckoning).
+        sonars: the side sonars.
+        tracker: the on-line APCS (estimate, covariance, streams).
+        motion_rng, sensor_rng: the random streams of the motion and of the readings.
+        timing: optional dict to which the wall-clock seconds of ``"sensing"`` and
+            ``"localization"`` are added.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        robot: DifferentialDriveRobot,
+        sonars: SideSonars,
+        tracker: APCSTracker,
+        motion_rng: np.random.Generator,
+        sensor_rng: np.random.Generator,
+        timing: dict[str, float] | None = None,
+    ) -> None:
+        self.world = world
+        self.robot = robot
+        self.sonars = sonars
+        self.tracker = tracker
+        self.motion_rng = motion_rng
+        self.sensor_rng = sensor_rng
+        self.timing = {} if timing is None else timing
+        self.trace = EpisodeTrace()
+        self.leg = 0
+        self.steps_since_sample = 0
+        self.sensing_time_s = 0.0
+        self._record(
+            world.robot_pose.as_array()[None, :],
+            tracker.estimate.as_array()[None, :],
+            (robot.odometry_pose or tracker.estimate).as_array()[None, :],
+        )
+
+    @contextmanager
+    def _timed(self, phase: str) -> Iterator[None]:
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.timing[phase] = self.timing.get(phase, 0.0) + time.perf_counter() - start
+
+    @property
+    def true_pose(self) -> Pose:
+        """The robot's true pose ({W})."""
+        return self.world.robot_pose
+
+    def flush(self, side: str, summary: LegSummary) -> None:
+        """Stop ``side``'s sonar: its open group is closed and handled (Fig. 2)."""
+        with self._timed("localization"):
+            result = self.tracker.flush(side)
+        self._handled(result, np.zeros((0, 3)), summary)
+
+    def drive_to(
+        self,
+        target: FloatArray,
+        active_sides: Sequence[str],
+        steps_per_sample: int,
+        step_m: float,
+        steps_per_aim: int,
+        summary: LegSummary,
+    ) -> None:
+        """Drive to ``target`` ({W}) in straight commands of ``step_m``, steering from the estimate.
+
+        Every ``steps_per_aim`` commands (and at the start) the remaining distance and the
+        bearing to ``target`` are taken from the estimate and the robot turns in place when the
+        heading is off by more than :data:`REAIM_TOLERANCE_RAD`. Every ``steps_per_sample``
+        commands (counted across calls) the ``active_sides`` take a reading each.
+        """
+        while True:
+            estimate = self.tracker.estimate
+            offset = np.asarray(target, dtype=np.float64) - estimate.position
+            remaining = round(float(np.hypot(*offset)) / step_m)
+            if remaining == 0:
+                return
+            turn = angle_difference(math.atan2(offset[1], offset[0]), estimate.theta)
+            if abs(turn) > REAIM_TOLERANCE_RAD:
+                motion = self.robot.turn(self.world, turn, self.motion_rng)
+                summary.collided = summary.collided or motion.collided
+                with self._timed("localization"):
+                    result = self.tracker.run([motion.encoder_left_m], [motion.encoder_right_m])
+                odometry = self.robot.odometry_pose or self.tracker.estimate
+                self._record(
+                    motion.true_pose.as_array()[None, :],
+                    result.estimated_path,
+                    odometry.as_array()[None, :],
+                )
+            count = min(remaining, steps_per_aim)
+            self._straight(count, active_sides, steps_per_sample, step_m, summary)
+            if count < steps_per_aim:
+                return
+
+    def _straight(
+        self,
+        count: int,
+        active_sides: Sequence[str],
+        steps_per_sample: int,
+        step_m: float,
+        summary: LegSummary,
+    ) -> None:
+        run = drive_straight_run(self.robot, self.world, step_m, count, self.motion_rng)
+        summary.collided = summary.collided or bool(run.collided.any())
+        samples: list[int] = []
+        if active_sides:
+            for index in range(count):
+                self.steps_since_sample += 1
+                if self.steps_since_sample >= steps_per_sample:
+                    self.steps_since_sample = 0
+                    samples.append(index)
+        else:
+            self.steps_since_sample += count
+        readings: dict[str, FloatArray] = {}
+        if samples:
+            with self._timed("sensing"):
+                side_readings = self.sonars.sample_along(
+                    self.world, [Pose(*run.true_poses[i]) for i in samples], self.sensor_rng
+                )
+            listen_s = self.sonars.transducer.listen_time_s * len(samples)  # fire together
+            self.sensing_time_s += listen_s
+            summary.sensing_time_s += listen_s
+            summary.samples += len(active_sides) * len(samples)
+            all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
+            readings = {side: all_readings[side] for side in active_sides}
+        with self._timed("localization"):
+            result = self.tracker.run(
+                run.encoder_left_m,
+                run.encoder_right_m,
+                samples,
+                readings,
+                sensor_offset_m=self.sonars.lateral_offset_m,
+            )
+        self._record(run.true_poses, result.estimated_path, run.odometry_poses)
+        self._handled(result, run.true_poses, summary)
+
+    def _handled(self, result: RunResult, true_poses: FloatArray, summary: LegSummary) -> None:
+        """Book the ERPs, walls and corrections of a tracker run into the trace and summary."""
+        self.trace.erps.extend(result.erps)
+        summary.dropped_groups += sum(result.dropped.values())
+        for wall in result.walls:
+            truth = (
+                Pose(*true_poses[wall.command_index]) if wall.command_index >= 0 else self.true_pose
+            )
+            summary.detected[wall.side] += 1
+            if wall.match.matched:
+                summary.matched[wall.side] += 1
+            else:
+                summary.rejected[wall.side] += 1
+            if wall.pose_after is not wall.pose_before:
+                summary.corrections += 1
+                self.trace.corrections.append((truth, wall.pose_before, wall.pose_after))
+            assert wall.group.fit.wall is not None
+            self.trace.detections.append(
+                WallDetection(
+                    leg=self.leg,
+                    side=wall.side,
+                    wall=wall.group.fit.wall,
+                    erp_points=wall.group.points,
+                    match=wall.match,
+                    reason=wall.reason,
+                    correction_status=wall.correction.status,
+                    pose_before=wall.pose_before,
+                    pose_after=wall.pose_after,
+                    true_pose=truth,
+                )
+            )
+
+    def _record(self, true: FloatArray, estimated: FloatArray, odometry: FloatArray) -> None:
+        self.trace.true_path.extend(np.array(true, dtype=np.float64))
+        self.trace.estimated_path.extend(np.array(estimated, dtype=np.float64))
+        self.trace.odometry_path.extend(np.array(odometry, dtype=np.float64))
+
+
+__all__ = [
+    "REAIM_TOLERANCE_RAD",
+    "APCSRoute",
+    "EpisodeTrace",
+    "LegSummary",
+    "WallDetection",
+]

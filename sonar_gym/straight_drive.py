@@ -1,0 +1,184 @@
+"""A run of identical straight drive commands, as arrays where the robot touches nothing.
+
+:meth:`sonar_gym.robot.DifferentialDriveRobot.drive` moves the true robot through pymunk one
+command at a time. Where the robot's disc stays clear of every static shape, pymunk imposes
+the planned displacements exactly (no contact, no impulse), so the true path is the planned
+one: the circular arc of each command's ground increments (:func:`~sonar_gym.robot.unicycle_step`
+with ``"arc"``). :func:`drive_straight_run` computes a run of commands that way, with the very
+same random draws per command as ``drive`` (two standard normals, then four uniforms), checks
+the clearance of the whole planned path against the world's static geometry, and hands every
+command from the first one that comes near a shape to ``drive`` itself (pymunk), so contacts
+are resolved exactly as before. The odometry integrates the encoder increments per physics
+substep, as ``drive`` does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from sonar_gym.geometry import StaticGeometry
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.world import World
+
+CLEARANCE_MARGIN_M = 0.002
+"""Clearance (metres) beyond the robot's radius below which a command goes through pymunk."""
+_CHECK_SPACING_M = 0.005
+
+
+@dataclass(frozen=True)
+class StraightRun:
+    """The outcome of :func:`drive_straight_run` (arrays over the ``K`` commands).
+
+    Attributes:
+        encoder_left_m, encoder_right_m: ``(K,)`` encoder increments, metres.
+        true_poses: ``(K, 3)`` true ``[x, y, theta]`` after each command ({W}).
+        odometry_poses: ``(K, 3)`` the robot's dead-reckoning pose after each command.
+        collided: ``(K,)`` whether the command touched a static shape.
+    """
+
+    encoder_left_m: FloatArray
+    encoder_right_m: FloatArray
+    true_poses: FloatArray
+    odometry_poses: FloatArray
+    collided: np.ndarray
+
+
+def _sinc(x: FloatArray) -> FloatArray:
+    """``sin(x)/x`` with its series below 1e-4 rad, as :func:`sonar_gym.robot.unicycle_step`."""
+    small = np.abs(x) < 1e-4
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
+
+
+def _clearance(geometry: StaticGeometry, points: FloatArray) -> FloatArray:
+    """``(P,)`` distance (metres) from each point to the nearest static segment or circle."""
+    nearest = np.full(len(points), math.inf)
+    if geometry.n_segments:
+        starts, ends = geometry.segment_starts, geometry.segment_ends
+        edges = ends - starts
+        lengths_sq = np.maximum(np.einsum("sk,sk->s", edges, edges), 1e-24)
+        rel = points[:, None, :] - starts[None, :, :]
+        t = np.clip(np.einsum("psk,sk->ps", rel, edges) / lengths_sq, 0.0, 1.0)
+        gap = rel - t[:, :, None] * edges[None, :, :]
+        nearest = np.minimum(nearest, np.sqrt(np.einsum("psk,psk->ps", gap, gap)).min(axis=1))
+    if geometry.n_circles:
+        centres, radii = geometry.circles[:, :2], geometry.circles[:, 2]
+        gaps = np.hypot(*(points[:, None, :] - centres[None, :, :]).transpose(2, 0, 1)) - radii
+        nearest = np.minimum(nearest, np.abs(gaps).min(axis=1))
+    return nearest
+
+
+def drive_straight_run(
+    robot: DifferentialDriveRobot,
+    world: World,
+    step_m: float,
+    count: int,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Drive ``count`` straight commands of ``step_m`` metres, as ``count`` calls of
+    :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_straight` would.
+
+    Same random stream, same true motion (to rounding) and same odometry; the world's robot
+    and ``robot.odometry_pose`` end where those calls leave them.
+    """
+    step_m = float(step_m)
+    if not math.isfinite(step_m):
+        raise ValueError(f"argument 'step_m' must be a finite distance (metres); got {step_m!r}")
+    if int(count) != count or count < 0:
+        raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
+    count = int(count)
+    base = robot.wheel_base_for(world)
+    noise = robot.noise
+    state = rng.bit_generator.state
+    normals = np.empty((count, 2))
+    uniforms = np.empty((count, 4))
+    for index in range(count):  # drive()'s draw order: two normals, then four uniforms
+        normals[index] = rng.standard_normal(2)
+        uniforms[index] = rng.random(4)
+    commanded = abs(step_m)
+    encoder = step_m + noise.encoder_std_m_per_sqrt_m * math.sqrt(commanded) * normals
+    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** commanded
+    slip_loss = np.where(
+        uniforms[:, :2] < slip_probability, uniforms[:, 2:] * noise.slip_fraction_max, 0.0
+    )
+    scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
+    ground = step_m * scale * (1.0 - slip_loss)  # (K, 2)
+
+    travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
+    ground_turn = (ground[:, 1] - ground[:, 0]) / base
+    substeps = np.maximum.reduce(
+        [
+            np.ones(count, dtype=np.int64),
+            np.ceil(travel / robot.max_substep_m).astype(np.int64),
+            np.ceil(np.abs(ground_turn) / robot.max_substep_rad).astype(np.int64),
+        ]
+    )
+
+    # The planned true path: each command an arc from the previous command's end.
+    start = world.robot_pose
+    distance = 0.5 * (ground[:, 0] + ground[:, 1])
+    thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
+    fine = max(1, math.ceil(float(np.max(np.abs(distance), initial=0.0)) / _CHECK_SPACING_M))
+    fractions = np.arange(fine + 1) / fine  # (F,)
+    sub_d = distance[:, None] * fractions * _sinc(0.5 * ground_turn[:, None] * fractions)
+    sub_heading = thetas[:-1, None] + 0.5 * ground_turn[:, None] * fractions
+    step_x = distance * _sinc(0.5 * ground_turn) * np.cos(thetas[:-1] + 0.5 * ground_turn)
+    step_y = distance * _sinc(0.5 * ground_turn) * np.sin(thetas[:-1] + 0.5 * ground_turn)
+    ends_x = start.x + np.cumsum(step_x)
+    ends_y = start.y + np.cumsum(step_y)
+    starts_x = np.concatenate([[start.x], ends_x[:-1]])
+    starts_y = np.concatenate([[start.y], ends_y[:-1]])
+    points = np.stack(
+        [
+            starts_x[:, None] + sub_d * np.cos(sub_heading),
+            starts_y[:, None] + sub_d * np.sin(sub_heading),
+        ],
+        axis=2,
+    )  # (K, F, 2)
+    margin = world.robot_radius + CLEARANCE_MARGIN_M + 0.5 * _CHECK_SPACING_M
+    clear = (
+        _clearance(world.geometry, points.reshape(-1, 2)).reshape(count, fine + 1) > margin
+    ).all(axis=1)
+    free = count if clear.all() else int(np.argmin(clear))
+
+    # The odometry: each command's encoder increments split over its substeps (midpoint).
+    odometry = robot.odometry_pose if robot.odometry_pose is not None else start
+    odometry_poses = np.empty((count, 3))
+    collided = np.zeros(count, dtype=bool)
+    true_poses = np.empty((count, 3))
+    true_poses[:, 0], true_poses[:, 1] = ends_x, ends_y
+    true_poses[:, 2] = wrap_angles(thetas[1:])
+    x, y, theta = odometry.x, odometry.y, odometry.theta
+    for index in range(free):
+        n = int(substeps[index])
+        d = 0.5 * (encoder[index, 0] + encoder[index, 1]) / n
+        turn = (encoder[index, 1] - encoder[index, 0]) / base / n
+        for _ in range(n):
+            heading = theta + 0.5 * turn
+            x, y = x + d * math.cos(heading), y + d * math.sin(heading)
+            theta = float(wrap_angles(theta + turn))
+        odometry_poses[index] = x, y, theta
+    if free:
+        robot.odometry_pose = Pose(x, y, theta)
+        world.set_robot_pose(Pose(*true_poses[free - 1]))
+    if free < count:
+        rng.bit_generator.state = state
+        for _ in range(free):  # replay the draws the fast commands used
+            rng.standard_normal(2)
+            rng.random(4)
+        for index in range(free, count):
+            result = robot.drive_straight(world, step_m, rng)
+            encoder[index] = result.encoder_left_m, result.encoder_right_m
+            true_poses[index] = result.true_pose.as_array()
+            odometry_poses[index] = result.odometry_pose.as_array()
+            collided[index] = result.collided
+    return StraightRun(
+        encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
+    )
+
+
+__all__ = ["CLEARANCE_MARGIN_M", "StraightRun", "drive_straight_run"]
