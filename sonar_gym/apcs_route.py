@@ -27,7 +27,7 @@ from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResul
 from sonar_gym.pose import FloatArray, Pose, angle_difference
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.sonar.swept import SideSonars
-from sonar_gym.straight_drive import drive_straight_run
+from sonar_gym.straight_drive import drive_straight_run, turn_run
 from sonar_gym.world import World
 
 REAIM_TOLERANCE_RAD = math.radians(0.05)
@@ -195,16 +195,11 @@ class APCSRoute:
                 return
             turn = angle_difference(math.atan2(offset[1], offset[0]), estimate.theta)
             if abs(turn) > REAIM_TOLERANCE_RAD:
-                motion = self.robot.turn(self.world, turn, self.motion_rng)
-                summary.collided = summary.collided or motion.collided
+                motion = turn_run(self.robot, self.world, turn, self.motion_rng)
+                summary.collided = summary.collided or bool(motion.collided.any())
                 with self._timed("localization"):
-                    result = self.tracker.run([motion.encoder_left_m], [motion.encoder_right_m])
-                odometry = self.robot.odometry_pose or self.tracker.estimate
-                self._record(
-                    motion.true_pose.as_array()[None, :],
-                    result.estimated_path,
-                    odometry.as_array()[None, :],
-                )
+                    result = self.tracker.run(motion.encoder_left_m, motion.encoder_right_m)
+                self._record(motion.true_poses, result.estimated_path, motion.odometry_poses)
             count = min(remaining, steps_per_aim)
             self._straight(count, active_sides, steps_per_sample, step_m, summary)
             if count < steps_per_aim:

@@ -1,4 +1,4 @@
-"""A run of identical straight drive commands, as arrays where the robot touches nothing.
+"""A run of identical drive commands, as arrays where the robot touches nothing.
 
 :meth:`sonar_gym.robot.DifferentialDriveRobot.drive` moves the true robot through pymunk one
 command at a time. Where the robot's disc stays clear of every static shape, pymunk imposes
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonar_gym.geometry import StaticGeometry
-from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.pose import FloatArray, Pose, wrap_angle, wrap_angles
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
 
@@ -80,14 +80,38 @@ def drive_straight_run(
     rng: np.random.Generator,
 ) -> StraightRun:
     """Drive ``count`` straight commands of ``step_m`` metres, as ``count`` calls of
-    :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_straight` would.
+    :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_straight` would."""
+    return drive_run(robot, world, step_m, step_m, count, rng)
+
+
+def turn_run(
+    robot: DifferentialDriveRobot, world: World, angle_rad: float, rng: np.random.Generator
+) -> StraightRun:
+    """One turn in place by ``angle_rad`` radians, as
+    :meth:`~sonar_gym.robot.DifferentialDriveRobot.turn` would."""
+    half = 0.5 * float(angle_rad) * robot.wheel_base_for(world)
+    return drive_run(robot, world, -half, half, 1, rng)
+
+
+def drive_run(
+    robot: DifferentialDriveRobot,
+    world: World,
+    d_left_m: float,
+    d_right_m: float,
+    count: int,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Command the wheel increments ``(d_left_m, d_right_m)`` ``count`` times, as ``count``
+    calls of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` would.
 
     Same random stream, same true motion (to rounding) and same odometry; the world's robot
     and ``robot.odometry_pose`` end where those calls leave them.
     """
-    step_m = float(step_m)
-    if not math.isfinite(step_m):
-        raise ValueError(f"argument 'step_m' must be a finite distance (metres); got {step_m!r}")
+    d_left_m, d_right_m = float(d_left_m), float(d_right_m)
+    if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+        raise ValueError(
+            f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+        )
     if int(count) != count or count < 0:
         raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
     count = int(count)
@@ -99,14 +123,14 @@ def drive_straight_run(
     for index in range(count):  # drive()'s draw order: two normals, then four uniforms
         normals[index] = rng.standard_normal(2)
         uniforms[index] = rng.random(4)
-    commanded = abs(step_m)
-    encoder = step_m + noise.encoder_std_m_per_sqrt_m * math.sqrt(commanded) * normals
-    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** commanded
+    commanded = np.array([d_left_m, d_right_m])
+    encoder = commanded + noise.encoder_std_m_per_sqrt_m * np.sqrt(np.abs(commanded)) * normals
+    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
     slip_loss = np.where(
         uniforms[:, :2] < slip_probability, uniforms[:, 2:] * noise.slip_fraction_max, 0.0
     )
     scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
-    ground = step_m * scale * (1.0 - slip_loss)  # (K, 2)
+    ground = commanded * scale * (1.0 - slip_loss)  # (K, 2)
 
     travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
     ground_turn = (ground[:, 1] - ground[:, 0]) / base
@@ -160,7 +184,7 @@ def drive_straight_run(
         for _ in range(n):
             heading = theta + 0.5 * turn
             x, y = x + d * math.cos(heading), y + d * math.sin(heading)
-            theta = float(wrap_angles(theta + turn))
+            theta = wrap_angle(theta + turn)
         odometry_poses[index] = x, y, theta
     if free:
         robot.odometry_pose = Pose(x, y, theta)
@@ -171,7 +195,7 @@ def drive_straight_run(
             rng.standard_normal(2)
             rng.random(4)
         for index in range(free, count):
-            result = robot.drive_straight(world, step_m, rng)
+            result = robot.drive(world, d_left_m, d_right_m, rng)
             encoder[index] = result.encoder_left_m, result.encoder_right_m
             true_poses[index] = result.true_pose.as_array()
             odometry_poses[index] = result.odometry_pose.as_array()
@@ -181,4 +205,4 @@ def drive_straight_run(
     )
 
 
-__all__ = ["CLEARANCE_MARGIN_M", "StraightRun", "drive_straight_run"]
+__all__ = ["CLEARANCE_MARGIN_M", "StraightRun", "drive_run", "drive_straight_run", "turn_run"]

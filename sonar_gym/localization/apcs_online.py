@@ -145,16 +145,23 @@ def dead_reckon(
     wheels[:, 2, 1] = -1.0 / base
     variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
     encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
-    covariances = np.empty((len(left) + 1, 3, 3))
-    covariances[0] = start_covariance
-    state = np.eye(3)
-    current = start_covariance
-    for index in range(len(left)):
-        state[0, 2] = -distance[index] * sin_h[index]
-        state[1, 2] = distance[index] * cos_h[index]
-        current = state @ current @ state.T + encoder_terms[index]
-        current = 0.5 * (current + current.T)
-        covariances[index + 1] = current
+    # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
+    # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
+    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's.
+    count = len(left)
+    sums = np.zeros((count + 1, 3))
+    sums[1:, 0] = np.cumsum(-distance * sin_h)
+    sums[1:, 1] = np.cumsum(distance * cos_h)
+    transitions = np.broadcast_to(np.eye(3), (count + 1, count + 1, 3, 3)).copy()
+    transitions[:, :, :, 2] += sums[None, :, :] - sums[:, None, :]  # [j, k] = Phi_jk
+    covariances = np.einsum("kab,bc,kdc->kad", transitions[0], start_covariance, transitions[0])
+    if count:
+        later = np.tril(np.ones((count + 1, count), dtype=bool), -1)  # [k, i]: i < k
+        noise_terms = np.einsum(
+            "ikab,ibc,ikdc->ikad", transitions[1:], encoder_terms, transitions[1:]
+        )
+        covariances += np.einsum("ki,ikad->kad", later, noise_terms)
+    covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
     return poses, covariances
 
 
