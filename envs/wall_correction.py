@@ -657,15 +657,14 @@ class WallCorrectionEnv(SonarEnv):
         end_x = self.leg_starts_x[route.leg + 1]
         y = self.centre_line_y + command.standoff_m
         steps_per_aim = max(1, round(config.reaim_interval_m / config.motion_step_m))
-        for waypoint in ((start_x + config.transition_m, y), (end_x, y)):
-            route.drive_to(
-                np.array(waypoint),
-                command.active_sides,
-                command.spacing_cm // config.motion_step_cm,
-                config.motion_step_m,
-                steps_per_aim,
-                summary,
-            )
+        route.drive_through(
+            [np.array((start_x + config.transition_m, y)), np.array((end_x, y))],
+            command.active_sides,
+            command.spacing_cm // config.motion_step_cm,
+            config.motion_step_m,
+            steps_per_aim,
+            summary,
+        )
         route.leg += 1
         done = route.leg >= config.n_legs
         if done:

@@ -24,10 +24,10 @@ import numpy as np
 
 from sonar_gym.localization.apcs import DetectedWall, MatchResult
 from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
-from sonar_gym.pose import FloatArray, Pose, angle_difference
+from sonar_gym.pose import FloatArray, Pose, angle_difference, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.sonar.swept import SideSonars
-from sonar_gym.straight_drive import drive_straight_run, turn_run
+from sonar_gym.straight_drive import CommandDraws, drive_commands
 from sonar_gym.world import World
 
 REAIM_TOLERANCE_RAD = math.radians(0.05)
@@ -112,6 +112,18 @@ class EpisodeTrace:
     corrections: list[tuple[Pose, Pose, Pose]] = field(default_factory=list)
 
 
+@dataclass
+class _Plan:
+    """Planned commands: ``(d_left, d_right)``, whether each is a straight step, the command
+    counts at the steering points (``stops``) with the waypoint aimed at from each, the draws."""
+
+    draws: CommandDraws
+    commanded: list[tuple[float, float]] = field(default_factory=list)
+    straight: list[bool] = field(default_factory=list)
+    stops: list[int] = field(default_factory=list)
+    next_waypoint: list[int] = field(default_factory=list)
+
+
 class APCSRoute:
     """A robot with side sonars driving through ``world`` while APCS corrects its estimate.
 
@@ -185,67 +197,137 @@ class APCSRoute:
         Every ``steps_per_aim`` commands (and at the start) the remaining distance and the
         bearing to ``target`` are taken from the estimate and the robot turns in place when the
         heading is off by more than :data:`REAIM_TOLERANCE_RAD`. Every ``steps_per_sample``
-        commands (counted across calls) the ``active_sides`` take a reading each.
+        straight commands (counted across calls) the ``active_sides`` take a reading each.
         """
-        while True:
-            estimate = self.tracker.estimate
-            offset = np.asarray(target, dtype=np.float64) - estimate.position
-            remaining = round(float(np.hypot(*offset)) / step_m)
-            if remaining == 0:
-                return
-            turn = angle_difference(math.atan2(offset[1], offset[0]), estimate.theta)
-            if abs(turn) > REAIM_TOLERANCE_RAD:
-                motion = turn_run(self.robot, self.world, turn, self.motion_rng)
-                summary.collided = summary.collided or bool(motion.collided.any())
-                with self._timed("localization"):
-                    result = self.tracker.run(motion.encoder_left_m, motion.encoder_right_m)
-                self._record(motion.true_poses, result.estimated_path, motion.odometry_poses)
-            count = min(remaining, steps_per_aim)
-            self._straight(count, active_sides, steps_per_sample, step_m, summary)
-            if count < steps_per_aim:
-                return
+        self.drive_through([target], active_sides, steps_per_sample, step_m, steps_per_aim, summary)
 
-    def _straight(
+    def drive_through(
         self,
-        count: int,
+        waypoints: Sequence[FloatArray],
         active_sides: Sequence[str],
         steps_per_sample: int,
         step_m: float,
+        steps_per_aim: int,
         summary: LegSummary,
     ) -> None:
-        run = drive_straight_run(self.robot, self.world, step_m, count, self.motion_rng)
-        summary.collided = summary.collided or bool(run.collided.any())
+        """:meth:`drive_to` each of ``waypoints`` in turn.
+
+        The commands to the last waypoint are planned at once from the estimate as dead
+        reckoning carries it, then driven, sensed and handed to the tracker as arrays. When
+        APCS corrects the estimate, the plan holds up to the next steering point; from there it
+        is planned again from the corrected estimate (the random streams and the robot are
+        put back where the first plan left them at that point).
+        """
+        targets = [np.asarray(target, dtype=np.float64).reshape(2) for target in waypoints]
+        waypoint = 0
+        while waypoint < len(targets):
+            plan = self._plan(targets, waypoint, step_m, steps_per_aim)
+            if not plan.stops:
+                return
+            waypoint = self._execute(plan, active_sides, steps_per_sample, summary)
+
+    def _plan(
+        self, targets: Sequence[FloatArray], waypoint: int, step_m: float, steps_per_aim: int
+    ) -> _Plan:
+        """The commands from the current estimate to the last target (see :meth:`drive_through`)."""
+        base = self.robot.wheel_base_for(self.world)
+        encoder_std = self.robot.noise.encoder_std_m_per_sqrt_m
+        estimate = self.tracker.estimate
+        x, y, theta = estimate.x, estimate.y, estimate.theta
+        plan = _Plan(CommandDraws.empty())
+        rng = self.motion_rng
+
+        def command(d_left: float, d_right: float, straight: bool) -> None:
+            nonlocal x, y, theta
+            normals, _ = plan.draws.draw(rng)
+            left = d_left + encoder_std * math.sqrt(abs(d_left)) * float(normals[0])
+            right = d_right + encoder_std * math.sqrt(abs(d_right)) * float(normals[1])
+            distance, turn = 0.5 * (right + left), (right - left) / base
+            heading = theta + 0.5 * turn
+            x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
+            theta = wrap_angle(theta + turn)
+            plan.commanded.append((d_left, d_right))
+            plan.straight.append(straight)
+
+        while waypoint < len(targets):
+            dx, dy = float(targets[waypoint][0]) - x, float(targets[waypoint][1]) - y
+            remaining = round(math.hypot(dx, dy) / step_m)
+            if remaining == 0:
+                waypoint += 1
+                continue
+            turn = angle_difference(math.atan2(dy, dx), theta)
+            if abs(turn) > REAIM_TOLERANCE_RAD:
+                half = 0.5 * turn * base
+                command(-half, half, straight=False)
+            count = min(remaining, steps_per_aim)
+            for _ in range(count):
+                command(step_m, step_m, straight=True)
+            if count < steps_per_aim:
+                waypoint += 1
+            plan.stops.append(len(plan.commanded))
+            plan.next_waypoint.append(waypoint)
+        plan.draws.finish(rng)
+        return plan
+
+    def _execute(
+        self, plan: _Plan, active_sides: Sequence[str], steps_per_sample: int, summary: LegSummary
+    ) -> int:
+        """Drive, sense and track ``plan``; returns the waypoint to plan for next."""
+        commanded = np.array(plan.commanded, dtype=np.float64)
+        motion = drive_commands(self.robot, self.world, commanded, plan.draws, self.motion_rng)
         samples: list[int] = []
-        if active_sides:
-            for index in range(count):
-                self.steps_since_sample += 1
-                if self.steps_since_sample >= steps_per_sample:
-                    self.steps_since_sample = 0
+        counters: list[int] = []
+        counter = self.steps_since_sample
+        for index, straight in enumerate(plan.straight):
+            if straight:
+                counter += 1
+                if active_sides and counter >= steps_per_sample:
+                    counter = 0
                     samples.append(index)
-        else:
-            self.steps_since_sample += count
-        readings: dict[str, FloatArray] = {}
-        if samples:
-            with self._timed("sensing"):
-                side_readings = self.sonars.sample_along(
-                    self.world, [Pose(*run.true_poses[i]) for i in samples], self.sensor_rng
-                )
-            listen_s = self.sonars.transducer.listen_time_s * len(samples)  # fire together
-            self.sensing_time_s += listen_s
-            summary.sensing_time_s += listen_s
-            summary.samples += len(active_sides) * len(samples)
-            all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
-            readings = {side: all_readings[side] for side in active_sides}
+            counters.append(counter)
+        sensor_state = self.sensor_rng.bit_generator.state
+        readings = self._read(motion.true_poses, samples, active_sides)
         with self._timed("localization"):
             result = self.tracker.run(
-                run.encoder_left_m,
-                run.encoder_right_m,
+                motion.encoder_left_m,
+                motion.encoder_right_m,
                 samples,
                 readings,
                 sensor_offset_m=self.sonars.lateral_offset_m,
+                stops=plan.stops,
             )
-        self._record(run.true_poses, result.estimated_path, run.odometry_poses)
-        self._handled(result, run.true_poses, summary)
+        consumed = result.consumed
+        kept = [index for index in samples if index < consumed]
+        if consumed < len(commanded):  # a correction: the rest was planned from the old estimate
+            self.world.set_robot_pose(Pose(*motion.true_poses[consumed - 1]))
+            self.robot.odometry_pose = Pose(*motion.odometry_poses[consumed - 1])
+            self.motion_rng.bit_generator.state = plan.draws.states[consumed]
+            self.sensor_rng.bit_generator.state = sensor_state
+            self._read(motion.true_poses, kept, active_sides)  # the draws of the kept readings
+        self.steps_since_sample = counters[consumed - 1]
+        listen_s = self.sonars.transducer.listen_time_s * len(kept)  # both sonars fire together
+        self.sensing_time_s += listen_s
+        summary.sensing_time_s += listen_s
+        summary.samples += len(active_sides) * len(kept)
+        summary.collided = summary.collided or bool(motion.collided[:consumed].any())
+        self._record(
+            motion.true_poses[:consumed], result.estimated_path, motion.odometry_poses[:consumed]
+        )
+        self._handled(result, motion.true_poses, summary)
+        return plan.next_waypoint[plan.stops.index(consumed)]
+
+    def _read(
+        self, true_poses: FloatArray, samples: Sequence[int], active_sides: Sequence[str]
+    ) -> dict[str, FloatArray]:
+        """Readings of the active sides at the commands ``samples`` (both sonars fire)."""
+        if not samples:
+            return {}
+        with self._timed("sensing"):
+            side_readings = self.sonars.sample_along(
+                self.world, [Pose(*true_poses[i]) for i in samples], self.sensor_rng
+            )
+        all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
+        return {side: all_readings[side] for side in active_sides}
 
     def _handled(self, result: RunResult, true_poses: FloatArray, summary: LegSummary) -> None:
         """Book the ERPs, walls and corrections of a tracker run into the trace and summary."""

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonar_gym.geometry import StaticGeometry
-from sonar_gym.pose import FloatArray, Pose, wrap_angle, wrap_angles
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
 
@@ -114,24 +114,81 @@ def drive_run(
         )
     if int(count) != count or count < 0:
         raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
-    count = int(count)
+    draws = CommandDraws.empty()
+    for _ in range(int(count)):
+        draws.draw(rng)
+    draws.finish(rng)
+    commanded = np.tile([d_left_m, d_right_m], (int(count), 1))
+    return drive_commands(robot, world, commanded, draws, rng)
+
+
+@dataclass
+class CommandDraws:
+    """The random numbers of a run of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive`
+    commands, drawn in its order (two standard normals, then four uniforms, per command),
+    with the generator's state before each command (to replay one through pymunk)."""
+
+    normals: list[FloatArray]
+    uniforms: list[FloatArray]
+    states: list[dict]
+
+    @classmethod
+    def empty(cls) -> CommandDraws:
+        return cls([], [], [])
+
+    def draw(self, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
+        """Draw one command's numbers; returns ``(normals, uniforms)``."""
+        self.states.append(rng.bit_generator.state)
+        normals, uniforms = rng.standard_normal(2), rng.random(4)
+        self.normals.append(normals)
+        self.uniforms.append(uniforms)
+        return normals, uniforms
+
+    def finish(self, rng: np.random.Generator) -> None:
+        """Note the generator's state after the last command."""
+        self.states.append(rng.bit_generator.state)
+
+
+def encoder_increments(
+    robot: DifferentialDriveRobot, commanded: FloatArray, normals: FloatArray
+) -> FloatArray:
+    """``(K, 2)`` encoder increments of commands ``(K, 2)`` ``[d_left, d_right]`` (metres):
+    the commanded travel plus the encoder noise of ``drive``."""
+    noise = robot.noise.encoder_std_m_per_sqrt_m
+    return commanded + noise * np.sqrt(np.abs(commanded)) * normals
+
+
+def drive_commands(
+    robot: DifferentialDriveRobot,
+    world: World,
+    commanded: FloatArray,
+    draws: CommandDraws,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Execute commands ``(K, 2)`` whose random numbers ``draws`` already holds.
+
+    Each command is what :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` does with
+    those numbers; commands whose planned path comes near a static shape go through ``drive``
+    itself (the generator replayed from the command's state). ``rng`` ends in the state after
+    the last command.
+    """
+    commanded = np.asarray(commanded, dtype=np.float64).reshape(-1, 2)
+    count = len(commanded)
+    if count == 0:
+        return StraightRun(
+            np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=bool)
+        )
     base = robot.wheel_base_for(world)
     noise = robot.noise
-    state = rng.bit_generator.state
-    normals = np.empty((count, 2))
-    uniforms = np.empty((count, 4))
-    for index in range(count):  # drive()'s draw order: two normals, then four uniforms
-        normals[index] = rng.standard_normal(2)
-        uniforms[index] = rng.random(4)
-    commanded = np.array([d_left_m, d_right_m])
-    encoder = commanded + noise.encoder_std_m_per_sqrt_m * np.sqrt(np.abs(commanded)) * normals
+    normals = np.array(draws.normals)
+    uniforms = np.array(draws.uniforms)
+    encoder = encoder_increments(robot, commanded, normals)
     slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
     slip_loss = np.where(
         uniforms[:, :2] < slip_probability, uniforms[:, 2:] * noise.slip_fraction_max, 0.0
     )
     scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
     ground = commanded * scale * (1.0 - slip_loss)  # (K, 2)
-
     travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
     ground_turn = (ground[:, 1] - ground[:, 0]) / base
     substeps = np.maximum.reduce(
@@ -141,25 +198,63 @@ def drive_run(
             np.ceil(np.abs(ground_turn) / robot.max_substep_rad).astype(np.int64),
         ]
     )
+    true_poses = np.empty((count, 3))
+    collided = np.zeros(count, dtype=bool)
+    odometry = robot.odometry_pose if robot.odometry_pose is not None else world.robot_pose
+    first = 0
+    while first < count:
+        free = first + _free_commands(
+            world, ground[first:], ground_turn[first:], true_poses[first:]
+        )
+        if free > first:
+            world.set_robot_pose(Pose(*true_poses[free - 1]))
+        if free == count:
+            break
+        rng.bit_generator.state = draws.states[free]
+        result = robot.drive(world, commanded[free, 0], commanded[free, 1], rng)
+        true_poses[free] = result.true_pose.as_array()
+        collided[free] = result.collided
+        first = free + 1
+    rng.bit_generator.state = draws.states[count]
 
-    # The planned true path: each command an arc from the previous command's end.
+    # The odometry: each command's encoder increments split over its substeps (midpoint).
+    sub_distance = np.repeat(0.5 * (encoder[:, 0] + encoder[:, 1]) / substeps, substeps)
+    sub_turn = np.repeat((encoder[:, 1] - encoder[:, 0]) / base / substeps, substeps)
+    thetas = odometry.theta + np.concatenate([[0.0], np.cumsum(sub_turn)])
+    heading = thetas[:-1] + 0.5 * sub_turn
+    xs = np.cumsum(np.concatenate([[odometry.x], sub_distance * np.cos(heading)]))
+    ys = np.cumsum(np.concatenate([[odometry.y], sub_distance * np.sin(heading)]))
+    ends = np.cumsum(substeps)
+    odometry_poses = np.column_stack([xs[ends], ys[ends], wrap_angles(thetas[ends])])
+    robot.odometry_pose = Pose(*odometry_poses[-1])
+    return StraightRun(
+        encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
+    )
+
+
+def _free_commands(
+    world: World, ground: FloatArray, ground_turn: FloatArray, out: FloatArray
+) -> int:
+    """How many of the commands, from the robot's pose, keep clear of every static shape.
+
+    Fills ``out[:k]`` with their planned end poses (``k`` the returned count).
+    """
+    count = len(ground)
     start = world.robot_pose
     distance = 0.5 * (ground[:, 0] + ground[:, 1])
     thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
     fine = max(1, math.ceil(float(np.max(np.abs(distance), initial=0.0)) / _CHECK_SPACING_M))
     fractions = np.arange(fine + 1) / fine  # (F,)
-    sub_d = distance[:, None] * fractions * _sinc(0.5 * ground_turn[:, None] * fractions)
-    sub_heading = thetas[:-1, None] + 0.5 * ground_turn[:, None] * fractions
-    step_x = distance * _sinc(0.5 * ground_turn) * np.cos(thetas[:-1] + 0.5 * ground_turn)
-    step_y = distance * _sinc(0.5 * ground_turn) * np.sin(thetas[:-1] + 0.5 * ground_turn)
-    ends_x = start.x + np.cumsum(step_x)
-    ends_y = start.y + np.cumsum(step_y)
-    starts_x = np.concatenate([[start.x], ends_x[:-1]])
-    starts_y = np.concatenate([[start.y], ends_y[:-1]])
+    half_turn = 0.5 * ground_turn
+    step = distance * _sinc(half_turn)
+    ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
+    ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
+    sub_d = distance[:, None] * fractions * _sinc(half_turn[:, None] * fractions)
+    sub_heading = thetas[:-1, None] + half_turn[:, None] * fractions
     points = np.stack(
         [
-            starts_x[:, None] + sub_d * np.cos(sub_heading),
-            starts_y[:, None] + sub_d * np.sin(sub_heading),
+            ends_x[:-1, None] + sub_d * np.cos(sub_heading),
+            ends_y[:-1, None] + sub_d * np.sin(sub_heading),
         ],
         axis=2,
     )  # (K, F, 2)
@@ -168,41 +263,19 @@ def drive_run(
         _clearance(world.geometry, points.reshape(-1, 2)).reshape(count, fine + 1) > margin
     ).all(axis=1)
     free = count if clear.all() else int(np.argmin(clear))
-
-    # The odometry: each command's encoder increments split over its substeps (midpoint).
-    odometry = robot.odometry_pose if robot.odometry_pose is not None else start
-    odometry_poses = np.empty((count, 3))
-    collided = np.zeros(count, dtype=bool)
-    true_poses = np.empty((count, 3))
-    true_poses[:, 0], true_poses[:, 1] = ends_x, ends_y
-    true_poses[:, 2] = wrap_angles(thetas[1:])
-    x, y, theta = odometry.x, odometry.y, odometry.theta
-    for index in range(free):
-        n = int(substeps[index])
-        d = 0.5 * (encoder[index, 0] + encoder[index, 1]) / n
-        turn = (encoder[index, 1] - encoder[index, 0]) / base / n
-        for _ in range(n):
-            heading = theta + 0.5 * turn
-            x, y = x + d * math.cos(heading), y + d * math.sin(heading)
-            theta = wrap_angle(theta + turn)
-        odometry_poses[index] = x, y, theta
-    if free:
-        robot.odometry_pose = Pose(x, y, theta)
-        world.set_robot_pose(Pose(*true_poses[free - 1]))
-    if free < count:
-        rng.bit_generator.state = state
-        for _ in range(free):  # replay the draws the fast commands used
-            rng.standard_normal(2)
-            rng.random(4)
-        for index in range(free, count):
-            result = robot.drive(world, d_left_m, d_right_m, rng)
-            encoder[index] = result.encoder_left_m, result.encoder_right_m
-            true_poses[index] = result.true_pose.as_array()
-            odometry_poses[index] = result.odometry_pose.as_array()
-            collided[index] = result.collided
-    return StraightRun(
-        encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
-    )
+    out[:free, 0] = ends_x[1 : free + 1]
+    out[:free, 1] = ends_y[1 : free + 1]
+    out[:free, 2] = wrap_angles(thetas[1 : free + 1])
+    return free
 
 
-__all__ = ["CLEARANCE_MARGIN_M", "StraightRun", "drive_run", "drive_straight_run", "turn_run"]
+__all__ = [
+    "CLEARANCE_MARGIN_M",
+    "CommandDraws",
+    "StraightRun",
+    "drive_commands",
+    "drive_run",
+    "drive_straight_run",
+    "encoder_increments",
+    "turn_run",
+]

@@ -478,9 +478,11 @@ class RunResult:
         erps: ``(x, y, side)`` of every ERP, in the frame of the estimate when computed.
         walls: every verified wall, in order.
         dropped: per side, closed groups that failed the size or variance test.
+        consumed: how many of the run's commands were dead-reckoned and sensed.
     """
 
     estimated_path: FloatArray
+    consumed: int = 0
     erps: list[tuple[float, float, str]] = field(default_factory=list)
     walls: list[WallHandling] = field(default_factory=list)
     dropped: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
@@ -545,6 +547,7 @@ class APCSTracker:
         sample_commands: npt.ArrayLike = (),
         readings: dict[str, npt.ArrayLike] | None = None,
         sensor_offset_m: float = 0.0,
+        stops: Sequence[int] = (),
     ) -> RunResult:
         """Dead-reckon over a run of commands and run Fig. 2 on the readings taken along it.
 
@@ -555,10 +558,13 @@ class APCSTracker:
             readings: per active side, ``(M,)`` ranges in metres (NaN = dropout); at each
                 reading instant ``left`` is handled before ``right``.
             sensor_offset_m: distance of each sensor from the robot centre along {R}'s y axis.
+            stops: increasing command counts at which the run may stop: after a correction
+                the run goes on to the next of them and stops there (the commands after it
+                were planned from the estimate before the correction).
 
         Returns:
-            The estimated path, the ERPs and the walls handled. ``estimate`` and
-            ``covariance`` are those after the last command.
+            The estimated path, the ERPs and the walls handled, and how many commands were
+            consumed. ``estimate`` and ``covariance`` are those after the last consumed command.
         """
         left = _finite_array(encoder_left_m, "encoder_left_m", (None,))
         right = _finite_array(encoder_right_m, "encoder_right_m", (len(left),))
@@ -584,11 +590,12 @@ class APCSTracker:
         poses, covariances = dead_reckon(
             self.estimate, self.covariance, left, right, self.wheel_base_m, self.variance_per_m
         )
-        result = RunResult(estimated_path=poses[1:].copy())
+        result = RunResult(estimated_path=poses[1:].copy(), consumed=len(left))
+        limit = len(left)
         # Events in time order: (sample, side). Pending ERPs are valid until a correction.
         events = [(m, side) for m in range(len(samples)) for side in sides]
         event = 0
-        while event < len(events):
+        while event < len(events) and samples[events[event][0]] < limit:
             first_sample = events[event][0]
             pending = {}
             rows = poses[samples[first_sample:] + 1]
@@ -601,7 +608,7 @@ class APCSTracker:
                     ),
                 )
             corrected = False
-            while event < len(events) and not corrected:
+            while event < len(events) and not corrected and samples[events[event][0]] < limit:
                 m, side = events[event]
                 event += 1
                 sensor_xy, points, phis, valid = pending[side]
@@ -618,6 +625,9 @@ class APCSTracker:
                 corrected = self.handle_groups(side, groups, int(samples[m]), result)
             if corrected:
                 command = int(samples[events[event - 1][0]])
+                later_stops = [stop for stop in stops if stop > command]
+                if later_stops:
+                    limit = min(limit, later_stops[0])
                 tail_poses, tail_covariances = dead_reckon(
                     self.estimate,
                     self.covariance,
@@ -629,9 +639,12 @@ class APCSTracker:
                 poses = np.vstack([poses[: command + 1], tail_poses])
                 covariances = np.concatenate([covariances[: command + 1], tail_covariances])
                 result.estimated_path[command + 1 :] = tail_poses[1:]
-        if len(left):
-            self.estimate = Pose(*poses[-1])
-            self.covariance = covariances[-1].copy()
+        if limit < len(left):
+            result.consumed = limit
+            result.estimated_path = result.estimated_path[:limit]
+        if limit:
+            self.estimate = Pose(*poses[limit])
+            self.covariance = covariances[limit].copy()
         return result
 
     def flush(self, side: str, result: RunResult | None = None) -> RunResult:

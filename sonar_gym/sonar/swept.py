@@ -43,7 +43,7 @@ APCS_SPEED_MPS = 0.3
 _SIDE_DIRECTIONS = np.array([[0.0, 1.0], [0.0, -1.0]])  # left, right in {R}
 _PATH_END_TOLERANCE = 1e-9  # as sonar_gym.sonar.echoes.PATH_END_TOLERANCE
 _UV_CENTRE_SCALAR = (1.0 - _PATH_END_TOLERANCE) / 2.0
-_UV_CENTRE = np.array([_UV_CENTRE_SCALAR, 0.5])[None, :, None, None]
+_UV_CENTRE = np.array([_UV_CENTRE_SCALAR, 0.5])[None, :, None]
 _UV_HALF_WIDTH = _UV_CENTRE
 
 
@@ -286,28 +286,6 @@ def _side_first_echoes(
         inside = np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
         valid &= ~(test[:, None] & inside)
 
-    # Occlusion of every candidate path (echo_candidates' _unoccluded, for all candidates).
-    occluders = facing & ~tables.encloses  # (P, S)
-    matrix = np.einsum("rk,pk->pr", tables.occlusion_map, homogeneous).reshape(count, -1, 3)
-    matrix[:, :n_segments] *= occluders[:, :, None]
-    products = np.einsum("prk,pck->prc", matrix, rel)  # (P, 3 S + C, K)
-    blocked = np.zeros((count, n_candidates), dtype=bool)
-    if n_segments:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            uv = (
-                products[:, n_segments : 3 * n_segments].reshape(count, 2, n_segments, n_candidates)
-                / products[:, None, :n_segments]
-            )
-        inside_uv = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
-        blocked |= (inside_uv[:, 0] & inside_uv[:, 1]).any(axis=1)
-    if tables.n_circles:
-        dots = products[:, 3 * n_segments :]
-        nearest = dots / (ranges * ranges)[:, None, :]
-        on_path = np.abs(nearest - _UV_CENTRE_SCALAR) <= _UV_CENTRE_SCALAR
-        gap_sq = (centre_distance * centre_distance)[:, :, None] - dots * nearest
-        blocked |= (on_path & (gap_sq < tables.radius_sq[None, :, None])).any(axis=1)
-    valid &= ~blocked
-
     # Detection along each sensor's beam (first_echoes with one ping per sensor).
     cos_h, sin_h = np.cos(headings), np.sin(headings)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -324,6 +302,35 @@ def _side_first_echoes(
     else:
         limits = beam.main_lobe_cos_limits((threshold / safe_amplitudes).reshape(-1))
         heard = (cosines >= limits.reshape(cosines.shape)) & valid
+
+    # Occlusion (echo_candidates' _unoccluded), only for the paths a beam hears.
+    sensor_rows, candidate_rows = np.nonzero(heard)
+    if len(sensor_rows):
+        occluders = (facing & ~tables.encloses)[sensor_rows]  # (H, S)
+        matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
+            len(sensor_rows), -1, 3
+        )
+        matrix[:, :n_segments] *= occluders[:, :, None]
+        paths = rel[sensor_rows, candidate_rows]  # (H, 3)
+        products = np.einsum("hrk,hk->hr", matrix, paths)  # (H, 3 S + C)
+        blocked = np.zeros(len(sensor_rows), dtype=bool)
+        if n_segments:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                uv = (
+                    products[:, n_segments : 3 * n_segments].reshape(-1, 2, n_segments)
+                    / products[:, None, :n_segments]
+                )
+            inside_uv = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
+            blocked |= (inside_uv[:, 0] & inside_uv[:, 1]).any(axis=1)
+        if tables.n_circles:
+            dots = products[:, 3 * n_segments :]
+            path_sq = ranges[sensor_rows, candidate_rows] ** 2
+            nearest = dots / path_sq[:, None]
+            on_path = np.abs(nearest - _UV_CENTRE_SCALAR) <= _UV_CENTRE_SCALAR
+            centre_sq = (centre_distance * centre_distance)[sensor_rows]
+            gap_sq = centre_sq - dots * nearest
+            blocked |= (on_path & (gap_sq < tables.radius_sq[None, :])).any(axis=1)
+        heard[sensor_rows[blocked], candidate_rows[blocked]] = False
     order_ranges = np.where(heard, ranges, np.inf)
     first = np.argmin(order_ranges, axis=1)
     rows = np.arange(count)
