@@ -147,20 +147,48 @@ def dead_reckon(
     encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
     # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
     # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
-    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's.
+    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's. For symmetric X,
+    # (I + w e3^T) X (I + w e3^T)^T = X + w x^T + x w^T + X_33 w w^T with x = X e3; with
+    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K).
     count = len(left)
     sums = np.zeros((count + 1, 3))
     sums[1:, 0] = np.cumsum(-distance * sin_h)
     sums[1:, 1] = np.cumsum(distance * cos_h)
-    transitions = np.broadcast_to(np.eye(3), (count + 1, count + 1, 3, 3)).copy()
-    transitions[:, :, :, 2] += sums[None, :, :] - sums[:, None, :]  # [j, k] = Phi_jk
-    covariances = np.einsum("kab,bc,kdc->kad", transitions[0], start_covariance, transitions[0])
+
+    def before(values: FloatArray) -> FloatArray:  # [k] = sum over i < k
+        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
+
+    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
+        return a[:, :, None] * b[:, None, :]
+
+    column = start_covariance[:, 2]
+    covariances = (
+        start_covariance
+        + outer(sums, np.broadcast_to(column, sums.shape))
+        + outer(np.broadcast_to(column, sums.shape), sums)
+        + start_covariance[2, 2] * outer(sums, sums)
+    )
     if count:
-        later = np.tril(np.ones((count + 1, count), dtype=bool), -1)  # [k, i]: i < k
-        noise_terms = np.einsum(
-            "ikab,ibc,ikdc->ikad", transitions[1:], encoder_terms, transitions[1:]
+        q = encoder_terms[:, :, 2]
+        q33 = encoder_terms[:, 2, 2]
+        later = sums[1:]  # U_(i+1)
+        total = before(encoder_terms)
+        q_sum = before(q)
+        cross = before(outer(later, q))
+        weight = before(q33)
+        weighted = before(q33[:, None] * later)
+        second = before(q33[:, None, None] * outer(later, later))
+        covariances += (
+            total
+            + outer(sums, q_sum)
+            + outer(q_sum, sums)
+            - cross
+            - cross.transpose(0, 2, 1)
+            + weight[:, None, None] * outer(sums, sums)
+            - outer(sums, weighted)
+            - outer(weighted, sums)
+            + second
         )
-        covariances += np.einsum("ki,ikad->kad", later, noise_terms)
     covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
     return poses, covariances
 
