@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -32,6 +31,7 @@ from sonar_gym.apcs_route import (
     EpisodeTrace,
     LegSummary,
     WallDetection,
+    with_wall_obstacles,
 )
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
@@ -44,11 +44,11 @@ from sonar_gym.localization.apcs_online import (
     nearest_facing_walls,
     rejection_reason,
 )
-from sonar_gym.maps import map_wall_vectors
+from sonar_gym.maps import facing_wall_stretch, map_wall_vectors
 from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
-from sonar_gym.scenario import Box, Scenario, load_scenario
+from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.world import World
 
@@ -522,15 +522,11 @@ class WallCorrectionEnv(SonarEnv):
             xs = np.arange(self.leg_starts_x[leg], self.leg_starts_x[leg + 1], MAP_PROFILE_STEP_M)
             origins = np.column_stack([xs, np.full_like(xs, self.centre_line_y)])
             for side_index, side in enumerate(SIDE_NAMES):
-                wall_ids, distances = nearest_facing_walls(
-                    self.wall_map, origins, np.array([0.0, _side_sign(side)])
+                longest_m, median_m = facing_wall_stretch(
+                    self.wall_map, origins, (0.0, _side_sign(side)), MAP_PROFILE_STEP_M
                 )
-                longest = _longest_run(wall_ids.tolist()) * MAP_PROFILE_STEP_M
-                seen = distances[wall_ids >= 0]
-                features[leg, 2 * side_index] = min(longest / self.leg_length_m, 1.0)
-                features[leg, 2 * side_index + 1] = (
-                    min(float(np.median(seen)) / max_range, 1.0) if seen.size else 1.0
-                )
+                features[leg, 2 * side_index] = min(longest_m / self.leg_length_m, 1.0)
+                features[leg, 2 * side_index + 1] = min(median_m / max_range, 1.0)
         return features
 
     # --- actions ----------------------------------------------------------------------------
@@ -616,33 +612,14 @@ class WallCorrectionEnv(SonarEnv):
     def _with_random_obstacles(self, rng: np.random.Generator) -> Scenario:
         """The scenario plus ``n_unmapped_obstacles`` unmapped boxes against the long walls."""
         config = self.config
-        room = self.scenario.room
-        assert room is not None
-        boxes: list[Box] = []
-        taken: dict[str, list[tuple[float, float]]] = {"left": [], "right": []}
-        for wall in self.scenario.walls:  # keep clear of the scenario's own free walls
-            for side, y_wall in (("left", room.max[1]), ("right", room.min[1])):
-                if min(abs(wall.a[1] - y_wall), abs(wall.b[1] - y_wall)) < 0.5:
-                    taken[side].append((min(wall.a[0], wall.b[0]), max(wall.a[0], wall.b[0])))
-        low_x = self.route_start_x + 0.5
-        high_x = self.leg_starts_x[-1] - 0.2
-        for _ in range(config.n_unmapped_obstacles):
-            for _attempt in range(50):
-                side = SIDE_NAMES[int(rng.integers(2))]
-                length = float(rng.uniform(*config.obstacle_length_range_m))
-                depth = float(rng.uniform(*config.obstacle_depth_range_m))
-                start_x = float(rng.uniform(low_x, max(low_x, high_x - length)))
-                span = (start_x, start_x + length)
-                if all(span[1] + 0.1 < a or span[0] - 0.1 > b for a, b in taken[side]):
-                    break
-            else:
-                continue
-            taken[side].append(span)
-            y_centre = room.max[1] - depth / 2.0 if side == "left" else room.min[1] + depth / 2.0
-            boxes.append(
-                Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False)
-            )
-        return dataclasses.replace(self.scenario, boxes=self.scenario.boxes + tuple(boxes))
+        return with_wall_obstacles(
+            self.scenario,
+            rng,
+            config.n_unmapped_obstacles,
+            config.obstacle_length_range_m,
+            config.obstacle_depth_range_m,
+            (self.route_start_x + 0.5, self.leg_starts_x[-1] - 0.2),
+        )
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
@@ -821,19 +798,6 @@ def _side_sonars(range_noise_std_m: float | None) -> SideSonars:
 
 def _side_sign(side: str) -> float:
     return 1.0 if side == "left" else -1.0
-
-
-def _longest_run(ids: Sequence[int]) -> int:
-    """Length of the longest run of one non-negative id."""
-    longest = current = 0
-    previous = -1
-    for wall_id in ids:
-        current = (
-            current + 1 if wall_id == previous and wall_id >= 0 else (1 if wall_id >= 0 else 0)
-        )
-        previous = wall_id
-        longest = max(longest, current)
-    return longest
 
 
 def _draw_path(
