@@ -236,7 +236,7 @@ class APCSRoute:
         encoder_std = self.robot.noise.encoder_std_m_per_sqrt_m
         estimate = self.tracker.estimate
         x, y, theta = estimate.x, estimate.y, estimate.theta
-        plan = _Plan(CommandDraws.empty())
+        plan = _Plan(CommandDraws.start(self.motion_rng))
         rng = self.motion_rng
 
         def command(d_left: float, d_right: float, straight: bool) -> None:
@@ -303,7 +303,7 @@ class APCSRoute:
         if consumed < len(commanded):  # a correction: the rest was planned from the old estimate
             self.world.set_robot_pose(Pose(*motion.true_poses[consumed - 1]))
             self.robot.odometry_pose = Pose(*motion.odometry_poses[consumed - 1])
-            self.motion_rng.bit_generator.state = plan.draws.states[consumed]
+            plan.draws.rewind(self.motion_rng, consumed)
             self.sensor_rng.bit_generator.state = sensor_state
             self._read(motion.true_poses, kept, active_sides)  # the draws of the kept readings
         self.steps_since_sample = counters[consumed - 1]
@@ -326,7 +326,7 @@ class APCSRoute:
             return {}
         with self._timed("sensing"):
             side_readings = self.sonars.sample_along(
-                self.world, [Pose(*true_poses[i]) for i in samples], self.sensor_rng
+                self.world, true_poses[np.asarray(samples)], self.sensor_rng
             )
         all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
         return {side: all_readings[side] for side in active_sides}

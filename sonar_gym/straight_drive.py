@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from sonar_gym.world import World
 
 CLEARANCE_MARGIN_M = 0.002
 """Clearance (metres) beyond the robot's radius below which a command goes through pymunk."""
-_CHECK_SPACING_M = 0.005
+_ROUNDING_M = 1e-6
 
 
 @dataclass(frozen=True)
@@ -114,7 +115,7 @@ def drive_run(
         )
     if int(count) != count or count < 0:
         raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
-    draws = CommandDraws.empty()
+    draws = CommandDraws.start(rng)
     for _ in range(int(count)):
         draws.draw(rng)
     draws.finish(rng)
@@ -125,20 +126,26 @@ def drive_run(
 @dataclass
 class CommandDraws:
     """The random numbers of a run of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive`
-    commands, drawn in its order (two standard normals, then four uniforms, per command),
-    with the generator's state before each command (to replay one through pymunk)."""
+    commands, drawn in its order (two standard normals, then four uniforms, per command).
 
+    Attributes:
+        start_state: the generator's state before the first command (to replay a command
+            through ``drive``, or to stop the run early).
+        end_state: its state after the last command (set by :meth:`finish`).
+    """
+
+    start_state: dict[str, Any]
     normals: list[FloatArray]
     uniforms: list[FloatArray]
-    states: list[dict]
+    end_state: dict[str, Any] | None = None
 
     @classmethod
-    def empty(cls) -> CommandDraws:
-        return cls([], [], [])
+    def start(cls, rng: np.random.Generator) -> CommandDraws:
+        """Begin drawing from ``rng``."""
+        return cls(rng.bit_generator.state, [], [])
 
     def draw(self, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
         """Draw one command's numbers; returns ``(normals, uniforms)``."""
-        self.states.append(rng.bit_generator.state)
         normals, uniforms = rng.standard_normal(2), rng.random(4)
         self.normals.append(normals)
         self.uniforms.append(uniforms)
@@ -146,7 +153,17 @@ class CommandDraws:
 
     def finish(self, rng: np.random.Generator) -> None:
         """Note the generator's state after the last command."""
-        self.states.append(rng.bit_generator.state)
+        self.end_state = rng.bit_generator.state
+
+    def rewind(self, rng: np.random.Generator, index: int) -> None:
+        """Put ``rng`` in its state before command ``index`` (after the last for ``len``)."""
+        if index == len(self.normals) and self.end_state is not None:
+            rng.bit_generator.state = self.end_state
+            return
+        rng.bit_generator.state = self.start_state
+        for _ in range(index):
+            rng.standard_normal(2)
+            rng.random(4)
 
 
 def encoder_increments(
@@ -210,12 +227,12 @@ def drive_commands(
             world.set_robot_pose(Pose(*true_poses[free - 1]))
         if free == count:
             break
-        rng.bit_generator.state = draws.states[free]
+        draws.rewind(rng, free)
         result = robot.drive(world, commanded[free, 0], commanded[free, 1], rng)
         true_poses[free] = result.true_pose.as_array()
         collided[free] = result.collided
         first = free + 1
-    rng.bit_generator.state = draws.states[count]
+    draws.rewind(rng, count)
 
     # The odometry: each command's encoder increments split over its substeps (midpoint).
     sub_distance = np.repeat(0.5 * (encoder[:, 0] + encoder[:, 1]) / substeps, substeps)
@@ -243,25 +260,17 @@ def _free_commands(
     start = world.robot_pose
     distance = 0.5 * (ground[:, 0] + ground[:, 1])
     thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
-    fine = max(1, math.ceil(float(np.max(np.abs(distance), initial=0.0)) / _CHECK_SPACING_M))
-    fractions = np.arange(fine + 1) / fine  # (F,)
     half_turn = 0.5 * ground_turn
     step = distance * _sinc(half_turn)
     ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
     ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
-    sub_d = distance[:, None] * fractions * _sinc(half_turn[:, None] * fractions)
-    sub_heading = thetas[:-1, None] + half_turn[:, None] * fractions
-    points = np.stack(
-        [
-            ends_x[:-1, None] + sub_d * np.cos(sub_heading),
-            ends_y[:-1, None] + sub_d * np.sin(sub_heading),
-        ],
-        axis=2,
-    )  # (K, F, 2)
-    margin = world.robot_radius + CLEARANCE_MARGIN_M + 0.5 * _CHECK_SPACING_M
-    clear = (
-        _clearance(world.geometry, points.reshape(-1, 2)).reshape(count, fine + 1) > margin
-    ).all(axis=1)
+    # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
+    # than the chord's nearer end minus half its length; the arc leaves its chord by at most
+    # its sagitta, |d dtheta| / 8.
+    gaps = _clearance(world.geometry, np.column_stack([ends_x, ends_y]))
+    reach = 0.5 * np.abs(distance) + np.abs(distance * ground_turn) / 8.0 + _ROUNDING_M
+    margin = world.robot_radius + CLEARANCE_MARGIN_M
+    clear = np.minimum(gaps[:-1], gaps[1:]) - reach > margin
     free = count if clear.all() else int(np.argmin(clear))
     out[:free, 0] = ends_x[1 : free + 1]
     out[:free, 1] = ends_y[1 : free + 1]

@@ -645,12 +645,13 @@ class APCSTracker:
                 if erp is not None:
                     result.erps.append((float(erp[0][0]), float(erp[0][1]), side))
                 pose_row = poses[samples[m] + 1]
-                self.estimate = Pose(*pose_row)
-                self.covariance = covariances[samples[m] + 1]
                 groups = self.streams[side].accept(
                     sensor_xy[row], float(pose_row[2]), float(ranges[side][m]), erp
                 )
-                corrected = self.handle_groups(side, groups, int(samples[m]), result)
+                if groups:
+                    self.estimate = Pose(*pose_row)
+                    self.covariance = covariances[samples[m] + 1]
+                    corrected = self.handle_groups(side, groups, int(samples[m]), result)
             if corrected:
                 command = int(samples[events[event - 1][0]])
                 later_stops = [stop for stop in stops if stop > command]

@@ -165,9 +165,13 @@ class SideSonars(PulseEchoSonar):
         return float(ranges[0]), float(ranges[1])
 
     def sample_along(
-        self, world: WorldLike, poses: Sequence[Pose], rng: np.random.Generator | None
+        self,
+        world: WorldLike,
+        poses: Sequence[Pose] | FloatArray,
+        rng: np.random.Generator | None,
     ) -> SideReadings:
-        """Samples at each of ``poses`` ({W}); geometry and electronics as arrays over all of them.
+        """Samples at each of ``poses`` ({W}; Poses or ``(n, 3)`` rows ``[x, y, theta]``);
+        geometry and electronics as arrays over all of them.
 
         The echo geometry of every sensor position is found at once
         (:meth:`first_echoes_along`, the same physics as :meth:`first_echoes_at` pose by pose);
@@ -191,7 +195,9 @@ class SideSonars(PulseEchoSonar):
         pairs = ranges.reshape(len(poses), 2)
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
 
-    def first_echoes_along(self, world: WorldLike, poses: Sequence[Pose]) -> FirstEchoes:
+    def first_echoes_along(
+        self, world: WorldLike, poses: Sequence[Pose] | FloatArray
+    ) -> FirstEchoes:
         """First echoes of the left and right sensor at each of ``poses``, ``(2 n,)`` in the
         order left, right of the first pose, then of the next.
 
@@ -200,10 +206,13 @@ class SideSonars(PulseEchoSonar):
         detection of :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, evaluated with the same
         constant tables for every sensor position at once.
         """
-        robot = np.array([[pose.x, pose.y, pose.theta] for pose in poses], dtype=np.float64)
+        if isinstance(poses, np.ndarray):
+            robot = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        else:
+            robot = np.array([[p.x, p.y, p.theta] for p in poses], dtype=np.float64).reshape(-1, 3)
         n = len(robot)
         if not np.all(np.isfinite(robot)):
-            raise ValueError("argument 'poses' must hold finite poses")
+            raise ValueError(f"argument 'poses' must hold finite poses; got {poses!r}")
         headings = np.repeat(robot[:, 2], 2)
         side_sign = np.tile([1.0, -1.0], n)
         centres = np.repeat(robot[:, :2], 2, axis=0)
