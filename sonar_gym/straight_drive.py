@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -134,10 +135,10 @@ class CommandDraws:
         end_state: its state after the last command (set by :meth:`finish`).
     """
 
-    start_state: dict[str, Any]
+    start_state: Mapping[str, Any]
     normals: list[FloatArray]
     uniforms: list[FloatArray]
-    end_state: dict[str, Any] | None = None
+    end_state: Mapping[str, Any] | None = None
 
     @classmethod
     def start(cls, rng: np.random.Generator) -> CommandDraws:

@@ -22,7 +22,7 @@ Everything here takes plain arrays and dataclasses; nothing reads a world.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -573,7 +573,7 @@ class APCSTracker:
         encoder_left_m: npt.ArrayLike,
         encoder_right_m: npt.ArrayLike,
         sample_commands: npt.ArrayLike = (),
-        readings: dict[str, npt.ArrayLike] | None = None,
+        readings: Mapping[str, npt.ArrayLike] | None = None,
         sensor_offset_m: float = 0.0,
         stops: Sequence[int] = (),
     ) -> RunResult:
