@@ -31,6 +31,7 @@ import numpy.typing as npt
 from sonar_gym.localization.apcs import (
     AMBIGUOUS,
     DEFAULT_PARAMETERS,
+    GROUP_TOO_FEW_POINTS,
     APCSParameters,
     CorrectionResult,
     DetectedWall,
@@ -461,8 +462,11 @@ class WallStream:
 
     def _close(self) -> ClosedGroup:
         points = np.array(self._group_points)
-        erps = EstimatedReflectionPoints.from_points(points, np.array(self._group_directions))
+        directions = np.array(self._group_directions)
         self._group_points, self._group_directions = [], []
+        if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
+            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, tuple(range(len(points)))), points)
+        erps = EstimatedReflectionPoints.from_points(points, directions)
         return ClosedGroup(fit_wall_group(erps, range(len(points)), self.params), points)
 
 

@@ -315,3 +315,22 @@ def test_tracker_map_is_independent_of_later_edits() -> None:
     )
     walls.append(dataclasses.replace(walls[0], name="other"))
     assert len(tracker.wall_map) == 1
+
+
+@pytest.mark.parametrize("readings", [2, 4, 5, 6, 12])
+def test_closed_groups_get_fit_wall_groups_verdict(readings: int) -> None:
+    from sonar_gym.localization.apcs import EstimatedReflectionPoints, fit_wall_group
+
+    stream = WallStream("left")
+    groups = []
+    for k in range(readings):
+        groups += stream.add([0.03 * k, 0.0], 0.0, 1.0 + 0.001 * (k % 2))[1]
+    groups += stream.flush()
+    assert groups
+    for group in groups:
+        erps = EstimatedReflectionPoints.from_points(
+            group.points, np.full(len(group.points), math.pi / 2.0)
+        )
+        expected = fit_wall_group(erps, range(len(group.points)))
+        assert group.fit.status == expected.status
+        assert group.fit.erp_indices == expected.erp_indices
