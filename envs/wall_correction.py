@@ -3,21 +3,21 @@
 The task of Yamamoto, Maeyama, Ohya & Yuta, *APCS: autonomous position correction system using
 ultrasonic sensing*. The robot drives a corridor route leg by leg; before each leg the agent
 chooses which side sonars to run, how often to sample and how far from the corridor's centre
-line to drive. Inside the legs runs the paper's procedure (Fig. 2): estimated reflection points
-(eqs 1-6), flat-wall detection (sec. 4.2.2-4.2.3), matching to the map of oriented wall
-vectors (sec. 4.3) and the maximum-likelihood correction of pose and covariance (eqs 7-14), all
-from :mod:`sonar_gym.localization.apcs`.
+line to drive. Inside the legs runs the paper's procedure (Fig. 2) in
+:class:`sonar_gym.apcs_route.APCSRoute` and :mod:`sonar_gym.localization.apcs_online`:
+estimated reflection points (eqs 1-6), flat-wall detection (sec. 4.2.2-4.2.3), matching to the
+map of oriented wall vectors (sec. 4.3) and the maximum-likelihood correction of pose and
+covariance (eqs 7-14). This module holds the task: configuration, actions, observation, reward.
 
-Besides the environment, the module offers :func:`map_wall_vectors` (a scenario's map as APCS
-wall vectors) and :class:`WallStream` (the on-line ERP grouping of one side sonar), which the
-agents and the reproduction of the paper's experiment use.
+:func:`map_wall_vectors`, :class:`WallStream`, :func:`rejection_reason`,
+:func:`nearest_facing_walls` and the episode records are re-exported from their homes
+(:mod:`sonar_gym.maps`, :mod:`sonar_gym.localization.apcs_online`, :mod:`sonar_gym.apcs_route`).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,28 +25,30 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.apcs_route import (
+    REAIM_TOLERANCE_RAD,
+    APCSRoute,
+    EpisodeTrace,
+    LegSummary,
+    WallDetection,
+    with_wall_obstacles,
+)
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
-from sonar_gym.localization.apcs import (
-    AMBIGUOUS,
-    DEFAULT_PARAMETERS,
-    APCSParameters,
-    CorrectionResult,
-    DetectedWall,
-    EstimatedReflectionPoints,
-    MatchResult,
-    WallFit,
-    WallVector,
-    correct_with_detected_wall,
-    estimated_reflection_points,
-    fit_wall_group,
+from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
+from sonar_gym.localization.apcs_online import (
+    SIDE_NAMES,
+    APCSTracker,
+    ClosedGroup,
+    WallStream,
+    nearest_facing_walls,
+    rejection_reason,
 )
-from sonar_gym.localization.kim import predict, proportional_encoder_noise
-from sonar_gym.localization.result import OK
+from sonar_gym.maps import facing_wall_stretch, map_wall_vectors
 from sonar_gym.metrics import heading_error_rad, position_error_m
-from sonar_gym.pose import FloatArray, Pose, angle_difference
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
-from sonar_gym.scenario import Box, Scenario, load_scenario
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
+from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.world import World
 
@@ -54,8 +56,6 @@ ENV_ID = "SonarGym/WallCorrection-v0"
 
 SIDES = ("none", "left", "right", "both")
 """Values of the first action component: which side sonars run during the leg."""
-SIDE_NAMES = ("left", "right")
-_BEAM_OFFSET_RAD = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 
 POSITION_STD_SCALE_M = 0.1
 """Standard deviation (metres) that fills the position-uncertainty features of the observation."""
@@ -63,8 +63,6 @@ HEADING_STD_SCALE_RAD = math.radians(2.0)
 """Standard deviation (radians) that fills the heading-uncertainty feature."""
 COUNT_SCALE = 10.0
 """Wall count that fills a last-leg count feature."""
-REAIM_TOLERANCE_RAD = math.radians(0.05)
-"""Smallest heading correction the path follower commands (radians)."""
 MAP_PROFILE_STEP_M = 0.02
 """Spacing of the map look-up along a leg for the map-ahead features (metres)."""
 STANDOFF_CLEARANCE_M = 0.05
@@ -204,178 +202,6 @@ def _check_range(name: str, value: object, *, low: float, high: float) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# The map and the on-line wall detection of one side sonar
-# --------------------------------------------------------------------------------------------
-
-
-def map_wall_vectors(scenario: Scenario) -> tuple[WallVector, ...]:
-    """The mapped flat surfaces of ``scenario`` as APCS wall vectors (sec. 4.1, Fig. 3).
-
-    Each vector has the occupied side on its left:
-
-    - the room's walls: the room is free inside, so its counter-clockwise edges are reversed;
-    - free walls with ``mapped = true``: ``a -> b`` as listed, the convention of the scenario
-      files (the occupied side of ``a -> b`` on the left, see ``apcs_corridor.toml``);
-    - mapped boxes: their counter-clockwise edges as they are (the inside is occupied).
-
-    Cylinders are not flat and unmapped objects are not in the map; neither appears.
-    """
-    vectors: list[WallVector] = []
-    if scenario.room is not None:
-        corners = scenario.room.corners
-        for index in range(4):
-            start, end = corners[(index + 1) % 4], corners[index]
-            vectors.append(WallVector(start, end, name=f"room_{index}"))
-    for index, wall in enumerate(scenario.walls):
-        if wall.mapped:
-            vectors.append(WallVector(wall.a, wall.b, name=f"wall_{index}"))
-    for index, box in enumerate(scenario.boxes):
-        if box.mapped:
-            corners = box.corners
-            for side in range(4):
-                vectors.append(
-                    WallVector(corners[side], corners[(side + 1) % 4], name=f"box_{index}_{side}")
-                )
-    return tuple(vectors)
-
-
-def rejection_reason(match: MatchResult) -> str | None:
-    """Why a detected wall was not used: the paper's first failed condition (sec. 4.3).
-
-    ``None`` for a unique match, ``"ambiguous"`` when more than one map wall matched, else
-    the reason of the map wall that came closest to matching (most conditions passed, in the
-    paper's order orientation, inclusion, distance; ties by the smaller ``d1^2 + d2^2``).
-    """
-    if match.matched:
-        return None
-    if match.status == AMBIGUOUS:
-        return AMBIGUOUS
-    if not match.checks:
-        return "empty_map"
-    best = max(
-        match.checks,
-        key=lambda check: (
-            check.orientation_ok + check.inclusion_ok + check.distance_ok,
-            check.orientation_ok,
-            check.inclusion_ok,
-            -check.endpoint_distance_squared_m2,
-        ),
-    )
-    return best.reason
-
-
-@dataclass(frozen=True)
-class ClosedGroup:
-    """A closed group of ERPs and its verdict.
-
-    Attributes:
-        fit: the size, line and variance verdict (:func:`~sonar_gym.localization.apcs.fit_wall_group`).
-        points: ``(n, 2)`` the group's ERPs, metres, in the frame of the estimate.
-    """
-
-    fit: WallFit
-    points: FloatArray
-
-
-class WallStream:
-    """On-line ERPs and ERP groups of one side sonar (sec. 4.2.1-4.2.2), reading by reading.
-
-    Each reading pairs with the previous one to give one ERP (the newer reading's, as
-    :func:`~sonar_gym.localization.apcs.estimated_reflection_points` with
-    ``points_per_pair="newest"``); ERPs join the open group while consecutive ERPs stay within
-    the grouping distance. A group is closed at a discontinuity, as soon as it holds
-    ``max_group_size`` ERPs, or when the stream is flushed, and then verified with
-    :func:`~sonar_gym.localization.apcs.fit_wall_group`. The groups are those
-    :func:`~sonar_gym.localization.apcs.group_erps` finds on the whole sequence.
-
-    Args:
-        side: ``"left"`` or ``"right"``: the beam axis is the heading plus or minus pi/2.
-        params: APCS thresholds.
-    """
-
-    def __init__(self, side: str, params: APCSParameters = DEFAULT_PARAMETERS) -> None:
-        check_choice("side", side, SIDE_NAMES)
-        self.side = side
-        self.params = params
-        self._previous: tuple[FloatArray, float, float] | None = None
-        self._group_points: list[FloatArray] = []
-        self._group_directions: list[float] = []
-
-    @property
-    def open_group_size(self) -> int:
-        """Number of ERPs in the group being built."""
-        return len(self._group_points)
-
-    def add(
-        self, sensor_xy: FloatArray, heading_rad: float, range_m: float
-    ) -> tuple[FloatArray | None, list[ClosedGroup]]:
-        """Add one reading taken at ``sensor_xy`` ({W} estimate, metres) with the robot heading.
-
-        Args:
-            sensor_xy: sensor position, metres, in the frame of the pose estimate.
-            heading_rad: robot heading of the estimate, radians.
-            range_m: the measured range, metres; NaN for a dropout.
-
-        Returns:
-            The new ERP (or ``None``) and the verdicts of the groups this reading closed.
-        """
-        direction = heading_rad + _BEAM_OFFSET_RAD[self.side]
-        position = np.asarray(sensor_xy, dtype=np.float64).reshape(2)
-        previous, self._previous = self._previous, (position, direction, float(range_m))
-        if previous is None:
-            return None, []
-        erps = estimated_reflection_points(
-            np.stack([previous[0], position]),
-            np.array([previous[1], direction]),
-            np.array([previous[2], float(range_m)]),
-            valid_range_m=self.params.sensing_range_m,
-        )
-        if len(erps) == 0:
-            return None, []
-        point = erps.points[0].copy()
-        closed: list[ClosedGroup] = []
-        if self._group_points:
-            step = point - self._group_points[-1]
-            if float(step @ step) > self.params.grouping_distance_squared_m2:
-                closed.append(self._close())
-        self._group_points.append(point)
-        self._group_directions.append(float(erps.reflection_directions_rad[0]))
-        if len(self._group_points) >= self.params.max_group_size:
-            closed.append(self._close())
-        return point, closed
-
-    def flush(self) -> list[ClosedGroup]:
-        """End the stream (the sensor stops): close the open group and forget the last reading."""
-        self._previous = None
-        return [self._close()] if self._group_points else []
-
-    def move_frame(self, before: Pose, after: Pose) -> None:
-        """Re-express the stored positions after a pose correction from ``before`` to ``after``.
-
-        The readings and ERPs of the stream live in the frame of the pose estimate; a
-        correction moves that frame rigidly, and the stored points move with it.
-        """
-        turn = after.theta - before.theta
-        cos_turn, sin_turn = math.cos(turn), math.sin(turn)
-        rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
-
-        def moved(point: FloatArray) -> FloatArray:
-            return after.position + rotation @ (point - before.position)
-
-        if self._previous is not None:
-            position, direction, range_m = self._previous
-            self._previous = (moved(position), direction + turn, range_m)
-        self._group_points = [moved(point) for point in self._group_points]
-        self._group_directions = [direction + turn for direction in self._group_directions]
-
-    def _close(self) -> ClosedGroup:
-        points = np.array(self._group_points)
-        erps = EstimatedReflectionPoints.from_points(points, np.array(self._group_directions))
-        self._group_points, self._group_directions = [], []
-        return ClosedGroup(fit_wall_group(erps, range(len(points)), self.params), points)
-
-
-# --------------------------------------------------------------------------------------------
 # Episode state and records
 # --------------------------------------------------------------------------------------------
 
@@ -400,93 +226,44 @@ class LegCommand:
         return {"none": (), "left": ("left",), "right": ("right",), "both": SIDE_NAMES}[self.side]
 
 
-@dataclass(frozen=True)
-class WallDetection:
-    """One detected wall and what APCS did with it (Fig. 2).
-
-    Attributes:
-        leg: index of the leg during which the wall was detected.
-        side: ``"left"`` or ``"right"``.
-        wall: the detected wall (in the frame of the estimate at detection time).
-        erp_points: ``(n, 2)`` the ERPs of its group, metres.
-        match: the matching against the map (sec. 4.3).
-        reason: ``None`` when matched, else why not (:func:`rejection_reason`).
-        correction_status: ``"ok"`` when the pose was corrected, else the reason.
-        pose_before, pose_after: the estimate before and after (equal without a correction).
-        true_pose: the true pose at detection time.
-    """
-
-    leg: int
-    side: str
-    wall: DetectedWall
-    erp_points: FloatArray
-    match: MatchResult
-    reason: str | None
-    correction_status: str
-    pose_before: Pose
-    pose_after: Pose
-    true_pose: Pose
-
-    @property
-    def matched(self) -> bool:
-        """Whether exactly one map wall matched."""
-        return self.match.matched
-
-
-@dataclass
-class LegSummary:
-    """What happened during one leg, per side (``left``, ``right``)."""
-
-    detected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
-    matched: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
-    rejected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
-    dropped_groups: int = 0
-    corrections: int = 0
-    collided: bool = False
-    sensing_time_s: float = 0.0
-    samples: int = 0
-
-
-@dataclass
-class EpisodeTrace:
-    """Everything an episode did, for rendering and the reproduction's plots.
-
-    Attributes:
-        true_path, estimated_path, odometry_path: ``[x, y, theta]`` after every command.
-        erps: ``(x, y)`` of every ERP with its side, in the frame of the estimate when computed.
-        detections: every detected wall with its match and correction.
-        corrections: ``(true, before, after)`` poses of every correction made.
-    """
-
-    true_path: list[FloatArray] = field(default_factory=list)
-    estimated_path: list[FloatArray] = field(default_factory=list)
-    odometry_path: list[FloatArray] = field(default_factory=list)
-    erps: list[tuple[float, float, str]] = field(default_factory=list)
-    detections: list[WallDetection] = field(default_factory=list)
-    corrections: list[tuple[Pose, Pose, Pose]] = field(default_factory=list)
-
-
 @dataclass
 class _Episode:
-    world: World
-    robot: DifferentialDriveRobot
-    sonars: SideSonars
-    motion_rng: np.random.Generator
-    sensor_rng: np.random.Generator
-    estimate: Pose
-    covariance: FloatArray
-    streams: dict[str, WallStream]
-    leg: int = 0
-    steps_since_sample: int = 0
-    sensing_time_s: float = 0.0
+    route: APCSRoute
     collisions: int = 0
     last_leg: LegSummary = field(default_factory=LegSummary)
     totals: LegSummary = field(default_factory=LegSummary)
-    trace: EpisodeTrace = field(default_factory=EpisodeTrace)
+
+    @property
+    def world(self) -> World:
+        return self.route.world
+
+    @property
+    def robot(self) -> DifferentialDriveRobot:
+        return self.route.robot
+
+    @property
+    def leg(self) -> int:
+        return self.route.leg
+
+    @property
+    def estimate(self) -> Pose:
+        return self.route.tracker.estimate
+
+    @property
+    def covariance(self) -> FloatArray:
+        return self.route.tracker.covariance
+
+    @property
+    def sensing_time_s(self) -> float:
+        return self.route.sensing_time_s
+
+    @property
+    def trace(self) -> EpisodeTrace:
+        return self.route.trace
 
     @property
     def true_pose(self) -> Pose:
-        return self.world.robot_pose
+        return self.route.true_pose
 
 
 # --------------------------------------------------------------------------------------------
@@ -745,15 +522,11 @@ class WallCorrectionEnv(SonarEnv):
             xs = np.arange(self.leg_starts_x[leg], self.leg_starts_x[leg + 1], MAP_PROFILE_STEP_M)
             origins = np.column_stack([xs, np.full_like(xs, self.centre_line_y)])
             for side_index, side in enumerate(SIDE_NAMES):
-                wall_ids, distances = nearest_facing_walls(
-                    self.wall_map, origins, np.array([0.0, _side_sign(side)])
+                longest_m, median_m = facing_wall_stretch(
+                    self.wall_map, origins, (0.0, _side_sign(side)), MAP_PROFILE_STEP_M
                 )
-                longest = _longest_run(wall_ids.tolist()) * MAP_PROFILE_STEP_M
-                seen = distances[wall_ids >= 0]
-                features[leg, 2 * side_index] = min(longest / self.leg_length_m, 1.0)
-                features[leg, 2 * side_index + 1] = (
-                    min(float(np.median(seen)) / max_range, 1.0) if seen.size else 1.0
-                )
+                features[leg, 2 * side_index] = min(longest_m / self.leg_length_m, 1.0)
+                features[leg, 2 * side_index + 1] = min(median_m / max_range, 1.0)
         return features
 
     # --- actions ----------------------------------------------------------------------------
@@ -820,252 +593,74 @@ class WallCorrectionEnv(SonarEnv):
         motion_rng = np.random.default_rng(int(rng.integers(2**63)))
         sensor_rng = np.random.default_rng(int(rng.integers(2**63)))
         robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
-        self._episode = _Episode(
-            world=world,
-            robot=robot,
-            sonars=self.sonars,
-            motion_rng=motion_rng,
-            sensor_rng=sensor_rng,
-            estimate=estimate,
-            covariance=covariance,
-            streams={side: WallStream(side, self.params) for side in SIDE_NAMES},
+        tracker = APCSTracker(
+            self.wall_map,
+            estimate,
+            covariance,
+            wheel_base_m=robot.wheel_base_for(world),
+            variance_per_m=config.filter_variance_per_m,
+            range_variance_m2=config.range_variance_m2,
+            bearing_variance_rad2=math.radians(config.bearing_std_deg) ** 2,
+            measurement_variances=config.measurement_variances,
+            correction_method=config.correction_method,
+            params=self.params,
         )
-        self._record_poses(self._episode)
+        route = APCSRoute(world, robot, self.sonars, tracker, motion_rng, sensor_rng, self.timing)
+        self._episode = _Episode(route)
         return self._info("running")
 
     def _with_random_obstacles(self, rng: np.random.Generator) -> Scenario:
         """The scenario plus ``n_unmapped_obstacles`` unmapped boxes against the long walls."""
         config = self.config
-        room = self.scenario.room
-        assert room is not None
-        boxes: list[Box] = []
-        taken: dict[str, list[tuple[float, float]]] = {"left": [], "right": []}
-        for wall in self.scenario.walls:  # keep clear of the scenario's own free walls
-            for side, y_wall in (("left", room.max[1]), ("right", room.min[1])):
-                if min(abs(wall.a[1] - y_wall), abs(wall.b[1] - y_wall)) < 0.5:
-                    taken[side].append((min(wall.a[0], wall.b[0]), max(wall.a[0], wall.b[0])))
-        low_x = self.route_start_x + 0.5
-        high_x = self.leg_starts_x[-1] - 0.2
-        for _ in range(config.n_unmapped_obstacles):
-            for _attempt in range(50):
-                side = SIDE_NAMES[int(rng.integers(2))]
-                length = float(rng.uniform(*config.obstacle_length_range_m))
-                depth = float(rng.uniform(*config.obstacle_depth_range_m))
-                start_x = float(rng.uniform(low_x, max(low_x, high_x - length)))
-                span = (start_x, start_x + length)
-                if all(span[1] + 0.1 < a or span[0] - 0.1 > b for a, b in taken[side]):
-                    break
-            else:
-                continue
-            taken[side].append(span)
-            y_centre = room.max[1] - depth / 2.0 if side == "left" else room.min[1] + depth / 2.0
-            boxes.append(
-                Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False)
-            )
-        return dataclasses.replace(self.scenario, boxes=self.scenario.boxes + tuple(boxes))
+        return with_wall_obstacles(
+            self.scenario,
+            rng,
+            config.n_unmapped_obstacles,
+            config.obstacle_length_range_m,
+            config.obstacle_depth_range_m,
+            (self.route_start_x + 0.5, self.leg_starts_x[-1] - 0.2),
+        )
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
+        config = self.config
+        route = episode.route
         command = self.decode_action(action)
         summary = LegSummary()
         for side in SIDE_NAMES:
             if side not in command.active_sides:
-                self._handle_fits(episode, summary, side, episode.streams[side].flush())
-        start_x = self.leg_starts_x[episode.leg]
-        end_x = self.leg_starts_x[episode.leg + 1]
+                route.flush(side, summary)
+        start_x = self.leg_starts_x[route.leg]
+        end_x = self.leg_starts_x[route.leg + 1]
         y = self.centre_line_y + command.standoff_m
-        for waypoint in ((start_x + self.config.transition_m, y), (end_x, y)):
-            self._drive_to(episode, np.array(waypoint), command, summary)
-        episode.leg += 1
-        done = episode.leg >= self.config.n_legs
+        steps_per_aim = max(1, round(config.reaim_interval_m / config.motion_step_m))
+        route.drive_through(
+            [np.array((start_x + config.transition_m, y)), np.array((end_x, y))],
+            command.active_sides,
+            command.spacing_cm // config.motion_step_cm,
+            config.motion_step_m,
+            steps_per_aim,
+            summary,
+        )
+        route.leg += 1
+        done = route.leg >= config.n_legs
         if done:
             for side in SIDE_NAMES:
-                self._handle_fits(episode, summary, side, episode.streams[side].flush())
+                route.flush(side, summary)
         episode.last_leg = summary
-        self._accumulate(episode.totals, summary)
+        episode.totals.add(summary)
         episode.collisions += int(summary.collided)
 
         truth = episode.true_pose
         pose_loss = position_error_m(
             episode.estimate, truth
-        ) / self.config.position_scale_m + heading_error_rad(
-            episode.estimate, truth
-        ) / math.radians(self.config.heading_scale_deg)
-        reward = -pose_loss - self.config.sensing_cost_per_s * summary.sensing_time_s
+        ) / config.position_scale_m + heading_error_rad(episode.estimate, truth) / math.radians(
+            config.heading_scale_deg
+        )
+        reward = -pose_loss - config.sensing_cost_per_s * summary.sensing_time_s
         if summary.collided:
-            reward -= self.config.collision_penalty
+            reward -= config.collision_penalty
         return StepOutcome(reward, terminated=done, info=self._info("ok" if done else "running"))
-
-    def _drive_to(
-        self, episode: _Episode, target: FloatArray, command: LegCommand, summary: LegSummary
-    ) -> None:
-        """Drive to ``target`` ({W}) in straight commands, steering from the estimate."""
-        step_m = self.config.motion_step_m
-        steps_per_sample = command.spacing_cm // self.config.motion_step_cm
-        steps_per_aim = max(1, round(self.config.reaim_interval_m / step_m))
-        remaining_steps = 0
-        since_aim = steps_per_aim
-        while True:
-            if since_aim >= steps_per_aim:
-                offset = target - episode.estimate.position
-                remaining_steps = round(float(np.hypot(*offset)) / step_m)
-                if remaining_steps == 0:
-                    return
-                turn = angle_difference(math.atan2(offset[1], offset[0]), episode.estimate.theta)
-                if abs(turn) > REAIM_TOLERANCE_RAD:
-                    self._move(
-                        episode,
-                        episode.robot.turn(episode.world, turn, episode.motion_rng),
-                        summary,
-                    )
-                since_aim = 0
-            if remaining_steps == 0:
-                return
-            result = episode.robot.drive_straight(episode.world, step_m, episode.motion_rng)
-            self._move(episode, result, summary)
-            remaining_steps -= 1
-            since_aim += 1
-            episode.steps_since_sample += 1
-            if command.active_sides and episode.steps_since_sample >= steps_per_sample:
-                episode.steps_since_sample = 0
-                self._sample(episode, command, summary)
-
-    def _move(self, episode: _Episode, result: MotionResult, summary: LegSummary) -> None:
-        """Propagate the estimate and covariance through one command's encoder increments."""
-        wheel_base = episode.robot.wheel_base_for(episode.world)
-        encoder_noise = proportional_encoder_noise(
-            result.encoder_left_m, result.encoder_right_m, self.config.filter_variance_per_m
-        )
-        with self._timed("localization"):
-            episode.estimate, episode.covariance = predict(
-                episode.estimate,
-                episode.covariance,
-                result.encoder_left_m,
-                result.encoder_right_m,
-                wheel_base,
-                encoder_noise=encoder_noise,
-                integration="midpoint",
-            )
-        summary.collided = summary.collided or result.collided
-        self._record_poses(episode)
-
-    def _sample(self, episode: _Episode, command: LegCommand, summary: LegSummary) -> None:
-        """One reading of each active sonar, fed to its APCS stream."""
-        truth = episode.true_pose
-        with self._timed("sensing"):
-            left_m, right_m = episode.sonars.read(episode.world, truth, episode.sensor_rng)
-        listen_s = episode.sonars.transducer.listen_time_s  # the sonars fire and listen together
-        episode.sensing_time_s += listen_s
-        summary.sensing_time_s += listen_s
-        summary.samples += len(command.active_sides)
-        readings = {"left": left_m, "right": right_m}
-        for side in command.active_sides:
-            estimate = episode.estimate
-            sensor_xy = estimate.transform_point(
-                (0.0, _side_sign(side) * episode.sonars.lateral_offset_m)
-            )
-            with self._timed("localization"):
-                erp, fits = episode.streams[side].add(sensor_xy, estimate.theta, readings[side])
-            if erp is not None:
-                episode.trace.erps.append((float(erp[0]), float(erp[1]), side))
-            self._handle_fits(episode, summary, side, fits)
-
-    def _handle_fits(
-        self, episode: _Episode, summary: LegSummary, side: str, groups: Sequence[ClosedGroup]
-    ) -> None:
-        """Match every verified wall and correct the estimate on a unique match (Fig. 2)."""
-        for group in groups:
-            fit = group.fit
-            if fit.wall is None:
-                summary.dropped_groups += 1
-                continue
-            before = episode.estimate
-            sigma_r, sigma_xi = self._measurement_variances(group, before)
-            with self._timed("localization"):
-                match, correction = correct_with_detected_wall(
-                    before,
-                    episode.covariance,
-                    fit.wall,
-                    self.wall_map,
-                    sigma_r,
-                    sigma_xi,
-                    self.params,
-                    method=self.config.correction_method,  # type: ignore[arg-type]
-                )
-            summary.detected[side] += 1
-            if match.matched:
-                summary.matched[side] += 1
-            else:
-                summary.rejected[side] += 1
-            after = self._apply_correction(episode, correction)
-            if after is not before:
-                summary.corrections += 1
-                episode.trace.corrections.append((episode.true_pose, before, after))
-            episode.trace.detections.append(
-                WallDetection(
-                    leg=episode.leg,
-                    side=side,
-                    wall=fit.wall,
-                    erp_points=group.points,
-                    match=match,
-                    reason=rejection_reason(match),
-                    correction_status=correction.status,
-                    pose_before=before,
-                    pose_after=after,
-                    true_pose=episode.true_pose,
-                )
-            )
-
-    def _measurement_variances(self, group: ClosedGroup, pose: Pose) -> tuple[float, float]:
-        """``(sigma_r, sigma_xi)``: the fixed values, or the line fit's own variances."""
-        config = self.config
-        fixed = config.range_variance_m2, math.radians(config.bearing_std_deg) ** 2
-        if config.measurement_variances == "fixed" or group.fit.wall is None:
-            return fixed
-        points = group.points
-        n = len(points)
-        wall = group.fit.wall
-        along = wall.vector.unit_direction
-        centroid = points.mean(axis=0)
-        spread = float(np.sum(((points - centroid) @ along) ** 2))
-        residual = group.fit.residual_variance_m2 * n / max(n - 2, 1)
-        bearing_variance = residual / max(spread, 1e-12)
-        lever = float((pose.position - centroid) @ along)
-        range_variance = residual / n + bearing_variance * lever * lever
-        return max(range_variance, 1e-6), max(bearing_variance, math.radians(0.05) ** 2)
-
-    @staticmethod
-    def _apply_correction(episode: _Episode, correction: CorrectionResult) -> Pose:
-        before = episode.estimate
-        if correction.status != OK or correction.pose is None:
-            return before
-        after = correction.pose
-        episode.estimate = after
-        episode.covariance = np.array(correction.covariance, dtype=np.float64)
-        for stream in episode.streams.values():
-            stream.move_frame(before, after)
-        return after
-
-    @staticmethod
-    def _accumulate(total: LegSummary, leg: LegSummary) -> None:
-        for side in SIDE_NAMES:
-            total.detected[side] += leg.detected[side]
-            total.matched[side] += leg.matched[side]
-            total.rejected[side] += leg.rejected[side]
-        total.dropped_groups += leg.dropped_groups
-        total.corrections += leg.corrections
-        total.sensing_time_s += leg.sensing_time_s
-        total.samples += leg.samples
-
-    @staticmethod
-    def _record_poses(episode: _Episode) -> None:
-        trace = episode.trace
-        trace.true_path.append(episode.true_pose.as_array())
-        trace.estimated_path.append(episode.estimate.as_array())
-        odometry = episode.robot.odometry_pose
-        trace.odometry_path.append(
-            (odometry if odometry is not None else episode.estimate).as_array()
-        )
 
     # --- observation and info ---------------------------------------------------------------
     def _observe(self) -> np.ndarray:
@@ -1205,55 +800,6 @@ def _side_sign(side: str) -> float:
     return 1.0 if side == "left" else -1.0
 
 
-def nearest_facing_walls(
-    walls: Sequence[WallVector], origins: FloatArray, direction: FloatArray
-) -> tuple[np.ndarray, FloatArray]:
-    """For each origin, the nearest wall the ray ``origin + t direction`` meets face on.
-
-    A wall counts when the ray crosses its segment at ``t > 0`` coming from its free side.
-
-    Args:
-        walls: the map's wall vectors.
-        origins: ``(n, 2)`` ray origins, metres in {W}.
-        direction: unit direction of the rays in {W}.
-
-    Returns:
-        ``(ids, distances)``: the index of the wall in ``walls`` (-1 where none) and ``t``
-        (metres; inf where none), each ``(n,)``.
-    """
-    origins = np.asarray(origins, dtype=np.float64).reshape(-1, 2)
-    if not walls:
-        return np.full(len(origins), -1), np.full(len(origins), math.inf)
-    starts = np.array([wall.start for wall in walls])
-    units = np.array([wall.unit_direction for wall in walls])
-    lengths = np.array([wall.length for wall in walls])
-    normals = np.column_stack([units[:, 1], -units[:, 0]])  # free side, WallVector.normal
-    facing = normals @ direction  # (walls,)
-    signed = np.einsum("nwk,wk->nw", origins[:, None, :] - starts[None, :, :], normals)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        distance = np.where(facing < -1e-9, signed / -np.where(facing < -1e-9, facing, -1.0), -1.0)
-    hits = origins[:, None, :] + distance[:, :, None] * direction
-    along = np.einsum("nwk,wk->nw", hits - starts[None, :, :], units) / lengths
-    valid = (distance > 0.0) & (along >= -1e-9) & (along <= 1.0 + 1e-9)
-    distance = np.where(valid, distance, math.inf)
-    ids = np.argmin(distance, axis=1)
-    best = distance[np.arange(len(origins)), ids]
-    return np.where(np.isfinite(best), ids, -1), best
-
-
-def _longest_run(ids: Sequence[int]) -> int:
-    """Length of the longest run of one non-negative id."""
-    longest = current = 0
-    previous = -1
-    for wall_id in ids:
-        current = (
-            current + 1 if wall_id == previous and wall_id >= 0 else (1 if wall_id >= 0 else 0)
-        )
-        previous = wall_id
-        longest = max(longest, current)
-    return longest
-
-
 def _draw_path(
     image: np.ndarray,
     scenario: Scenario,
@@ -1269,3 +815,22 @@ def _draw_path(
         row, col = world_to_pixel(scenario, (x, y), width_px, height)
         if 0 <= row < height - 1 and 0 <= col < width - 1:
             image[row : row + 2, col : col + 2] = colour
+
+
+__all__ = [
+    "ENV_ID",
+    "REAIM_TOLERANCE_RAD",
+    "SIDES",
+    "SIDE_NAMES",
+    "ClosedGroup",
+    "EpisodeTrace",
+    "LegCommand",
+    "LegSummary",
+    "WallCorrectionConfig",
+    "WallCorrectionEnv",
+    "WallDetection",
+    "WallStream",
+    "map_wall_vectors",
+    "nearest_facing_walls",
+    "rejection_reason",
+]

@@ -53,6 +53,10 @@ _CM2_TO_M2 = 1e-4
 
 
 def _finite_pair(value: npt.ArrayLike, name: str) -> tuple[float, float]:
+    if isinstance(value, tuple) and len(value) == 2:  # the common case, without numpy
+        x, y = value
+        if isinstance(x, float) and isinstance(y, float) and math.isfinite(x + y):
+            return x, y
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (2,) or not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
@@ -90,6 +94,12 @@ class WallVector:
         object.__setattr__(self, "start", start)
         object.__setattr__(self, "end", end)
         object.__setattr__(self, "name", str(self.name))
+        length = math.hypot(end[0] - start[0], end[1] - start[1])
+        unit = ((end[0] - start[0]) / length, (end[1] - start[1]) / length)
+        # Not fields: derived once, for the per-wall arithmetic of the matching (sec. 4.3).
+        object.__setattr__(self, "_length", length)
+        object.__setattr__(self, "_unit", unit)
+        object.__setattr__(self, "_offset", -(unit[1] * start[0] - unit[0] * start[1]))
 
     @property
     def start_point(self) -> FloatArray:
@@ -104,7 +114,7 @@ class WallVector:
     @property
     def length(self) -> float:
         """Length of the segment, metres."""
-        return math.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
+        return self._length  # type: ignore[attr-defined, no-any-return]
 
     @property
     def direction_angle(self) -> float:
@@ -114,7 +124,7 @@ class WallVector:
     @property
     def unit_direction(self) -> FloatArray:
         """Unit vector along ``start -> end``."""
-        return (self.end_point - self.start_point) / self.length
+        return np.array(self._unit)  # type: ignore[attr-defined]
 
     @property
     def normal(self) -> FloatArray:
@@ -129,9 +139,8 @@ class WallVector:
         ``(a, b)`` is the outward unit normal, so ``a x + b y + c`` is the signed distance of
         ``(x, y)`` from the wall line in metres, positive on the free side.
         """
-        a, b = self.normal
-        c = -(a * self.start[0] + b * self.start[1])
-        return float(a), float(b), float(c)
+        ux, uy = self._unit  # type: ignore[attr-defined]
+        return float(uy), float(-ux), float(self._offset)  # type: ignore[attr-defined]
 
     def signed_distance(self, point: npt.ArrayLike) -> float:
         """Signed distance of ``point`` from the wall line, metres, positive on the free side."""
@@ -141,8 +150,9 @@ class WallVector:
 
     def projection_parameter(self, point: npt.ArrayLike) -> float:
         """Where ``point`` projects on the wall: 0 at ``start``, 1 at ``end`` (dimensionless)."""
-        offset = np.asarray(_finite_pair(point, "point")) - self.start_point
-        return float(offset @ self.unit_direction) / self.length
+        x, y = _finite_pair(point, "point")
+        ux, uy = self._unit  # type: ignore[attr-defined]
+        return ((x - self.start[0]) * ux + (y - self.start[1]) * uy) / self._length  # type: ignore[attr-defined, no-any-return]
 
 
 @dataclass(frozen=True)

@@ -25,6 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.sonar.acoustics import PistonBeam, speed_of_sound_mps, wavenumber_per_m
+from sonar_gym.sonar.echo_tables import echo_tables
+from sonar_gym.sonar.echoes import EchoKind, edge_echo_amplitude
 from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.pulse_echo import FirstEchoes, PulseEchoSonar, WorldLike, concatenate_echoes
 from sonar_gym.sonar.scan import Scan
@@ -38,6 +41,10 @@ APCS_SAMPLE_SPACING_M = 0.03
 APCS_SPEED_MPS = 0.3
 """APCS sec. 6: the robot drove at 30 cm/s (so a sample every 0.1 s)."""
 _SIDE_DIRECTIONS = np.array([[0.0, 1.0], [0.0, -1.0]])  # left, right in {R}
+_PATH_END_TOLERANCE = 1e-9  # as sonar_gym.sonar.echoes.PATH_END_TOLERANCE
+_UV_CENTRE_SCALAR = (1.0 - _PATH_END_TOLERANCE) / 2.0
+_UV_CENTRE = np.array([_UV_CENTRE_SCALAR, 0.5])[None, :, None]
+_UV_HALF_WIDTH = _UV_CENTRE
 
 
 @dataclass(frozen=True)
@@ -158,16 +165,188 @@ class SideSonars(PulseEchoSonar):
         return float(ranges[0]), float(ranges[1])
 
     def sample_along(
+        self,
+        world: WorldLike,
+        poses: Sequence[Pose] | FloatArray,
+        rng: np.random.Generator | None,
+    ) -> SideReadings:
+        """Samples at each of ``poses`` ({W}; Poses or ``(n, 3)`` rows ``[x, y, theta]``);
+        geometry and electronics as arrays over all of them.
+
+        The echo geometry of every sensor position is found at once
+        (:meth:`first_echoes_along`, the same physics as :meth:`first_echoes_at` pose by pose);
+        the readout (delay, noise, counter) is one array operation over every sample, drawing
+        the noise in the order of ``len(poses)`` calls of :meth:`read`.
+        """
+        if len(poses) == 0:
+            return SideReadings(np.zeros(0), np.zeros(0))
+        ranges, _ = self.readings(world, self.first_echoes_along(world, poses), rng)
+        pairs = ranges.reshape(len(poses), 2)
+        return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
+
+    def sample_along_per_pose(
         self, world: WorldLike, poses: Sequence[Pose], rng: np.random.Generator | None
     ) -> SideReadings:
-        """Samples at each of ``poses`` ({W}); the electronics run once over all of them.
-
-        The echo geometry is found pose by pose (each position has its own echo points); the
-        readout (delay, noise, counter) is one array operation over every sample.
-        """
+        """:meth:`sample_along` with the echo geometry found pose by pose (the reference)."""
         if len(poses) == 0:
             return SideReadings(np.zeros(0), np.zeros(0))
         echoes = concatenate_echoes([self._echoes(world, pose) for pose in poses])
         ranges, _ = self.readings(world, echoes, rng)
         pairs = ranges.reshape(len(poses), 2)
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
+
+    def first_echoes_along(
+        self, world: WorldLike, poses: Sequence[Pose] | FloatArray
+    ) -> FirstEchoes:
+        """First echoes of the left and right sensor at each of ``poses``, ``(2 n,)`` in the
+        order left, right of the first pose, then of the next.
+
+        The echo candidates of :func:`~sonar_gym.sonar.echoes.echo_candidates` (planes,
+        cylinders, corners, edges; minimum range, threshold, footprint, occlusion) and the
+        detection of :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, evaluated with the same
+        constant tables for every sensor position at once.
+        """
+        if isinstance(poses, np.ndarray):
+            robot = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        else:
+            robot = np.array([[p.x, p.y, p.theta] for p in poses], dtype=np.float64).reshape(-1, 3)
+        n = len(robot)
+        if not np.all(np.isfinite(robot)):
+            raise ValueError(f"argument 'poses' must hold finite poses; got {poses!r}")
+        headings = np.repeat(robot[:, 2], 2)
+        side_sign = np.tile([1.0, -1.0], n)
+        centres = np.repeat(robot[:, :2], 2, axis=0)
+        if self.lateral_offset_m == 0.0:
+            sensors = centres.copy()
+        else:
+            angle = headings + side_sign * (math.pi / 2.0)
+            sensors = centres + self.lateral_offset_m * np.column_stack(
+                [np.cos(angle), np.sin(angle)]
+            )
+        return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
+
+
+def _side_first_echoes(
+    sonar: SideSonars,
+    world: WorldLike,
+    sensors: FloatArray,
+    centres: FloatArray,
+    headings: FloatArray,
+    side_sign: FloatArray,
+) -> FirstEchoes:
+    """First echoes of pings along ``heading + side_sign pi/2`` from each of ``sensors``.
+
+    Row by row the computation of :func:`~sonar_gym.sonar.echoes.echo_candidates` followed by
+    :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, over ``P`` sensor positions at once.
+    """
+    transducer = sonar.transducer
+    speed = speed_of_sound_mps(world.temperature_c)
+    wavenumber = wavenumber_per_m(transducer.frequency_hz, speed)
+    threshold = transducer.detection_threshold
+    tables = echo_tables(world.geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    n_segments, n_wedges = tables.n_segments, tables.n_wedges
+    n_specular = n_segments + tables.n_circles
+    n_candidates = n_specular + tables.n_vertices
+    wedge_end = n_specular + n_wedges
+    count = len(sensors)
+    homogeneous = np.column_stack([sensors, np.ones(count)])  # (P, 3)
+
+    mapped = homogeneous @ tables.position_map.T  # (P, M)
+    rel = mapped[:, : 3 * n_candidates].reshape(count, n_candidates, 3).copy()
+    along = mapped[:, 3 * n_candidates : 3 * n_candidates + n_segments]
+    signed_distance = mapped[:, 3 * n_candidates + n_segments : 3 * n_candidates + 2 * n_segments]
+    wedge_tests = mapped[:, 3 * n_candidates + 2 * n_segments :]
+    concave = (wedge_tests[:, :n_wedges] > 0.0) & (wedge_tests[:, n_wedges:] > 0.0)
+
+    ranges = np.hypot(rel[:, :, 0], rel[:, :, 1])
+    centre_distance = ranges[:, n_segments:n_specular].copy()
+    ranges[:, n_segments:n_specular] -= tables.radius
+    rel[:, n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
+        :, :, None
+    ]
+
+    safe = np.maximum(ranges, 1e-9)
+    amplitudes = 0.5 / safe
+    cylinder_ranges = safe[:, n_segments:n_specular]
+    amplitudes[:, n_segments:n_specular] *= np.sqrt(
+        tables.radius / (cylinder_ranges + tables.radius)
+    )
+    edges = edge_echo_amplitude(safe[:, n_specular:], wavenumber, sonar.edge_law)
+    amplitudes[:, n_specular:wedge_end] = np.where(
+        concave, amplitudes[:, n_specular:wedge_end], edges[:, :n_wedges]
+    )
+    amplitudes[:, wedge_end:] = edges[:, n_wedges:]
+    if transducer.absorption_db_per_m > 0.0:
+        amplitudes *= np.exp((-transducer.absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+    if transducer.time_varying_gain is not None:
+        amplitudes *= transducer.time_varying_gain.gain(safe)
+
+    valid = (ranges >= max(transducer.min_range_m, 1e-9)) & (amplitudes >= threshold)
+    facing = tables.solid_side * signed_distance <= 0.0
+    valid[:, :n_segments] &= (along > 0.0) & (along < 1.0) & facing
+    twin_concave = concave[:, tables.twin]
+    valid[:, n_specular:wedge_end] &= ~np.where(
+        twin_concave == concave, tables.twin_comes_first, twin_concave
+    )
+    footprint = world.scenario.robot.radius
+    if footprint > 0.0:
+        offset = sensors - centres
+        test = footprint > transducer.min_range_m - np.hypot(offset[:, 0], offset[:, 1])
+        inside = np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
+        valid &= ~(test[:, None] & inside)
+
+    # Detection along each sensor's beam (first_echoes with one ping per sensor).
+    cos_h, sin_h = np.cos(headings), np.sin(headings)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit_x = rel[:, :, 0] / safe
+        unit_y = rel[:, :, 1] / safe
+    # The beam is (0, +-1) in {R}: its cosine with a direction is +-(robot-frame y).
+    cosines = side_sign[:, None] * (-sin_h[:, None] * unit_x + cos_h[:, None] * unit_y)
+    beam = PistonBeam.for_ka(
+        transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
+    )
+    safe_amplitudes = np.where(valid, amplitudes, threshold)
+    if beam.side_lobes:
+        heard = (beam.two_way_from_cos(cosines) * safe_amplitudes >= threshold) & valid
+    else:
+        limits = beam.main_lobe_cos_limits((threshold / safe_amplitudes).reshape(-1))
+        heard = (cosines >= limits.reshape(cosines.shape)) & valid
+
+    # Occlusion (echo_candidates' _unoccluded), only for the paths a beam hears.
+    sensor_rows, candidate_rows = np.nonzero(heard)
+    if len(sensor_rows):
+        occluders = (facing & ~tables.encloses)[sensor_rows]  # (H, S)
+        matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
+            len(sensor_rows), -1, 3
+        )
+        matrix[:, :n_segments] *= occluders[:, :, None]
+        paths = rel[sensor_rows, candidate_rows]  # (H, 3)
+        products = np.einsum("hrk,hk->hr", matrix, paths)  # (H, 3 S + C)
+        blocked = np.zeros(len(sensor_rows), dtype=bool)
+        if n_segments:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                uv = (
+                    products[:, n_segments : 3 * n_segments].reshape(-1, 2, n_segments)
+                    / products[:, None, :n_segments]
+                )
+            inside_uv = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
+            blocked |= (inside_uv[:, 0] & inside_uv[:, 1]).any(axis=1)
+        if tables.n_circles:
+            dots = products[:, 3 * n_segments :]
+            path_sq = ranges[sensor_rows, candidate_rows] ** 2
+            nearest = dots / path_sq[:, None]
+            on_path = np.abs(nearest - _UV_CENTRE_SCALAR) <= _UV_CENTRE_SCALAR
+            centre_sq = (centre_distance * centre_distance)[sensor_rows]
+            gap_sq = centre_sq - dots * nearest
+            blocked |= (on_path & (gap_sq < tables.radius_sq[None, :])).any(axis=1)
+        heard[sensor_rows[blocked], candidate_rows[blocked]] = False
+    order_ranges = np.where(heard, ranges, np.inf)
+    first = np.argmin(order_ranges, axis=1)
+    rows = np.arange(count)
+    hit = heard[rows, first]
+    first_amplitude = beam.two_way_from_cos(cosines[rows, first]) * amplitudes[rows, first]
+    return FirstEchoes(
+        detected=hit,
+        path_lengths=np.where(hit, ranges[rows, first], 0.0),
+        amplitudes=np.where(hit, first_amplitude, 0.0),
+    )

@@ -1,0 +1,421 @@
+"""Driving an APCS route leg by leg: the robot, its side sonars and the on-line APCS together.
+
+One :class:`APCSRoute` holds what an APCS run needs in the world (the pymunk robot, its side
+sonars, the two random streams) and the tracker
+(:class:`~sonar_gym.localization.apcs_online.APCSTracker`)
+that runs the paper's Fig. 2 loop. :meth:`APCSRoute.drive_to` drives towards a target in
+straight commands, steering from the estimate every few commands; between two steering
+corrections the commands, the readings taken along them and the tracker's work are arrays:
+:func:`~sonar_gym.straight_drive.drive_straight_run` for the motion,
+:meth:`~sonar_gym.sonar.swept.SideSonars.sample_along` for the readings and
+:meth:`~sonar_gym.localization.apcs_online.APCSTracker.run` for dead reckoning, ERPs, walls and
+corrections.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from sonar_gym.localization.apcs import DetectedWall, MatchResult
+from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
+from sonar_gym.pose import FloatArray, Pose, angle_difference, wrap_angle
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.scenario import Box, Scenario
+from sonar_gym.sonar.swept import SideSonars
+from sonar_gym.straight_drive import CommandDraws, drive_commands
+from sonar_gym.world import World
+
+REAIM_TOLERANCE_RAD = math.radians(0.05)
+"""Smallest heading correction the path follower commands (radians)."""
+
+
+@dataclass(frozen=True)
+class WallDetection:
+    """One detected wall and what APCS did with it (Fig. 2).
+
+    Attributes:
+        leg: index of the leg during which the wall was detected.
+        side: ``"left"`` or ``"right"``.
+        wall: the detected wall (in the frame of the estimate at detection time).
+        erp_points: ``(n, 2)`` the ERPs of its group, metres.
+        match: the matching against the map (sec. 4.3).
+        reason: ``None`` when matched, else why not
+            (:func:`~sonar_gym.localization.apcs_online.rejection_reason`).
+        correction_status: ``"ok"`` when the pose was corrected, else the reason.
+        pose_before, pose_after: the estimate before and after (equal without a correction).
+        true_pose: the true pose at detection time.
+    """
+
+    leg: int
+    side: str
+    wall: DetectedWall
+    erp_points: FloatArray
+    match: MatchResult
+    reason: str | None
+    correction_status: str
+    pose_before: Pose
+    pose_after: Pose
+    true_pose: Pose
+
+    @property
+    def matched(self) -> bool:
+        """Whether exactly one map wall matched."""
+        return self.match.matched
+
+
+@dataclass
+class LegSummary:
+    """What happened during one leg, per side (``left``, ``right``)."""
+
+    detected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    matched: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    rejected: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+    dropped_groups: int = 0
+    corrections: int = 0
+    collided: bool = False
+    sensing_time_s: float = 0.0
+    samples: int = 0
+
+    def add(self, other: LegSummary) -> None:
+        """Add ``other``'s counts and times to these (``collided`` is left alone)."""
+        for side in SIDE_NAMES:
+            self.detected[side] += other.detected[side]
+            self.matched[side] += other.matched[side]
+            self.rejected[side] += other.rejected[side]
+        self.dropped_groups += other.dropped_groups
+        self.corrections += other.corrections
+        self.sensing_time_s += other.sensing_time_s
+        self.samples += other.samples
+
+
+@dataclass
+class EpisodeTrace:
+    """Everything a route did, for rendering and the reproduction's plots.
+
+    Attributes:
+        true_path, estimated_path, odometry_path: ``[x, y, theta]`` after every command.
+        erps: ``(x, y)`` of every ERP with its side, in the frame of the estimate when computed.
+        detections: every detected wall with its match and correction.
+        corrections: ``(true, before, after)`` poses of every correction made.
+    """
+
+    true_path: list[FloatArray] = field(default_factory=list)
+    estimated_path: list[FloatArray] = field(default_factory=list)
+    odometry_path: list[FloatArray] = field(default_factory=list)
+    erps: list[tuple[float, float, str]] = field(default_factory=list)
+    detections: list[WallDetection] = field(default_factory=list)
+    corrections: list[tuple[Pose, Pose, Pose]] = field(default_factory=list)
+
+
+@dataclass
+class _Plan:
+    """Planned commands: ``(d_left, d_right)``, whether each is a straight step, the command
+    counts at the steering points (``stops``) with the waypoint aimed at from each, the draws."""
+
+    draws: CommandDraws
+    commanded: list[tuple[float, float]] = field(default_factory=list)
+    straight: list[bool] = field(default_factory=list)
+    stops: list[int] = field(default_factory=list)
+    next_waypoint: list[int] = field(default_factory=list)
+
+
+class APCSRoute:
+    """A robot with side sonars driving through ``world`` while APCS corrects its estimate.
+
+    Args:
+        world: the world (its robot body is the true robot).
+        robot: the differential drive (its odometry pose is plain dead reckoning).
+        sonars: the side sonars.
+        tracker: the on-line APCS (estimate, covariance, streams).
+        motion_rng, sensor_rng: the random streams of the motion and of the readings.
+        timing: optional dict to which the wall-clock seconds of ``"sensing"`` and
+            ``"localization"`` are added.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        robot: DifferentialDriveRobot,
+        sonars: SideSonars,
+        tracker: APCSTracker,
+        motion_rng: np.random.Generator,
+        sensor_rng: np.random.Generator,
+        timing: dict[str, float] | None = None,
+    ) -> None:
+        self.world = world
+        self.robot = robot
+        self.sonars = sonars
+        self.tracker = tracker
+        self.motion_rng = motion_rng
+        self.sensor_rng = sensor_rng
+        self.timing = {} if timing is None else timing
+        self.trace = EpisodeTrace()
+        self.leg = 0
+        self.steps_since_sample = 0
+        self.sensing_time_s = 0.0
+        self._record(
+            world.robot_pose.as_array()[None, :],
+            tracker.estimate.as_array()[None, :],
+            (robot.odometry_pose or tracker.estimate).as_array()[None, :],
+        )
+
+    @contextmanager
+    def _timed(self, phase: str) -> Iterator[None]:
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.timing[phase] = self.timing.get(phase, 0.0) + time.perf_counter() - start
+
+    @property
+    def true_pose(self) -> Pose:
+        """The robot's true pose ({W})."""
+        return self.world.robot_pose
+
+    def flush(self, side: str, summary: LegSummary) -> None:
+        """Stop ``side``'s sonar: its open group is closed and handled (Fig. 2)."""
+        with self._timed("localization"):
+            result = self.tracker.flush(side)
+        self._handled(result, np.zeros((0, 3)), summary)
+
+    def drive_to(
+        self,
+        target: FloatArray,
+        active_sides: Sequence[str],
+        steps_per_sample: int,
+        step_m: float,
+        steps_per_aim: int,
+        summary: LegSummary,
+    ) -> None:
+        """Drive to ``target`` ({W}) in straight commands of ``step_m``, steering from the estimate.
+
+        Every ``steps_per_aim`` commands (and at the start) the remaining distance and the
+        bearing to ``target`` are taken from the estimate and the robot turns in place when the
+        heading is off by more than :data:`REAIM_TOLERANCE_RAD`. Every ``steps_per_sample``
+        straight commands (counted across calls) the ``active_sides`` take a reading each.
+        """
+        self.drive_through([target], active_sides, steps_per_sample, step_m, steps_per_aim, summary)
+
+    def drive_through(
+        self,
+        waypoints: Sequence[FloatArray],
+        active_sides: Sequence[str],
+        steps_per_sample: int,
+        step_m: float,
+        steps_per_aim: int,
+        summary: LegSummary,
+    ) -> None:
+        """:meth:`drive_to` each of ``waypoints`` in turn.
+
+        The commands to the last waypoint are planned at once from the estimate as dead
+        reckoning carries it, then driven, sensed and handed to the tracker as arrays. When
+        APCS corrects the estimate, the plan holds up to the next steering point; from there it
+        is planned again from the corrected estimate (the random streams and the robot are
+        put back where the first plan left them at that point).
+        """
+        targets = [np.asarray(target, dtype=np.float64).reshape(2) for target in waypoints]
+        waypoint = 0
+        while waypoint < len(targets):
+            plan = self._plan(targets, waypoint, step_m, steps_per_aim)
+            if not plan.stops:
+                return
+            waypoint = self._execute(plan, active_sides, steps_per_sample, summary)
+
+    def _plan(
+        self, targets: Sequence[FloatArray], waypoint: int, step_m: float, steps_per_aim: int
+    ) -> _Plan:
+        """The commands from the current estimate to the last target (see :meth:`drive_through`)."""
+        base = self.robot.wheel_base_for(self.world)
+        encoder_std = self.robot.noise.encoder_std_m_per_sqrt_m
+        estimate = self.tracker.estimate
+        x, y, theta = estimate.x, estimate.y, estimate.theta
+        plan = _Plan(CommandDraws.start(self.motion_rng))
+        rng = self.motion_rng
+
+        def command(d_left: float, d_right: float, straight: bool) -> None:
+            nonlocal x, y, theta
+            normals, _ = plan.draws.draw(rng)
+            left = d_left + encoder_std * math.sqrt(abs(d_left)) * float(normals[0])
+            right = d_right + encoder_std * math.sqrt(abs(d_right)) * float(normals[1])
+            distance, turn = 0.5 * (right + left), (right - left) / base
+            heading = theta + 0.5 * turn
+            x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
+            theta = wrap_angle(theta + turn)
+            plan.commanded.append((d_left, d_right))
+            plan.straight.append(straight)
+
+        while waypoint < len(targets):
+            dx, dy = float(targets[waypoint][0]) - x, float(targets[waypoint][1]) - y
+            remaining = round(math.hypot(dx, dy) / step_m)
+            if remaining == 0:
+                waypoint += 1
+                continue
+            turn = angle_difference(math.atan2(dy, dx), theta)
+            if abs(turn) > REAIM_TOLERANCE_RAD:
+                half = 0.5 * turn * base
+                command(-half, half, straight=False)
+            count = min(remaining, steps_per_aim)
+            for _ in range(count):
+                command(step_m, step_m, straight=True)
+            if count < steps_per_aim:
+                waypoint += 1
+            plan.stops.append(len(plan.commanded))
+            plan.next_waypoint.append(waypoint)
+        plan.draws.finish(rng)
+        return plan
+
+    def _execute(
+        self, plan: _Plan, active_sides: Sequence[str], steps_per_sample: int, summary: LegSummary
+    ) -> int:
+        """Drive, sense and track ``plan``; returns the waypoint to plan for next."""
+        commanded = np.array(plan.commanded, dtype=np.float64)
+        motion = drive_commands(self.robot, self.world, commanded, plan.draws, self.motion_rng)
+        samples: list[int] = []
+        counters: list[int] = []
+        counter = self.steps_since_sample
+        for index, straight in enumerate(plan.straight):
+            if straight:
+                counter += 1
+                if active_sides and counter >= steps_per_sample:
+                    counter = 0
+                    samples.append(index)
+            counters.append(counter)
+        sensor_state = self.sensor_rng.bit_generator.state
+        readings = self._read(motion.true_poses, samples, active_sides)
+        with self._timed("localization"):
+            result = self.tracker.run(
+                motion.encoder_left_m,
+                motion.encoder_right_m,
+                samples,
+                readings,
+                sensor_offset_m=self.sonars.lateral_offset_m,
+                stops=plan.stops,
+            )
+        consumed = result.consumed
+        kept = [index for index in samples if index < consumed]
+        if consumed < len(commanded):  # a correction: the rest was planned from the old estimate
+            self.world.set_robot_pose(Pose(*motion.true_poses[consumed - 1]))
+            self.robot.odometry_pose = Pose(*motion.odometry_poses[consumed - 1])
+            plan.draws.rewind(self.motion_rng, consumed)
+            self.sensor_rng.bit_generator.state = sensor_state
+            self._read(motion.true_poses, kept, active_sides)  # the draws of the kept readings
+        self.steps_since_sample = counters[consumed - 1]
+        listen_s = self.sonars.transducer.listen_time_s * len(kept)  # both sonars fire together
+        self.sensing_time_s += listen_s
+        summary.sensing_time_s += listen_s
+        summary.samples += len(active_sides) * len(kept)
+        summary.collided = summary.collided or bool(motion.collided[:consumed].any())
+        self._record(
+            motion.true_poses[:consumed], result.estimated_path, motion.odometry_poses[:consumed]
+        )
+        self._handled(result, motion.true_poses, summary)
+        return plan.next_waypoint[plan.stops.index(consumed)]
+
+    def _read(
+        self, true_poses: FloatArray, samples: Sequence[int], active_sides: Sequence[str]
+    ) -> dict[str, FloatArray]:
+        """Readings of the active sides at the commands ``samples`` (both sonars fire)."""
+        if not samples:
+            return {}
+        with self._timed("sensing"):
+            side_readings = self.sonars.sample_along(
+                self.world, true_poses[np.asarray(samples)], self.sensor_rng
+            )
+        all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
+        return {side: all_readings[side] for side in active_sides}
+
+    def _handled(self, result: RunResult, true_poses: FloatArray, summary: LegSummary) -> None:
+        """Book the ERPs, walls and corrections of a tracker run into the trace and summary."""
+        self.trace.erps.extend(result.erps)
+        summary.dropped_groups += sum(result.dropped.values())
+        for wall in result.walls:
+            truth = (
+                Pose(*true_poses[wall.command_index]) if wall.command_index >= 0 else self.true_pose
+            )
+            summary.detected[wall.side] += 1
+            if wall.match.matched:
+                summary.matched[wall.side] += 1
+            else:
+                summary.rejected[wall.side] += 1
+            if wall.pose_after is not wall.pose_before:
+                summary.corrections += 1
+                self.trace.corrections.append((truth, wall.pose_before, wall.pose_after))
+            assert wall.group.fit.wall is not None
+            self.trace.detections.append(
+                WallDetection(
+                    leg=self.leg,
+                    side=wall.side,
+                    wall=wall.group.fit.wall,
+                    erp_points=wall.group.points,
+                    match=wall.match,
+                    reason=wall.reason,
+                    correction_status=wall.correction.status,
+                    pose_before=wall.pose_before,
+                    pose_after=wall.pose_after,
+                    true_pose=truth,
+                )
+            )
+
+    def _record(self, true: FloatArray, estimated: FloatArray, odometry: FloatArray) -> None:
+        self.trace.true_path.extend(np.array(true, dtype=np.float64))
+        self.trace.estimated_path.extend(np.array(estimated, dtype=np.float64))
+        self.trace.odometry_path.extend(np.array(odometry, dtype=np.float64))
+
+
+def with_wall_obstacles(
+    scenario: Scenario,
+    rng: np.random.Generator,
+    count: int,
+    length_range_m: tuple[float, float],
+    depth_range_m: tuple[float, float],
+    x_range_m: tuple[float, float],
+) -> Scenario:
+    """``scenario`` plus ``count`` unmapped boxes standing against its room's long walls.
+
+    Each box is drawn on a random long wall (left ``y = max``, right ``y = min``) with a length
+    and a depth (metres) uniform in their ranges and a start uniform in ``x_range_m``; a box
+    keeps 0.1 m from the other boxes and from the scenario's free walls near that wall, with
+    50 attempts per box (a box that finds no place is left out).
+    """
+    room = scenario.room
+    if room is None:
+        raise ValueError(f"argument 'scenario': {scenario.name!r} has no room")
+    boxes: list[Box] = []
+    taken: dict[str, list[tuple[float, float]]] = {"left": [], "right": []}
+    for wall in scenario.walls:  # keep clear of the scenario's own free walls
+        for side, y_wall in (("left", room.max[1]), ("right", room.min[1])):
+            if min(abs(wall.a[1] - y_wall), abs(wall.b[1] - y_wall)) < 0.5:
+                taken[side].append((min(wall.a[0], wall.b[0]), max(wall.a[0], wall.b[0])))
+    low_x, high_x = x_range_m
+    for _ in range(count):
+        for _attempt in range(50):
+            side = SIDE_NAMES[int(rng.integers(2))]
+            length = float(rng.uniform(*length_range_m))
+            depth = float(rng.uniform(*depth_range_m))
+            start_x = float(rng.uniform(low_x, max(low_x, high_x - length)))
+            span = (start_x, start_x + length)
+            if all(span[1] + 0.1 < a or span[0] - 0.1 > b for a, b in taken[side]):
+                break
+        else:
+            continue
+        taken[side].append(span)
+        y_centre = room.max[1] - depth / 2.0 if side == "left" else room.min[1] + depth / 2.0
+        boxes.append(Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False))
+    return dataclasses.replace(scenario, boxes=scenario.boxes + tuple(boxes))
+
+
+__all__ = [
+    "REAIM_TOLERANCE_RAD",
+    "APCSRoute",
+    "EpisodeTrace",
+    "LegSummary",
+    "WallDetection",
+    "with_wall_obstacles",
+]

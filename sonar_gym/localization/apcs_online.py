@@ -1,0 +1,767 @@
+"""The on-line half of APCS: the Fig. 2 loop of Yamamoto et al. run while the robot moves.
+
+While the robot drives, APCS keeps a dead-reckoning estimate with its covariance, turns every
+new side-sonar reading into an estimated reflection point (ERP, eqs 1-6) paired with the
+previous reading of the same sensor, groups consecutive ERPs (sec. 4.2.2), verifies each closed
+group as a flat wall (sec. 4.2.2-4.2.3), matches it to the map (sec. 4.3) and, on a unique
+match, corrects the estimate by maximum likelihood (eqs 7-14). After a correction the stored
+readings and ERPs move with the estimate's frame.
+
+- :func:`dead_reckon`: the estimate and covariance over a run of encoder increments (Kim et al.
+  sec. 3.1, :func:`sonar_gym.localization.kim.predict` with the midpoint integration and
+  :func:`~sonar_gym.localization.kim.proportional_encoder_noise`), as arrays.
+- :class:`WallStream`: the ERPs and ERP groups of one side sonar.
+- :class:`APCSTracker`: the whole loop over a run of motion commands and the readings taken
+  along it, consuming the run's readings as arrays and re-doing only what a correction changes.
+- :func:`rejection_reason`, :func:`fit_measurement_variances`, :func:`nearest_facing_walls`:
+  the pieces the tracker, the env's observation and the reproduction share.
+
+Everything here takes plain arrays and dataclasses; nothing reads a world.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from sonar_gym.localization.apcs import (
+    AMBIGUOUS,
+    DEFAULT_PARAMETERS,
+    GROUP_TOO_FEW_POINTS,
+    APCSParameters,
+    CorrectionResult,
+    DetectedWall,
+    EstimatedReflectionPoints,
+    MatchResult,
+    WallFit,
+    WallVector,
+    correct_with_detected_wall,
+    estimated_reflection_points,
+    fit_wall_group,
+)
+from sonar_gym.localization.result import OK
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
+
+SIDE_NAMES = ("left", "right")
+"""The side sonars: ``left`` looks along the heading + pi/2, ``right`` along heading - pi/2."""
+BEAM_OFFSET_RAD = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
+"""Beam axis of each side sonar relative to the robot heading, radians."""
+MEASUREMENT_VARIANCES = ("fixed", "fit")
+CORRECTION_METHODS = ("paper", "linear")
+
+
+def _check_side(side: object) -> str:
+    if side not in SIDE_NAMES:
+        raise ValueError(f"argument 'side' must be one of {list(SIDE_NAMES)}; got {side!r}")
+    return str(side)
+
+
+def _finite_array(value: npt.ArrayLike, name: str, shape: tuple[int | None, ...]) -> FloatArray:
+    """``value`` as a float array of ``shape`` (``None``: any length), finite, else ValueError."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"argument {name!r} must be a numeric array; got {value!r}") from error
+    if array.ndim != len(shape) or any(
+        want is not None and got != want for got, want in zip(array.shape, shape, strict=True)
+    ):
+        wanted = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"argument {name!r} must have shape {wanted}; got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"argument {name!r} must be finite; got {array!r}")
+    return array
+
+
+def _positive(value: float, name: str) -> float:
+    number = float(value)
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"argument {name!r} must be a finite positive number; got {value!r}")
+    return number
+
+
+# --------------------------------------------------------------------------------------------
+# Dead reckoning
+# --------------------------------------------------------------------------------------------
+
+
+def dead_reckon(
+    pose: Pose,
+    covariance: npt.ArrayLike,
+    encoder_left_m: npt.ArrayLike,
+    encoder_right_m: npt.ArrayLike,
+    wheel_base_m: float,
+    variance_per_m: float,
+) -> tuple[FloatArray, FloatArray]:
+    """The estimate and its covariance after each of a run of encoder increments.
+
+    Kim et al. sec. 3.1, eqs (5)-(6), with the midpoint integration: for the increments
+    ``d_l, d_r`` of command ``k``, ``d = (d_r + d_l)/2``, ``dtheta = (d_r - d_l)/l``,
+    ``x += d cos(theta + dtheta/2)``, ``y += d sin(theta + dtheta/2)``, ``theta += dtheta`` and
+    ``P = A P A^T + F V F^T`` with ``V = diag(k |d_r|, k |d_l|)``. It is
+    :func:`sonar_gym.localization.kim.predict` (``integration="midpoint"``,
+    ``encoder_noise=proportional_encoder_noise(...)``) over every command at once.
+
+    Args:
+        pose: the estimate before the first command ({W}; metres, radians).
+        covariance: its 3x3 covariance over ``[x, y, theta]``.
+        encoder_left_m, encoder_right_m: ``(K,)`` encoder increments of each command, metres.
+        wheel_base_m: wheel base ``l``, metres.
+        variance_per_m: ``k``, each wheel's variance per metre rolled, m^2/m (>= 0).
+
+    Returns:
+        ``(poses, covariances)``: ``(K + 1, 3)`` rows ``[x, y, theta]`` (theta wrapped to
+        (-pi, pi]) and ``(K + 1, 3, 3)``; row 0 is the input.
+    """
+    left = _finite_array(encoder_left_m, "encoder_left_m", (None,))
+    right = _finite_array(encoder_right_m, "encoder_right_m", (len(left),))
+    start_covariance = _finite_array(covariance, "covariance", (3, 3))
+    base = _positive(wheel_base_m, "wheel_base_m")
+    k = float(variance_per_m)
+    if not (math.isfinite(k) and k >= 0.0):
+        raise ValueError(
+            f"argument 'variance_per_m' must be finite and >= 0; got {variance_per_m!r}"
+        )
+    distance = 0.5 * (right + left)
+    turn = (right - left) / base
+    thetas = pose.theta + np.concatenate([[0.0], np.cumsum(turn)])
+    heading = thetas[:-1] + 0.5 * turn
+    cos_h, sin_h = np.cos(heading), np.sin(heading)
+    poses = np.empty((len(left) + 1, 3))
+    poses[0] = pose.x, pose.y, pose.theta
+    poses[1:, 0] = pose.x + np.cumsum(distance * cos_h)
+    poses[1:, 1] = pose.y + np.cumsum(distance * sin_h)
+    poses[1:, 2] = wrap_angles(thetas[1:])
+    # F V F^T for every command: F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|).
+    lever = distance / (2.0 * base)
+    wheels = np.empty((len(left), 3, 2))
+    wheels[:, 0, 0] = 0.5 * cos_h - lever * sin_h
+    wheels[:, 0, 1] = 0.5 * cos_h + lever * sin_h
+    wheels[:, 1, 0] = 0.5 * sin_h + lever * cos_h
+    wheels[:, 1, 1] = 0.5 * sin_h - lever * cos_h
+    wheels[:, 2, 0] = 1.0 / base
+    wheels[:, 2, 1] = -1.0 / base
+    variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
+    encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
+    # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
+    # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
+    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's. For symmetric X,
+    # (I + w e3^T) X (I + w e3^T)^T = X + w x^T + x w^T + X_33 w w^T with x = X e3; with
+    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K).
+    count = len(left)
+    sums = np.zeros((count + 1, 3))
+    sums[1:, 0] = np.cumsum(-distance * sin_h)
+    sums[1:, 1] = np.cumsum(distance * cos_h)
+
+    def before(values: FloatArray) -> FloatArray:  # [k] = sum over i < k
+        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
+
+    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
+        return a[:, :, None] * b[:, None, :]
+
+    column = start_covariance[:, 2]
+    covariances = (
+        start_covariance
+        + outer(sums, np.broadcast_to(column, sums.shape))
+        + outer(np.broadcast_to(column, sums.shape), sums)
+        + start_covariance[2, 2] * outer(sums, sums)
+    )
+    if count:
+        q = encoder_terms[:, :, 2]
+        q33 = encoder_terms[:, 2, 2]
+        later = sums[1:]  # U_(i+1)
+        total = before(encoder_terms)
+        q_sum = before(q)
+        cross = before(outer(later, q))
+        weight = before(q33)
+        weighted = before(q33[:, None] * later)
+        second = before(q33[:, None, None] * outer(later, later))
+        covariances += (
+            total
+            + outer(sums, q_sum)
+            + outer(q_sum, sums)
+            - cross
+            - cross.transpose(0, 2, 1)
+            + weight[:, None, None] * outer(sums, sums)
+            - outer(sums, weighted)
+            - outer(weighted, sums)
+            + second
+        )
+    covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
+    return poses, covariances
+
+
+# --------------------------------------------------------------------------------------------
+# Matching verdicts and measurement variances
+# --------------------------------------------------------------------------------------------
+
+
+def rejection_reason(match: MatchResult) -> str | None:
+    """Why a detected wall was not used: the paper's first failed condition (sec. 4.3).
+
+    ``None`` for a unique match, ``"ambiguous"`` when more than one map wall matched, else
+    the reason of the map wall that came closest to matching (most conditions passed, in the
+    paper's order orientation, inclusion, distance; ties by the smaller ``d1^2 + d2^2``).
+    """
+    if match.matched:
+        return None
+    if match.status == AMBIGUOUS:
+        return AMBIGUOUS
+    if not match.checks:
+        return "empty_map"
+    best = max(
+        match.checks,
+        key=lambda check: (
+            check.orientation_ok + check.inclusion_ok + check.distance_ok,
+            check.orientation_ok,
+            check.inclusion_ok,
+            -check.endpoint_distance_squared_m2,
+        ),
+    )
+    return best.reason
+
+
+@dataclass(frozen=True)
+class ClosedGroup:
+    """A closed group of ERPs and its verdict.
+
+    Attributes:
+        fit: the size, line and variance verdict
+            (:func:`~sonar_gym.localization.apcs.fit_wall_group`).
+        points: ``(n, 2)`` the group's ERPs, metres, in the frame of the estimate.
+    """
+
+    fit: WallFit
+    points: FloatArray
+
+
+def fit_measurement_variances(
+    group: ClosedGroup,
+    pose: Pose,
+    fixed: tuple[float, float],
+    mode: str = "fixed",
+) -> tuple[float, float]:
+    """``(sigma_r, sigma_xi)`` of eqs (13)-(14) for a detected wall (m^2, rad^2).
+
+    The paper gives no values. ``mode="fixed"`` returns ``fixed``; ``"fit"`` takes the wall
+    fit's own least-squares variances: the residual variance (unbiased, ``n - 2`` degrees of
+    freedom) over the spread of the ERPs along the line for the bearing, and the variance of
+    the line's offset at the foot of ``pose`` on it for the range; floors of 1e-6 m^2 and
+    (0.05 deg)^2 keep them positive. A group without a wall gets ``fixed``.
+    """
+    if mode not in MEASUREMENT_VARIANCES:
+        raise ValueError(
+            f"argument 'mode' must be one of {list(MEASUREMENT_VARIANCES)}; got {mode!r}"
+        )
+    if mode == "fixed" or group.fit.wall is None:
+        return fixed
+    points = group.points
+    n = len(points)
+    along = group.fit.wall.vector.unit_direction
+    centroid = points.mean(axis=0)
+    spread = float(np.sum(((points - centroid) @ along) ** 2))
+    residual = group.fit.residual_variance_m2 * n / max(n - 2, 1)
+    bearing_variance = residual / max(spread, 1e-12)
+    lever = float((pose.position - centroid) @ along)
+    range_variance = residual / n + bearing_variance * lever * lever
+    return max(range_variance, 1e-6), max(bearing_variance, math.radians(0.05) ** 2)
+
+
+def nearest_facing_walls(
+    walls: Sequence[WallVector], origins: npt.ArrayLike, direction: npt.ArrayLike
+) -> tuple[np.ndarray, FloatArray]:
+    """For each origin, the nearest wall the ray ``origin + t direction`` meets face on.
+
+    A wall counts when the ray crosses its segment at ``t > 0`` coming from its free side.
+
+    Args:
+        walls: the map's wall vectors.
+        origins: ``(n, 2)`` ray origins, metres in {W}.
+        direction: unit direction of the rays in {W}.
+
+    Returns:
+        ``(ids, distances)``: the index of the wall in ``walls`` (-1 where none) and ``t``
+        (metres; inf where none), each ``(n,)``.
+    """
+    origins = _finite_array(origins, "origins", (None, 2))
+    direction = _finite_array(direction, "direction", (2,))
+    if not walls:
+        return np.full(len(origins), -1), np.full(len(origins), math.inf)
+    starts = np.array([wall.start for wall in walls])
+    units = np.array([wall.unit_direction for wall in walls])
+    lengths = np.array([wall.length for wall in walls])
+    normals = np.column_stack([units[:, 1], -units[:, 0]])  # free side, WallVector.normal
+    facing = normals @ direction  # (walls,)
+    signed = np.einsum("nwk,wk->nw", origins[:, None, :] - starts[None, :, :], normals)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        distance = np.where(facing < -1e-9, signed / -np.where(facing < -1e-9, facing, -1.0), -1.0)
+    hits = origins[:, None, :] + distance[:, :, None] * direction
+    along = np.einsum("nwk,wk->nw", hits - starts[None, :, :], units) / lengths
+    valid = (distance > 0.0) & (along >= -1e-9) & (along <= 1.0 + 1e-9)
+    distance = np.where(valid, distance, math.inf)
+    ids = np.argmin(distance, axis=1)
+    best = distance[np.arange(len(origins)), ids]
+    return np.where(np.isfinite(best), ids, -1), best
+
+
+# --------------------------------------------------------------------------------------------
+# One side sonar's ERPs and groups
+# --------------------------------------------------------------------------------------------
+
+
+class WallStream:
+    """On-line ERPs and ERP groups of one side sonar (sec. 4.2.1-4.2.2), reading by reading.
+
+    Each reading pairs with the previous one to give one ERP (the newer reading's, as
+    :func:`~sonar_gym.localization.apcs.estimated_reflection_points` with
+    ``points_per_pair="newest"``); ERPs join the open group while consecutive ERPs stay within
+    the grouping distance. A group is closed at a discontinuity, as soon as it holds
+    ``max_group_size`` ERPs, or when the stream is flushed, and then verified with
+    :func:`~sonar_gym.localization.apcs.fit_wall_group`. The groups are those
+    :func:`~sonar_gym.localization.apcs.group_erps` finds on the whole sequence.
+
+    :meth:`add` takes one reading; :meth:`pending_erps` computes the ERPs of a run of readings
+    at once without storing them, and :meth:`accept` stores one reading with its ERP.
+
+    Args:
+        side: ``"left"`` or ``"right"``: the beam axis is the heading plus or minus pi/2.
+        params: APCS thresholds.
+    """
+
+    def __init__(self, side: str, params: APCSParameters = DEFAULT_PARAMETERS) -> None:
+        self.side = _check_side(side)
+        self.params = params
+        self._previous: tuple[FloatArray, float, float] | None = None
+        self._group_points: list[FloatArray] = []
+        self._group_directions: list[float] = []
+
+    @property
+    def open_group_size(self) -> int:
+        """Number of ERPs in the group being built."""
+        return len(self._group_points)
+
+    def pending_erps(
+        self, sensor_xy: npt.ArrayLike, headings_rad: npt.ArrayLike, ranges_m: npt.ArrayLike
+    ) -> tuple[FloatArray, FloatArray, np.ndarray]:
+        """The ERPs that readings ``0..n-1`` would give, each paired with its predecessor.
+
+        The first reading pairs with the stream's last stored reading. Nothing is stored.
+
+        Args:
+            sensor_xy: ``(n, 2)`` sensor positions, metres, in the frame of the estimate.
+            headings_rad: ``(n,)`` robot headings of the estimate, radians.
+            ranges_m: ``(n,)`` measured ranges, metres; NaN for a dropout.
+
+        Returns:
+            ``(points, directions, valid)``: ``(n, 2)`` ERPs (metres), ``(n,)`` reflection
+            directions (radians) and ``(n,)`` whether the reading gives an ERP (rows where not
+            are zero).
+        """
+        positions = _finite_array(sensor_xy, "sensor_xy", (None, 2))
+        headings = _finite_array(headings_rad, "headings_rad", (len(positions),))
+        ranges = np.asarray(ranges_m, dtype=np.float64)
+        if ranges.shape != (len(positions),):
+            raise ValueError(
+                f"argument 'ranges_m' must have shape ({len(positions)},); got {ranges.shape}"
+            )
+        directions = headings + BEAM_OFFSET_RAD[self.side]
+        if self._previous is not None:
+            previous_xy, previous_direction, previous_range = self._previous
+            positions = np.vstack([previous_xy, positions])
+            directions = np.concatenate([[previous_direction], directions])
+            ranges = np.concatenate([[previous_range], ranges])
+            offset = 0
+        else:
+            offset = 1
+        n = len(headings)
+        points = np.zeros((n, 2))
+        phis = np.zeros(n)
+        valid = np.zeros(n, dtype=bool)
+        erps = estimated_reflection_points(
+            positions, directions, ranges, valid_range_m=self.params.sensing_range_m
+        )
+        rows = erps.reading_indices - 1 + offset  # the newer reading of each pair
+        points[rows] = erps.points
+        phis[rows] = erps.reflection_directions_rad
+        valid[rows] = True
+        return points, phis, valid
+
+    def accept(
+        self,
+        sensor_xy: FloatArray,
+        heading_rad: float,
+        range_m: float,
+        erp: tuple[FloatArray, float] | None,
+    ) -> list[ClosedGroup]:
+        """Store one reading and its ERP ``(point, direction)`` (from :meth:`pending_erps`).
+
+        Returns:
+            The verdicts of the groups this reading closed.
+        """
+        direction = heading_rad + BEAM_OFFSET_RAD[self.side]
+        self._previous = (np.asarray(sensor_xy, dtype=np.float64), direction, float(range_m))
+        if erp is None:
+            return []
+        point, phi = erp
+        closed: list[ClosedGroup] = []
+        if self._group_points:
+            step = point - self._group_points[-1]
+            if float(step @ step) > self.params.grouping_distance_squared_m2:
+                closed.append(self._close())
+        self._group_points.append(point)
+        self._group_directions.append(float(phi))
+        if len(self._group_points) >= self.params.max_group_size:
+            closed.append(self._close())
+        return closed
+
+    def add(
+        self, sensor_xy: npt.ArrayLike, heading_rad: float, range_m: float
+    ) -> tuple[FloatArray | None, list[ClosedGroup]]:
+        """Add one reading taken at ``sensor_xy`` ({W} estimate, metres) with the robot heading.
+
+        Args:
+            sensor_xy: sensor position, metres, in the frame of the pose estimate.
+            heading_rad: robot heading of the estimate, radians.
+            range_m: the measured range, metres; NaN for a dropout.
+
+        Returns:
+            The new ERP (or ``None``) and the verdicts of the groups this reading closed.
+        """
+        position = _finite_array(sensor_xy, "sensor_xy", (2,))
+        points, phis, valid = self.pending_erps(position[None, :], [heading_rad], [range_m])
+        erp = (points[0].copy(), float(phis[0])) if valid[0] else None
+        closed = self.accept(position, float(heading_rad), float(range_m), erp)
+        return (None if erp is None else erp[0]), closed
+
+    def flush(self) -> list[ClosedGroup]:
+        """End the stream (the sensor stops): close the open group and forget the last reading."""
+        self._previous = None
+        return [self._close()] if self._group_points else []
+
+    def move_frame(self, before: Pose, after: Pose) -> None:
+        """Re-express the stored positions after a pose correction from ``before`` to ``after``.
+
+        The readings and ERPs of the stream live in the frame of the pose estimate; a
+        correction moves that frame rigidly, and the stored points move with it.
+        """
+        turn = after.theta - before.theta
+        cos_turn, sin_turn = math.cos(turn), math.sin(turn)
+        rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
+
+        def moved(point: FloatArray) -> FloatArray:
+            return after.position + rotation @ (point - before.position)
+
+        if self._previous is not None:
+            position, direction, range_m = self._previous
+            self._previous = (moved(position), direction + turn, range_m)
+        self._group_points = [moved(point) for point in self._group_points]
+        self._group_directions = [direction + turn for direction in self._group_directions]
+
+    def _close(self) -> ClosedGroup:
+        points = np.array(self._group_points)
+        directions = np.array(self._group_directions)
+        self._group_points, self._group_directions = [], []
+        if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
+            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, tuple(range(len(points)))), points)
+        erps = EstimatedReflectionPoints.from_points(points, directions)
+        return ClosedGroup(fit_wall_group(erps, range(len(points)), self.params), points)
+
+
+# --------------------------------------------------------------------------------------------
+# The Fig. 2 loop
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class WallHandling:
+    """One detected wall and what APCS did with it (Fig. 2).
+
+    Attributes:
+        side: ``"left"`` or ``"right"``.
+        group: the closed ERP group with its wall.
+        match: the matching against the map (sec. 4.3).
+        reason: ``None`` when matched, else why not (:func:`rejection_reason`).
+        correction: the correction result (status ``"ok"`` when the pose was corrected).
+        pose_before, pose_after: the estimate before and after (equal without a correction).
+        command_index: the command after which the reading that closed the group was taken
+            (-1 for a flush before any command of the run).
+    """
+
+    side: str
+    group: ClosedGroup
+    match: MatchResult
+    reason: str | None
+    correction: CorrectionResult
+    pose_before: Pose
+    pose_after: Pose
+    command_index: int
+
+
+@dataclass
+class RunResult:
+    """What :meth:`APCSTracker.run` did over a run of commands.
+
+    Attributes:
+        estimated_path: ``(K, 3)`` the estimate after each command (before a correction made
+            at that command's reading).
+        erps: ``(x, y, side)`` of every ERP, in the frame of the estimate when computed.
+        walls: every verified wall, in order.
+        dropped: per side, closed groups that failed the size or variance test.
+        consumed: how many of the run's commands were dead-reckoned and sensed.
+    """
+
+    estimated_path: FloatArray
+    consumed: int = 0
+    erps: list[tuple[float, float, str]] = field(default_factory=list)
+    walls: list[WallHandling] = field(default_factory=list)
+    dropped: dict[str, int] = field(default_factory=lambda: {"left": 0, "right": 0})
+
+
+class APCSTracker:
+    """The APCS estimate, its covariance and the two side streams, updated as the robot moves.
+
+    Args:
+        wall_map: the map's oriented wall vectors (sec. 4.1).
+        estimate, covariance: the initial estimate ({W}) and its 3x3 covariance.
+        wheel_base_m: the wheel base the dead reckoning assumes, metres.
+        variance_per_m: each wheel's variance per metre rolled, m^2/m (:func:`dead_reckon`).
+        range_variance_m2, bearing_variance_rad2: the fixed ``sigma_r`` and ``sigma_xi``.
+        measurement_variances: ``"fixed"`` or ``"fit"`` (:func:`fit_measurement_variances`).
+        correction_method: ``"paper"`` (eqs 11-14) or ``"linear"``.
+        params: APCS thresholds (sec. 6).
+    """
+
+    def __init__(
+        self,
+        wall_map: Sequence[WallVector],
+        estimate: Pose,
+        covariance: npt.ArrayLike,
+        *,
+        wheel_base_m: float,
+        variance_per_m: float,
+        range_variance_m2: float,
+        bearing_variance_rad2: float,
+        measurement_variances: str = "fixed",
+        correction_method: str = "paper",
+        params: APCSParameters = DEFAULT_PARAMETERS,
+    ) -> None:
+        if measurement_variances not in MEASUREMENT_VARIANCES:
+            raise ValueError(
+                "argument 'measurement_variances' must be one of "
+                f"{list(MEASUREMENT_VARIANCES)}; got {measurement_variances!r}"
+            )
+        if correction_method not in CORRECTION_METHODS:
+            raise ValueError(
+                f"argument 'correction_method' must be one of {list(CORRECTION_METHODS)}; "
+                f"got {correction_method!r}"
+            )
+        self.wall_map = tuple(wall_map)
+        self.estimate = estimate
+        self.covariance = _finite_array(covariance, "covariance", (3, 3)).copy()
+        self.wheel_base_m = _positive(wheel_base_m, "wheel_base_m")
+        self.variance_per_m = float(variance_per_m)
+        self.fixed_variances = (
+            _positive(range_variance_m2, "range_variance_m2"),
+            _positive(bearing_variance_rad2, "bearing_variance_rad2"),
+        )
+        self.measurement_variances = measurement_variances
+        self.correction_method = correction_method
+        self.params = params
+        self.streams = {side: WallStream(side, params) for side in SIDE_NAMES}
+
+    def run(
+        self,
+        encoder_left_m: npt.ArrayLike,
+        encoder_right_m: npt.ArrayLike,
+        sample_commands: npt.ArrayLike = (),
+        readings: Mapping[str, npt.ArrayLike] | None = None,
+        sensor_offset_m: float = 0.0,
+        stops: Sequence[int] = (),
+    ) -> RunResult:
+        """Dead-reckon over a run of commands and run Fig. 2 on the readings taken along it.
+
+        Args:
+            encoder_left_m, encoder_right_m: ``(K,)`` encoder increments of each command, metres.
+            sample_commands: ``(M,)`` increasing indices of the commands after which the side
+                sonars took a reading.
+            readings: per active side, ``(M,)`` ranges in metres (NaN = dropout); at each
+                reading instant ``left`` is handled before ``right``.
+            sensor_offset_m: distance of each sensor from the robot centre along {R}'s y axis.
+            stops: increasing command counts at which the run may stop: after a correction
+                the run goes on to the next of them and stops there (the commands after it
+                were planned from the estimate before the correction).
+
+        Returns:
+            The estimated path, the ERPs and the walls handled, and how many commands were
+            consumed. ``estimate`` and ``covariance`` are those after the last consumed command.
+        """
+        left = _finite_array(encoder_left_m, "encoder_left_m", (None,))
+        right = _finite_array(encoder_right_m, "encoder_right_m", (len(left),))
+        samples = np.asarray(sample_commands, dtype=np.int64).reshape(-1)
+        if samples.size and (
+            samples[0] < 0 or samples[-1] >= len(left) or np.any(np.diff(samples) <= 0)
+        ):
+            raise ValueError(
+                "argument 'sample_commands' must hold increasing command indices in "
+                f"[0, {len(left)}); got {samples!r}"
+            )
+        ranges: dict[str, FloatArray] = {}
+        for side, values in (readings or {}).items():
+            _check_side(side)
+            array = np.asarray(values, dtype=np.float64)
+            if array.shape != samples.shape:
+                raise ValueError(
+                    f"argument 'readings[{side!r}]' must have shape {samples.shape}; "
+                    f"got {array.shape}"
+                )
+            ranges[side] = array
+        sides = tuple(side for side in SIDE_NAMES if side in ranges)
+        poses, covariances = dead_reckon(
+            self.estimate, self.covariance, left, right, self.wheel_base_m, self.variance_per_m
+        )
+        result = RunResult(estimated_path=poses[1:].copy(), consumed=len(left))
+        limit = len(left)
+        # Events in time order: (sample, side). Pending ERPs are valid until a correction.
+        events = [(m, side) for m in range(len(samples)) for side in sides]
+        event = 0
+        while event < len(events) and samples[events[event][0]] < limit:
+            first_sample = events[event][0]
+            pending = {}
+            rows = poses[samples[first_sample:] + 1]
+            for side in sides:
+                sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
+                pending[side] = (
+                    sensor_xy,
+                    *self.streams[side].pending_erps(
+                        sensor_xy, rows[:, 2], ranges[side][first_sample:]
+                    ),
+                )
+            corrected = False
+            while event < len(events) and not corrected and samples[events[event][0]] < limit:
+                m, side = events[event]
+                event += 1
+                sensor_xy, points, phis, valid = pending[side]
+                row = m - first_sample
+                erp = (points[row].copy(), float(phis[row])) if valid[row] else None
+                if erp is not None:
+                    result.erps.append((float(erp[0][0]), float(erp[0][1]), side))
+                pose_row = poses[samples[m] + 1]
+                groups = self.streams[side].accept(
+                    sensor_xy[row], float(pose_row[2]), float(ranges[side][m]), erp
+                )
+                if groups:
+                    self.estimate = Pose(*pose_row)
+                    self.covariance = covariances[samples[m] + 1]
+                    corrected = self.handle_groups(side, groups, int(samples[m]), result)
+            if corrected:
+                command = int(samples[events[event - 1][0]])
+                later_stops = [stop for stop in stops if stop > command]
+                if later_stops:
+                    limit = min(limit, later_stops[0])
+                tail_poses, tail_covariances = dead_reckon(
+                    self.estimate,
+                    self.covariance,
+                    left[command + 1 :],
+                    right[command + 1 :],
+                    self.wheel_base_m,
+                    self.variance_per_m,
+                )
+                poses = np.vstack([poses[: command + 1], tail_poses])
+                covariances = np.concatenate([covariances[: command + 1], tail_covariances])
+                result.estimated_path[command + 1 :] = tail_poses[1:]
+        if limit < len(left):
+            result.consumed = limit
+            result.estimated_path = result.estimated_path[:limit]
+        if limit:
+            self.estimate = Pose(*poses[limit])
+            self.covariance = covariances[limit].copy()
+        return result
+
+    def flush(self, side: str, result: RunResult | None = None) -> RunResult:
+        """Stop ``side``'s sonar: close its open group and handle it (Fig. 2)."""
+        result = RunResult(np.zeros((0, 3))) if result is None else result
+        self.handle_groups(_check_side(side), self.streams[side].flush(), -1, result)
+        return result
+
+    def handle_groups(
+        self, side: str, groups: Sequence[ClosedGroup], command_index: int, result: RunResult
+    ) -> bool:
+        """Match every verified wall and correct the estimate on a unique match (Fig. 2).
+
+        Returns:
+            Whether the estimate was corrected.
+        """
+        corrected = False
+        for group in groups:
+            fit = group.fit
+            if fit.wall is None:
+                result.dropped[side] += 1
+                continue
+            before = self.estimate
+            sigma_r, sigma_xi = fit_measurement_variances(
+                group, before, self.fixed_variances, self.measurement_variances
+            )
+            match, correction = correct_with_detected_wall(
+                before,
+                self.covariance,
+                fit.wall,
+                self.wall_map,
+                sigma_r,
+                sigma_xi,
+                self.params,
+                method=self.correction_method,  # type: ignore[arg-type]
+            )
+            after = self._apply(correction)
+            corrected = corrected or after is not before
+            result.walls.append(
+                WallHandling(
+                    side=side,
+                    group=group,
+                    match=match,
+                    reason=rejection_reason(match),
+                    correction=correction,
+                    pose_before=before,
+                    pose_after=after,
+                    command_index=command_index,
+                )
+            )
+        return corrected
+
+    def _apply(self, correction: CorrectionResult) -> Pose:
+        before = self.estimate
+        if correction.status != OK or correction.pose is None:
+            return before
+        after = correction.pose
+        self.estimate = after
+        self.covariance = np.array(correction.covariance, dtype=np.float64)
+        for stream in self.streams.values():
+            stream.move_frame(before, after)
+        return after
+
+
+def _sensor_positions(poses: FloatArray, side: str, offset_m: float) -> FloatArray:
+    """``(n, 2)`` positions of ``side``'s sensor for rows ``[x, y, theta]`` of ``poses``."""
+    if offset_m == 0.0:
+        return poses[:, :2].copy()
+    sign = 1.0 if side == "left" else -1.0
+    angle = poses[:, 2] + sign * math.pi / 2.0
+    return poses[:, :2] + offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+__all__ = [
+    "BEAM_OFFSET_RAD",
+    "SIDE_NAMES",
+    "APCSTracker",
+    "ClosedGroup",
+    "DetectedWall",
+    "RunResult",
+    "WallHandling",
+    "WallStream",
+    "dead_reckon",
+    "fit_measurement_variances",
+    "nearest_facing_walls",
+    "rejection_reason",
+]

@@ -1,0 +1,291 @@
+"""A run of identical drive commands, as arrays where the robot touches nothing.
+
+:meth:`sonar_gym.robot.DifferentialDriveRobot.drive` moves the true robot through pymunk one
+command at a time. Where the robot's disc stays clear of every static shape, pymunk imposes
+the planned displacements exactly (no contact, no impulse), so the true path is the planned
+one: the circular arc of each command's ground increments (:func:`~sonar_gym.robot.unicycle_step`
+with ``"arc"``). :func:`drive_straight_run` computes a run of commands that way, with the very
+same random draws per command as ``drive`` (two standard normals, then four uniforms), checks
+the clearance of the whole planned path against the world's static geometry, and hands every
+command from the first one that comes near a shape to ``drive`` itself (pymunk), so contacts
+are resolved exactly as before. The odometry integrates the encoder increments per physics
+substep, as ``drive`` does.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from sonar_gym.geometry import StaticGeometry
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.world import World
+
+CLEARANCE_MARGIN_M = 0.002
+"""Clearance (metres) beyond the robot's radius below which a command goes through pymunk."""
+_ROUNDING_M = 1e-6
+
+
+@dataclass(frozen=True)
+class StraightRun:
+    """The outcome of :func:`drive_straight_run` (arrays over the ``K`` commands).
+
+    Attributes:
+        encoder_left_m, encoder_right_m: ``(K,)`` encoder increments, metres.
+        true_poses: ``(K, 3)`` true ``[x, y, theta]`` after each command ({W}).
+        odometry_poses: ``(K, 3)`` the robot's dead-reckoning pose after each command.
+        collided: ``(K,)`` whether the command touched a static shape.
+    """
+
+    encoder_left_m: FloatArray
+    encoder_right_m: FloatArray
+    true_poses: FloatArray
+    odometry_poses: FloatArray
+    collided: np.ndarray
+
+
+def _sinc(x: FloatArray) -> FloatArray:
+    """``sin(x)/x`` with its series below 1e-4 rad, as :func:`sonar_gym.robot.unicycle_step`."""
+    small = np.abs(x) < 1e-4
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
+
+
+def _clearance(geometry: StaticGeometry, points: FloatArray) -> FloatArray:
+    """``(P,)`` distance (metres) from each point to the nearest static segment or circle."""
+    nearest = np.full(len(points), math.inf)
+    if geometry.n_segments:
+        starts, ends = geometry.segment_starts, geometry.segment_ends
+        edges = ends - starts
+        lengths_sq = np.maximum(np.einsum("sk,sk->s", edges, edges), 1e-24)
+        rel = points[:, None, :] - starts[None, :, :]
+        t = np.clip(np.einsum("psk,sk->ps", rel, edges) / lengths_sq, 0.0, 1.0)
+        gap = rel - t[:, :, None] * edges[None, :, :]
+        nearest = np.minimum(nearest, np.sqrt(np.einsum("psk,psk->ps", gap, gap)).min(axis=1))
+    if geometry.n_circles:
+        centres, radii = geometry.circles[:, :2], geometry.circles[:, 2]
+        gaps = np.hypot(*(points[:, None, :] - centres[None, :, :]).transpose(2, 0, 1)) - radii
+        nearest = np.minimum(nearest, np.abs(gaps).min(axis=1))
+    return nearest
+
+
+def drive_straight_run(
+    robot: DifferentialDriveRobot,
+    world: World,
+    step_m: float,
+    count: int,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Drive ``count`` straight commands of ``step_m`` metres, as ``count`` calls of
+    :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_straight` would."""
+    return drive_run(robot, world, step_m, step_m, count, rng)
+
+
+def turn_run(
+    robot: DifferentialDriveRobot, world: World, angle_rad: float, rng: np.random.Generator
+) -> StraightRun:
+    """One turn in place by ``angle_rad`` radians, as
+    :meth:`~sonar_gym.robot.DifferentialDriveRobot.turn` would."""
+    half = 0.5 * float(angle_rad) * robot.wheel_base_for(world)
+    return drive_run(robot, world, -half, half, 1, rng)
+
+
+def drive_run(
+    robot: DifferentialDriveRobot,
+    world: World,
+    d_left_m: float,
+    d_right_m: float,
+    count: int,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Command the wheel increments ``(d_left_m, d_right_m)`` ``count`` times, as ``count``
+    calls of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` would.
+
+    Same random stream, same true motion (to rounding) and same odometry; the world's robot
+    and ``robot.odometry_pose`` end where those calls leave them.
+    """
+    d_left_m, d_right_m = float(d_left_m), float(d_right_m)
+    if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+        raise ValueError(
+            f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+        )
+    if int(count) != count or count < 0:
+        raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
+    draws = CommandDraws.start(rng)
+    for _ in range(int(count)):
+        draws.draw(rng)
+    draws.finish(rng)
+    commanded = np.tile([d_left_m, d_right_m], (int(count), 1))
+    return drive_commands(robot, world, commanded, draws, rng)
+
+
+@dataclass
+class CommandDraws:
+    """The random numbers of a run of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive`
+    commands, drawn in its order (two standard normals, then four uniforms, per command).
+
+    Attributes:
+        start_state: the generator's state before the first command (to replay a command
+            through ``drive``, or to stop the run early).
+        end_state: its state after the last command (set by :meth:`finish`).
+    """
+
+    start_state: Mapping[str, Any]
+    normals: list[FloatArray]
+    uniforms: list[FloatArray]
+    end_state: Mapping[str, Any] | None = None
+
+    @classmethod
+    def start(cls, rng: np.random.Generator) -> CommandDraws:
+        """Begin drawing from ``rng``."""
+        return cls(rng.bit_generator.state, [], [])
+
+    def draw(self, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
+        """Draw one command's numbers; returns ``(normals, uniforms)``."""
+        normals, uniforms = rng.standard_normal(2), rng.random(4)
+        self.normals.append(normals)
+        self.uniforms.append(uniforms)
+        return normals, uniforms
+
+    def finish(self, rng: np.random.Generator) -> None:
+        """Note the generator's state after the last command."""
+        self.end_state = rng.bit_generator.state
+
+    def rewind(self, rng: np.random.Generator, index: int) -> None:
+        """Put ``rng`` in its state before command ``index`` (after the last for ``len``)."""
+        if index == len(self.normals) and self.end_state is not None:
+            rng.bit_generator.state = self.end_state
+            return
+        rng.bit_generator.state = self.start_state
+        for _ in range(index):
+            rng.standard_normal(2)
+            rng.random(4)
+
+
+def encoder_increments(
+    robot: DifferentialDriveRobot, commanded: FloatArray, normals: FloatArray
+) -> FloatArray:
+    """``(K, 2)`` encoder increments of commands ``(K, 2)`` ``[d_left, d_right]`` (metres):
+    the commanded travel plus the encoder noise of ``drive``."""
+    noise = robot.noise.encoder_std_m_per_sqrt_m
+    return commanded + noise * np.sqrt(np.abs(commanded)) * normals
+
+
+def drive_commands(
+    robot: DifferentialDriveRobot,
+    world: World,
+    commanded: FloatArray,
+    draws: CommandDraws,
+    rng: np.random.Generator,
+) -> StraightRun:
+    """Execute commands ``(K, 2)`` whose random numbers ``draws`` already holds.
+
+    Each command is what :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` does with
+    those numbers; commands whose planned path comes near a static shape go through ``drive``
+    itself (the generator replayed from the command's state). ``rng`` ends in the state after
+    the last command.
+    """
+    commanded = np.asarray(commanded, dtype=np.float64).reshape(-1, 2)
+    count = len(commanded)
+    if count == 0:
+        return StraightRun(
+            np.zeros(0), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, dtype=bool)
+        )
+    base = robot.wheel_base_for(world)
+    noise = robot.noise
+    normals = np.array(draws.normals)
+    uniforms = np.array(draws.uniforms)
+    encoder = encoder_increments(robot, commanded, normals)
+    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
+    slip_loss = np.where(
+        uniforms[:, :2] < slip_probability, uniforms[:, 2:] * noise.slip_fraction_max, 0.0
+    )
+    scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
+    ground = commanded * scale * (1.0 - slip_loss)  # (K, 2)
+    travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
+    ground_turn = (ground[:, 1] - ground[:, 0]) / base
+    substeps = np.maximum.reduce(
+        [
+            np.ones(count, dtype=np.int64),
+            np.ceil(travel / robot.max_substep_m).astype(np.int64),
+            np.ceil(np.abs(ground_turn) / robot.max_substep_rad).astype(np.int64),
+        ]
+    )
+    true_poses = np.empty((count, 3))
+    collided = np.zeros(count, dtype=bool)
+    odometry = robot.odometry_pose if robot.odometry_pose is not None else world.robot_pose
+    first = 0
+    while first < count:
+        free = first + _free_commands(
+            world, ground[first:], ground_turn[first:], true_poses[first:]
+        )
+        if free > first:
+            world.set_robot_pose(Pose(*true_poses[free - 1]))
+        if free == count:
+            break
+        draws.rewind(rng, free)
+        result = robot.drive(world, commanded[free, 0], commanded[free, 1], rng)
+        true_poses[free] = result.true_pose.as_array()
+        collided[free] = result.collided
+        first = free + 1
+    draws.rewind(rng, count)
+
+    # The odometry: each command's encoder increments split over its substeps (midpoint).
+    sub_distance = np.repeat(0.5 * (encoder[:, 0] + encoder[:, 1]) / substeps, substeps)
+    sub_turn = np.repeat((encoder[:, 1] - encoder[:, 0]) / base / substeps, substeps)
+    thetas = odometry.theta + np.concatenate([[0.0], np.cumsum(sub_turn)])
+    heading = thetas[:-1] + 0.5 * sub_turn
+    xs = np.cumsum(np.concatenate([[odometry.x], sub_distance * np.cos(heading)]))
+    ys = np.cumsum(np.concatenate([[odometry.y], sub_distance * np.sin(heading)]))
+    ends = np.cumsum(substeps)
+    odometry_poses = np.column_stack([xs[ends], ys[ends], wrap_angles(thetas[ends])])
+    robot.odometry_pose = Pose(*odometry_poses[-1])
+    return StraightRun(
+        encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
+    )
+
+
+def _free_commands(
+    world: World, ground: FloatArray, ground_turn: FloatArray, out: FloatArray
+) -> int:
+    """How many of the commands, from the robot's pose, keep clear of every static shape.
+
+    Fills ``out[:k]`` with their planned end poses (``k`` the returned count).
+    """
+    count = len(ground)
+    start = world.robot_pose
+    distance = 0.5 * (ground[:, 0] + ground[:, 1])
+    thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
+    half_turn = 0.5 * ground_turn
+    step = distance * _sinc(half_turn)
+    ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
+    ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
+    # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
+    # than the chord's nearer end minus half its length; the arc leaves its chord by at most
+    # its sagitta, |d dtheta| / 8.
+    gaps = _clearance(world.geometry, np.column_stack([ends_x, ends_y]))
+    reach = 0.5 * np.abs(distance) + np.abs(distance * ground_turn) / 8.0 + _ROUNDING_M
+    margin = world.robot_radius + CLEARANCE_MARGIN_M
+    clear = np.minimum(gaps[:-1], gaps[1:]) - reach > margin
+    free = count if clear.all() else int(np.argmin(clear))
+    out[:free, 0] = ends_x[1 : free + 1]
+    out[:free, 1] = ends_y[1 : free + 1]
+    out[:free, 2] = wrap_angles(thetas[1 : free + 1])
+    return free
+
+
+__all__ = [
+    "CLEARANCE_MARGIN_M",
+    "CommandDraws",
+    "StraightRun",
+    "drive_commands",
+    "drive_run",
+    "drive_straight_run",
+    "encoder_increments",
+    "turn_run",
+]
