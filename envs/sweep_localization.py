@@ -27,13 +27,12 @@ from sonar_gym.localization.kim import (
     Sweep,
     VoteLocalization,
     ekf_update,
-    predict,
-    proportional_encoder_noise,
     vote_localize,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.odometry import OdometryConfig, predict_over_motion
 from sonar_gym.pose import Pose, angle_difference, wrap_angle
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
+from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SweptSonar
 from sonar_gym.world import World
@@ -420,7 +419,7 @@ class SweepLocalizationEnv(SonarEnv):
         scale_left, scale_right = rng.uniform(
             -config.wheel_scale_error, config.wheel_scale_error, 2
         )
-        noise = OdometryNoise(
+        noise = OdometryConfig(
             encoder_std_m_per_sqrt_m=config.encoder_noise_std_m_per_sqrt_m,
             scale_error_left=float(scale_left),
             scale_error_right=float(scale_right),
@@ -618,18 +617,20 @@ class SweepLocalizationEnv(SonarEnv):
         if station_m <= episode.progress_m:
             return
         wheel_base = episode.robot.wheel_base_for(episode.world)
-        variance_per_m = self.config.ekf_variance_per_m
         for target in episode.route.targets_between(episode.progress_m, station_m):
             motion = episode.robot.move_to(
                 episode.world, target, self.np_random, from_pose=episode.estimate
             )
-            for part in motion.parts or (motion,):
-                episode.estimate, episode.covariance = _predicted(
-                    episode.estimate, episode.covariance, part, wheel_base, variance_per_m
-                )
-                episode.distance_since_fix_m += 0.5 * (
-                    abs(part.encoder_left_m) + abs(part.encoder_right_m)
-                )
+            increments = [(p.encoder_left_m, p.encoder_right_m) for p in motion.parts or (motion,)]
+            episode.estimate, episode.covariance, _ = predict_over_motion(
+                episode.estimate,
+                episode.covariance,
+                increments,
+                wheel_base,
+                self.config.ekf_variance_per_m,
+            )
+            for left, right in increments:
+                episode.distance_since_fix_m += 0.5 * (abs(left) + abs(right))
         episode.progress_m = station_m
         episode.true_track.append(episode.world.robot_pose.position)
         episode.estimate_track.append(episode.estimate.position)
@@ -755,25 +756,6 @@ def occupancy_grid_of(scenario: Scenario, cell_size_m: float = 0.05) -> Occupanc
         np.array(circles, dtype=np.float64).reshape(-1, 3),
         (x_min, y_min, x_max, y_max),
         cell_size_m,
-    )
-
-
-def _predicted(
-    estimate: Pose,
-    covariance: np.ndarray,
-    part: MotionResult,
-    wheel_base_m: float,
-    variance_per_m: float,
-) -> tuple[Pose, np.ndarray]:
-    """EKF prediction (sec. 3.1 eqs. (5)-(6)) over one elementary motion's encoder increments."""
-    left, right = part.encoder_left_m, part.encoder_right_m
-    return predict(
-        estimate,
-        covariance,
-        left,
-        right,
-        wheel_base_m,
-        encoder_noise=proportional_encoder_noise(left, right, variance_per_m),
     )
 
 

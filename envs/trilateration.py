@@ -26,7 +26,7 @@ from scipy.special import ndtr
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
-from sonar_gym.localization.kim_ekf import ekf_update, predict
+from sonar_gym.localization.kim_ekf import ekf_update
 from sonar_gym.localization.wu_tsai import (
     PAPER_COUNTER_RATE_HZ,
     PAPER_REPEATED_FIXES,
@@ -36,8 +36,9 @@ from sonar_gym.localization.wu_tsai import (
     localize,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.odometry import OdometryConfig, predict_step
 from sonar_gym.pose import FloatArray, Pose
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
+from sonar_gym.robot import DifferentialDriveRobot, MotionResult
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import WU_TSAI_RECEIVERS_XY, BeaconRanger
@@ -421,7 +422,7 @@ class TrilaterationEnv(SonarEnv):
     ``wall_clearance_m`` from the walls. The robot drives each leg by dead reckoning (turn,
     then straight, planned from its estimated pose) and its odometry drifts: encoder noise,
     wheel-radius errors drawn per episode, occasional wheel slip
-    (:class:`~sonar_gym.robot.OdometryNoise`). At the end of each leg, a decision point, the
+    (:class:`~sonar_gym.odometry.OdometryConfig`). At the end of each leg, a decision point, the
     agent chooses how many fixes to take. Why the choice matters: dead reckoning drifts
     between decision points; one fix is noisy (counter quantisation, jitter) and noisier away
     from below the transmitters (eqs (7)-(8) multiply range errors by about ``d / a``); each
@@ -656,7 +657,7 @@ class TrilaterationEnv(SonarEnv):
         scale_left, scale_right = np.clip(
             rng.normal(0.0, config.wheel_scale_error_std, 2), -0.05, 0.05
         )
-        noise = OdometryNoise(
+        noise = OdometryConfig(
             encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,
             scale_error_left=float(scale_left),
             scale_error_right=float(scale_right),
@@ -750,22 +751,14 @@ class TrilaterationEnv(SonarEnv):
         self, pose: Pose, covariance: FloatArray, part: MotionResult, wheel_base: float
     ) -> FloatArray:
         config = self.config
-        d_left, d_right = part.encoder_left_m, part.encoder_right_m
-        encoder_variance = config.encoder_std_m_per_sqrt_m**2
-        scale_variance = config.wheel_scale_error_std**2
-        wheel_noise = np.diag(
-            [
-                encoder_variance * abs(d_right) + scale_variance * d_right**2,
-                encoder_variance * abs(d_left) + scale_variance * d_left**2,
-            ]
-        )
-        _, propagated = predict(
+        _, propagated = predict_step(
             pose,
             covariance,
-            d_left,
-            d_right,
+            part.encoder_left_m,
+            part.encoder_right_m,
             wheel_base,
-            encoder_noise=wheel_noise,
+            config.encoder_std_m_per_sqrt_m**2,
+            config.wheel_scale_error_std**2,
             integration="midpoint",
         )
         return propagated
