@@ -32,8 +32,7 @@ from sonar_gym.localization.wu_tsai import (
     PAPER_REPEATED_FIXES,
     PAPER_TEMPERATURE_C,
     Fix,
-    average_fixes,
-    localize,
+    localize_repeated,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.odometry import OdometryConfig, predict_step
@@ -768,34 +767,36 @@ class TrilaterationEnv(SonarEnv):
         config = self.config
         n_fixes = self.fix_count(action)
         dead_reckoning = episode.estimate
-        fixes: list[Fix] = []
         failure = NO_FIX
-        with self._timed("sensing"):
-            measurements = [
-                self.ranger.measure(
-                    episode.world, episode.true_pose, self.np_random, self.transmitter_frame.names
+        n_ok = 0
+        fix_pose: Pose | None = None
+        measurement_time_s = 0.0
+        if n_fixes > 0:
+            with self._timed("sensing"):
+                truth = episode.true_pose
+                rounds = self.ranger.measure_route(
+                    episode.world,
+                    np.repeat(truth.position[None, :], n_fixes, axis=0),
+                    self.np_random,
+                    self.transmitter_frame.names,
+                    headings_rad=np.full(n_fixes, truth.theta),
                 )
-                for _ in range(n_fixes)
-            ]
-        with self._timed("localization"):
-            for measurement in measurements:
-                result = localize(
-                    measurement.distances,
+            measurement_time_s = float(np.sum(rounds.round_durations_s))
+            with self._timed("localization"):
+                repeated = localize_repeated(
+                    rounds.distances,
                     self.transmitter_frame.spacing_m,
                     self.ranger.receivers_xy,
                     z_sign=-1,
                 )
-                if result.fix is not None:
-                    fixes.append(result.fix)
-                else:
-                    failure = result.status
-            fix_pose: Pose | None = None
-            if fixes:
-                averaged = average_fixes(fixes)  # eqs (12)-(16), circular mean of headings
-                fix_pose = self.transmitter_frame.to_world(averaged.pose)
-                episode.last_fix = averaged
-                self._correct(episode, fix_pose, len(fixes))
-        measurement_time_s = float(sum(m.duration_s for m in measurements))
+                n_ok = int(np.count_nonzero(repeated.ok))
+                if n_ok < n_fixes:
+                    failure = str(repeated.statuses[~repeated.ok][-1])
+                averaged = repeated.average()  # eqs (12)-(16), circular mean of headings
+                if averaged is not None:
+                    fix_pose = self.transmitter_frame.to_world(averaged.pose)
+                    episode.last_fix = averaged
+                    self._correct(episode, fix_pose, n_ok)
         episode.sensing_time_s += measurement_time_s
         episode.elapsed_time_s += measurement_time_s
         episode.decisions += 1
@@ -813,9 +814,9 @@ class TrilaterationEnv(SonarEnv):
         info = self._info(
             STATUS_OK if done else STATUS_RUNNING,
             n_fixes=n_fixes,
-            fix_status=STATUS_OK if fixes else failure,
+            fix_status=STATUS_OK if n_ok else failure,
             measurement_time_s=measurement_time_s,
-            n_fixes_ok=len(fixes),
+            n_fixes_ok=n_ok,
             dead_reckoning=dead_reckoning,
             fix_pose=fix_pose,
         )
