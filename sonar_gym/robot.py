@@ -33,7 +33,7 @@ import numpy as np
 import pymunk
 
 from sonar_gym.odometry import OdometryConfig, arc_displacements, integrate_substeps
-from sonar_gym.pose import Pose, angle_difference, wrap_angle
+from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.world import STATIC_ONLY, World
 
 Integration = Literal["euler", "midpoint", "arc"]
@@ -244,11 +244,12 @@ class DifferentialDriveRobot:
         start = world.robot_pose
         odometry_start = start if self.odometry_pose is None else self.odometry_pose
 
-        displacements = arc_displacements(start, ground[0], ground[1], wheel_base, n)
         if _path_is_clear(world, start, ground, wheel_base):
-            true_pose, collided, path_length = _free_motion(world, start, displacements)
+            true_pose, collided, path_length = _free_motion(world, start, ground, wheel_base, n)
         else:
-            outcome = world.move_robot(displacements)
+            outcome = world.move_robot(
+                arc_displacements(start, ground[0], ground[1], wheel_base, n)
+            )
             true_pose, collided, path_length = outcome.pose, outcome.collided, outcome.path_length_m
 
         odometry = integrate_substeps(
@@ -353,10 +354,10 @@ def _path_is_clear(world: World, start: Pose, ground: np.ndarray, wheel_base_m: 
     if turned > math.pi:
         return False
     arc_length = 0.5 * abs(float(ground[0] + ground[1]))
-    end = arc_displacements(start, float(ground[0]), float(ground[1]), wheel_base_m, 1)[0]
+    end = integrate_substeps(start, float(ground[0]), float(ground[1]), wheel_base_m, 1, "arc")
     radius = world.robot_radius + arc_length * turned / 8.0 + PATH_CLEARANCE_M
     a = (start.x, start.y)
-    b = (start.x + float(end[0]), start.y + float(end[1]))
+    b = (end.x, end.y)
     box = pymunk.BB(
         min(a[0], b[0]) - radius,
         min(a[1], b[1]) - radius,
@@ -405,18 +406,25 @@ def _segment_distance(
     )
 
 
-def _free_motion(world: World, start: Pose, displacements: np.ndarray) -> tuple[Pose, bool, float]:
-    """The outcome of :meth:`World.move_robot` when no contact can occur, without stepping.
+def _free_motion(
+    world: World, start: Pose, ground: np.ndarray, wheel_base_m: float, substeps: int
+) -> tuple[Pose, bool, float]:
+    """The outcome of :meth:`World.move_robot` along the arc when no contact can occur.
 
-    With no contact the body integrates the imposed velocities exactly: it ends at the start
-    plus the summed displacements, and its centre travels the summed chord lengths.
+    With no contact the body integrates the imposed velocities exactly: it ends where the arc
+    ends, and its centre travels the ``n`` chords of the substeps, each ``|d / n|
+    sinc(delta / 2)`` long (``d`` the centre's arc length, ``delta`` the substep's turn).
     """
-    moved = np.sum(displacements, axis=0)
-    pose = Pose(
-        start.x + float(moved[0]), start.y + float(moved[1]), wrap_angle(start.theta + moved[2])
-    )
+    left, right = float(ground[0]), float(ground[1])
+    pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
     world.set_robot_pose(pose)
-    path_length = float(np.sum(np.hypot(displacements[:, 0], displacements[:, 1])))
+    half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
+    sinc = (
+        1.0 - half_turn * half_turn / 6.0
+        if abs(half_turn) < 1e-4
+        else math.sin(half_turn) / half_turn
+    )
+    path_length = abs(0.5 * (left + right)) * abs(sinc)
     return pose, False, path_length
 
 
