@@ -107,7 +107,8 @@ def integrate_substeps(
     Each substep rolls ``d_left_m / n`` and ``d_right_m / n`` and turns by ``delta =
     (d_right_m - d_left_m) / (l n)``; substep ``k`` heads at ``theta + k delta`` (``"euler"``)
     or ``theta + (k + 1/2) delta`` (``"midpoint"``, ``"arc"``; ``"arc"`` also shortens each
-    chord by ``sinc(delta / 2)``). The position is the sum of the ``n`` chords.
+    chord by ``sinc(delta / 2)``). The position is the sum of the ``n`` chords, taken in closed
+    form.
 
     Args:
         pose: pose before the command ({W}; metres, radians).
@@ -130,10 +131,14 @@ def integrate_substeps(
     if integration == "arc":
         half = 0.5 * delta
         distance *= 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
-    headings = pose.theta + (np.arange(n) + lead) * delta
+    # sum_k cos(theta + (k + lead) delta) = sin(n delta / 2) / sin(delta / 2) cos(theta + c delta)
+    # with c = lead + (n - 1) / 2 (the Dirichlet kernel; the same for sin)
+    half = 0.5 * delta
+    gain = n if abs(half) < 1e-300 else math.sin(n * half) / math.sin(half)
+    heading = pose.theta + (lead + 0.5 * (n - 1)) * delta
     return Pose(
-        pose.x + distance * float(np.sum(np.cos(headings))),
-        pose.y + distance * float(np.sum(np.sin(headings))),
+        pose.x + distance * gain * math.cos(heading),
+        pose.y + distance * gain * math.sin(heading),
         pose.theta + n * delta,
     )
 

@@ -346,10 +346,13 @@ def _resolve_headings(
 
 def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
     """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer, zero outside the grid."""
-    padded = np.pad(volume, ((0, 0), (1, 1), (0, 0)))
-    along_x = padded[:, :-2] + 2 * padded[:, 1:-1] + padded[:, 2:]
-    padded = np.pad(along_x, ((0, 0), (0, 0), (1, 1)))
-    return padded[:, :, :-2] + 2 * padded[:, :, 1:-1] + padded[:, :, 2:]
+    along_x = 2 * volume
+    along_x[:, 1:] += volume[:, :-1]
+    along_x[:, :-1] += volume[:, 1:]
+    smoothed = 2 * along_x
+    smoothed[:, :, 1:] += along_x[:, :, :-1]
+    smoothed[:, :, :-1] += along_x[:, :, 1:]
+    return smoothed
 
 
 # -- voting -------------------------------------------------------------------------------------

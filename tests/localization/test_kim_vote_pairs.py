@@ -70,3 +70,14 @@ def test_pairs_keep_every_pair_that_can_vote_inside_the_circle(grid: OccupancyGr
         inside = np.argwhere(np.hypot(*(votes - centre).transpose(2, 0, 1)) <= radius)
         assert {(int(j), int(k)) for j, k in inside} <= kept
     assert len(kept) < readings.range_m.size * anchors.shape[0] / 2
+
+
+def test_binomial_smoothing_matches_the_padded_reference() -> None:
+    volume = np.random.default_rng(5).integers(0, 9, size=(4, 7, 5))
+    padded = np.pad(volume, ((0, 0), (1, 1), (1, 1)))
+    kernel = np.outer([1, 2, 1], [1, 2, 1])
+    expected = np.zeros_like(volume)
+    for dx in range(3):
+        for dy in range(3):
+            expected += kernel[dx, dy] * padded[:, dx : dx + 7, dy : dy + 5]
+    assert np.array_equal(kim._binomial_smooth(volume), expected)
