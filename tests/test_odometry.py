@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sonar_gym import robot as robot_module
-from sonar_gym.localization.kim_ekf import predict, proportional_encoder_noise
+from sonar_gym.localization.ekf import predict, proportional_encoder_noise
 from sonar_gym.odometry import (
     OdometryConfig,
     arc_displacements,
