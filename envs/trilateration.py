@@ -14,7 +14,6 @@ covariance-weighted correction (:func:`quantised_range_error`,
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -43,9 +42,10 @@ from sonar_gym.localization.wu_tsai import (
     localize_repeated,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
-from sonar_gym.odometry import OdometryConfig, predict_step
+from sonar_gym.odometry import OdometryConfig, propagate_covariance
+from sonar_gym.polyline import densify, draw_equal_legs
 from sonar_gym.pose import FloatArray, Pose
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult
+from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
@@ -58,7 +58,6 @@ STATUS_OK = "ok"
 NO_FIX = "no_fix"
 TIME_SINCE_FIX_SCALE_S = 10.0
 """Time that maps to 0.5 in the ``time_since_fix`` feature, seconds."""
-_WAYPOINT_TRIES = 200
 
 
 # --------------------------------------------------------------------------------------------
@@ -444,7 +443,14 @@ class TrilaterationEnv(SonarEnv):
             slip_probability_per_m=config.slip_probability_per_m,
             slip_fraction_max=config.slip_fraction_max,
         )
-        waypoints = self._sample_route(world, rng)
+        waypoints = draw_equal_legs(
+            world,
+            rng,
+            config.n_decision_points,
+            config.leg_length_m,
+            config.wall_clearance_m,
+            fallback_towards=self._centre,
+        )
         start, first = waypoints[0], waypoints[1]
         true_start = Pose(
             float(start[0]), float(start[1]), math.atan2(first[1] - start[1], first[0] - start[0])
@@ -470,35 +476,6 @@ class TrilaterationEnv(SonarEnv):
         self._drive_next_leg(self._episode)
         return self._info(STATUS_RUNNING, n_fixes=0, fix_status=NO_FIX, measurement_time_s=0.0)
 
-    def _sample_route(self, world: World, rng: np.random.Generator) -> FloatArray:
-        """``n_decision_points + 1`` points in {W}: the start and the end of every leg."""
-        config = self.config
-        clearance = config.wall_clearance_m
-        margin = world.robot_radius + clearance
-        start = world.sample_free_pose(rng, clearance=clearance)
-        points = [start.position]
-        leg = config.leg_length_m
-        for _ in range(config.n_decision_points):
-            here = points[-1]
-            for _ in range(_WAYPOINT_TRIES):
-                direction = float(rng.uniform(-math.pi, math.pi))
-                candidate = here + leg * np.array([math.cos(direction), math.sin(direction)])
-                if self._leg_is_free(world, here, candidate, margin):
-                    break
-            else:  # head for the most open direction: towards the middle of the free space
-                towards = self._centre - here
-                towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
-                candidate = here + leg * towards
-            points.append(candidate)
-        return np.array(points)
-
-    @staticmethod
-    def _leg_is_free(world: World, start: FloatArray, end: FloatArray, margin: float) -> bool:
-        samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
-        return all(
-            world.is_free(start + t * (end - start), margin) for t in np.linspace(0.0, 1.0, samples)
-        )
-
     def _drive_next_leg(self, episode: _Episode) -> None:
         """Drive to the next waypoint; dead reckoning and its covariance follow."""
         target = episode.waypoints[episode.decisions + 1]
@@ -507,16 +484,23 @@ class TrilaterationEnv(SonarEnv):
         motion = episode.robot.move_to(
             episode.world, (float(target[0]), float(target[1])), self.np_random
         )
-        covariance = episode.covariance
-        pose = estimate_before
+        parts = motion.parts or (motion,)
+        config = self.config
+        covariance = propagate_covariance(
+            [estimate_before, *(part.odometry_pose for part in parts[:-1])],
+            [(part.encoder_left_m, part.encoder_right_m) for part in parts],
+            episode.covariance,
+            wheel_base,
+            config.encoder_std_m_per_sqrt_m**2,
+            config.wheel_scale_error_std**2,
+            integration="midpoint",
+        )
         drive_time = 0.0
         travelled = 0.0
-        for part in motion.parts or (motion,):
-            covariance = self._propagate(pose, covariance, part, wheel_base)
-            pose = part.odometry_pose
+        for part in parts:
             forward = 0.5 * abs(part.encoder_left_m + part.encoder_right_m)
             turn = abs(part.encoder_right_m - part.encoder_left_m) / wheel_base
-            drive_time += forward / self.config.robot_speed_mps + turn / self.config.turn_rate_rad_s
+            drive_time += forward / config.robot_speed_mps + turn / config.turn_rate_rad_s
             travelled += forward
         episode.true_pose = motion.true_pose
         episode.estimate = motion.odometry_pose
@@ -526,22 +510,6 @@ class TrilaterationEnv(SonarEnv):
         episode.time_since_fix_s += drive_time
         episode.distance_since_fix_m += travelled
         episode.true_trail.append((motion.true_pose.x, motion.true_pose.y))
-
-    def _propagate(
-        self, pose: Pose, covariance: FloatArray, part: MotionResult, wheel_base: float
-    ) -> FloatArray:
-        config = self.config
-        _, propagated = predict_step(
-            pose,
-            covariance,
-            part.encoder_left_m,
-            part.encoder_right_m,
-            wheel_base,
-            config.encoder_std_m_per_sqrt_m**2,
-            config.wheel_scale_error_std**2,
-            integration="midpoint",
-        )
-        return propagated
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
@@ -705,7 +673,7 @@ class TrilaterationEnv(SonarEnv):
         from sonar_gym.render import render_topdown
 
         episode = self._require_episode()
-        points = [*_densify(episode.waypoints, 0.05), *episode.true_trail, *episode.fix_trail]
+        points = [*densify(episode.waypoints, 0.05), *episode.true_trail, *episode.fix_trail]
         return render_topdown(
             self.scenario,
             true_pose=episode.true_pose,
@@ -725,18 +693,6 @@ class TrilaterationEnv(SonarEnv):
         if self._episode is None:
             raise RuntimeError("TrilaterationEnv: call reset() first")
         return self._episode
-
-
-def _densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:
-    """Points every ``spacing_m`` metres along the polyline ``points`` (to draw it as dots)."""
-    dense: list[tuple[float, float]] = []
-    for start, end in itertools.pairwise(points):
-        steps = max(1, math.ceil(float(np.linalg.norm(end - start)) / spacing_m))
-        for t in np.arange(steps) / steps:
-            x, y = start + t * (end - start)
-            dense.append((float(x), float(y)))
-    dense.append((float(points[-1][0]), float(points[-1][1])))
-    return dense
 
 
 def _saturate(value: float, scale: float) -> float:

@@ -261,6 +261,34 @@ def predict_over_motion(
     return pose, p, poses
 
 
+def propagate_covariance(
+    linearisation_poses: Sequence[Pose],
+    increments_m: Sequence[tuple[float, float]],
+    covariance: FloatArray,
+    wheel_base_m: float,
+    variance_per_m: float,
+    scale_variance: float = 0.0,
+    integration: FilterIntegration = "paper",
+) -> FloatArray:
+    """The covariance of :func:`predict_step` over a motion, linearised at given poses.
+
+    Command ``k`` of ``increments_m`` is linearised at ``linearisation_poses[k]`` (e.g. the
+    robot's own odometry before that command) instead of at the filter's prediction.
+    """
+    for pose, (d_left, d_right) in zip(linearisation_poses, increments_m, strict=True):
+        _, covariance = predict_step(
+            pose,
+            covariance,
+            d_left,
+            d_right,
+            wheel_base_m,
+            variance_per_m,
+            scale_variance,
+            integration,
+        )
+    return covariance
+
+
 __all__ = [
     "INTEGRATIONS",
     "FilterIntegration",
@@ -270,5 +298,6 @@ __all__ = [
     "integrate_substeps",
     "predict_over_motion",
     "predict_step",
+    "propagate_covariance",
     "wheel_increment_covariance",
 ]

@@ -125,6 +125,59 @@ def draw_polyline(
                 image[rows[keep] + dr, cols[keep] + dc] = colour
 
 
+def draw_equal_legs(
+    world: World,
+    rng: np.random.Generator,
+    n_legs: int,
+    leg_length_m: float,
+    clearance_m: float,
+    fallback_towards: FloatArray,
+    tries: int = 200,
+) -> FloatArray:
+    """``n_legs + 1`` points in {W}: a free start, then legs of ``leg_length_m`` in random
+    directions that keep the robot ``clearance_m`` beyond its radius from every obstacle.
+
+    A leg that finds no free direction in ``tries`` draws heads for ``fallback_towards`` (the
+    middle of the free space). Every draw comes from ``rng``.
+    """
+    margin = world.robot_radius + clearance_m
+    points = [world.sample_free_pose(rng, clearance=clearance_m).position]
+    for _ in range(n_legs):
+        here = points[-1]
+        for _ in range(tries):
+            direction = float(rng.uniform(-math.pi, math.pi))
+            candidate = here + leg_length_m * np.array([math.cos(direction), math.sin(direction)])
+            if _straight_leg_is_free(world, here, candidate, margin):
+                break
+        else:
+            towards = fallback_towards - here
+            towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
+            candidate = here + leg_length_m * towards
+        points.append(candidate)
+    return np.array(points)
+
+
+def _straight_leg_is_free(
+    world: World, start: FloatArray, end: FloatArray, margin_m: float
+) -> bool:
+    samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
+    return all(
+        world.is_free(start + t * (end - start), margin_m) for t in np.linspace(0.0, 1.0, samples)
+    )
+
+
+def densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:
+    """Points every ``spacing_m`` metres along the polyline ``points`` (to draw it as dots)."""
+    dense: list[tuple[float, float]] = []
+    for start, end in itertools.pairwise(points):
+        steps = max(1, math.ceil(float(np.linalg.norm(end - start)) / spacing_m))
+        for t in np.arange(steps) / steps:
+            x, y = start + t * (end - start)
+            dense.append((float(x), float(y)))
+    dense.append((float(points[-1][0]), float(points[-1][1])))
+    return dense
+
+
 @dataclass(frozen=True)
 class FollowedLeg:
     """The belief after :func:`follow_route`.

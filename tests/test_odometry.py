@@ -149,3 +149,19 @@ def test_a_path_into_a_wall_is_not_clear() -> None:
     assert robot_module._path_is_clear(world, world.robot_pose, np.array([-0.1, 0.1]), 0.4)
     world.set_robot_pose(Pose(0.7995, -1.0, 0.0))
     assert not robot_module._path_is_clear(world, world.robot_pose, np.array([-0.1, 0.1]), 0.4)
+
+
+def test_covariance_linearised_at_given_poses_matches_the_ekf_per_command() -> None:
+    from sonar_gym.odometry import propagate_covariance
+
+    poses = [Pose(0.1 * k, -0.2 * k, 0.3 * k) for k in range(len(COMMANDS))]
+    expected = np.diag([1e-4, 1e-4, 1e-3])
+    for pose, (left, right) in zip(poses, COMMANDS, strict=True):
+        noise = np.diag([3e-5 * abs(right) + 1e-6 * right**2, 3e-5 * abs(left) + 1e-6 * left**2])
+        _, expected = predict(
+            pose, expected, left, right, 0.4, encoder_noise=noise, integration="midpoint"
+        )
+    propagated = propagate_covariance(
+        poses, COMMANDS, np.diag([1e-4, 1e-4, 1e-3]), 0.4, 3e-5, 1e-6, "midpoint"
+    )
+    np.testing.assert_allclose(propagated, expected, rtol=1e-13, atol=1e-18)
