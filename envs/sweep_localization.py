@@ -505,7 +505,7 @@ class SweepLocalizationEnv(SonarEnv):
                 covariance,
                 heading_step_rad=math.radians(self.config.heading_step_deg),
                 max_range_m=self.sonar.transducer.max_range_m,
-                anchor=self.config.anchor,
+                anchor=self.config.anchor,  # type: ignore[arg-type]
             )
 
     def _measurement_covariance(self) -> np.ndarray:

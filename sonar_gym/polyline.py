@@ -215,7 +215,7 @@ def follow_route(
     wheel_base = robot.wheel_base_for(world)
     rolled: list[float] = []
     for target in route.targets_between(*span_m):
-        motion = robot.move_to(world, target, rng, from_pose=estimate)
+        motion = robot.move_to(world, (float(target[0]), float(target[1])), rng, from_pose=estimate)
         increments = [(p.encoder_left_m, p.encoder_right_m) for p in motion.parts or (motion,)]
         estimate, covariance, _ = predict_over_motion(
             estimate, covariance, increments, wheel_base, variance_per_m

@@ -366,11 +366,11 @@ def _path_is_clear(world: World, start: Pose, ground: np.ndarray, wheel_base_m: 
     )
     for shape in world.space.bb_query(box, STATIC_ONLY):
         if isinstance(shape, pymunk.Segment):
-            p, q = tuple(shape.a), tuple(shape.b)
+            p, q = (shape.a.x, shape.a.y), (shape.b.x, shape.b.y)
             gap = _segment_distance(a, b, p, q) - shape.radius
-        elif isinstance(shape, pymunk.Circle):
-            centre = tuple(shape.body.local_to_world(shape.offset))
-            gap = _point_segment_distance(centre, a, b) - shape.radius
+        elif isinstance(shape, pymunk.Circle) and shape.body is not None:
+            centre = shape.body.local_to_world(shape.offset)
+            gap = _point_segment_distance((centre.x, centre.y), a, b) - shape.radius
         else:  # a shape this check does not know: let the physics decide
             return False
         if gap <= radius:
