@@ -3,8 +3,8 @@
 Kim, Lee & Jeong, *Self localization of mobile robot using sonar sensing and map building*.
 This module holds the voting localization of sec. 3.3 and re-exports the rest of the method:
 
-- :mod:`sonar_gym.localization.ekf` (also as ``kim_ekf``): odometry prediction with covariance (sec. 3.1) and
-  the EKF correction (sec. 3.2);
+- :mod:`sonar_gym.localization.ekf` (also as ``kim_ekf``): odometry prediction with
+  covariance (sec. 3.1) and the EKF correction (sec. 3.2);
 - :mod:`sonar_gym.localization.kim_grid`: the occupancy / certainty grid (sec. 2.2) and the
   servo sweeps.
 
