@@ -20,17 +20,11 @@ import numpy as np
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
-from sonar_gym.localization.kim_fix import (
-    fix_covariance,
-    innovation_accepted,
-    vote_around_estimate,
-)
+from sonar_gym.localization.kim_fix import fix_covariance, gated_ekf_update, vote_around_estimate
 from sonar_gym.localization.kim_grid import occupancy_grid_of, sweep_end_points
 from sonar_gym.localization.kim import (
     TABLE_1_TRUE_POSITIONS_M,
     Sweep,
-    VoteLocalization,
-    ekf_update,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.odometry import OdometryConfig
@@ -470,7 +464,16 @@ class SweepLocalizationEnv(SonarEnv):
             scan_points.append(sweep_end_points(sweeps[-1], true_pose)[1])
             episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector
-        result = self._localize(first_estimate, first_covariance, sweeps)
+        with self._timed("localization"):
+            result = vote_around_estimate(
+                self.grid,
+                sweeps,
+                first_estimate,
+                first_covariance,
+                heading_step_rad=math.radians(config.heading_step_deg),
+                max_range_m=self.sonar.transducer.max_range_m,
+                anchor=config.anchor,  # type: ignore[arg-type]
+            )
         info: dict[str, Any] = {"fix_status": result.status}
         episode.last_fix_ok = False
         if result.ok and result.pose is not None and result.last_sweep_pose is not None:
@@ -481,46 +484,20 @@ class SweepLocalizationEnv(SonarEnv):
                 fix_estimated_pose=result.pose.as_array(),
                 fix_measured_pose=result.last_sweep_pose.as_array(),
             )
-            if self._accept(episode, result.last_sweep_pose):
-                episode.estimate, episode.covariance = ekf_update(
-                    episode.estimate,
-                    episode.covariance,
-                    result.last_sweep_pose,
-                    self._measurement_covariance(),
-                )
+            corrected = gated_ekf_update(
+                episode.estimate,
+                episode.covariance,
+                result.last_sweep_pose,
+                fix_covariance(config.fix_position_std_m, math.radians(config.fix_heading_std_deg)),
+                config.innovation_gate,
+            )
+            if corrected is not None:
+                episode.estimate, episode.covariance = corrected
                 episode.distance_since_fix_m = 0.0
                 episode.last_fix_ok = True
             else:
                 info["fix_status"] = "gated"
         return duration_s, info
-
-    def _localize(
-        self, center: Pose, covariance: np.ndarray, sweeps: list[Sweep]
-    ) -> VoteLocalization:
-        with self._timed("localization"):
-            return vote_around_estimate(
-                self.grid,
-                sweeps,
-                center,
-                covariance,
-                heading_step_rad=math.radians(self.config.heading_step_deg),
-                max_range_m=self.sonar.transducer.max_range_m,
-                anchor=self.config.anchor,  # type: ignore[arg-type]
-            )
-
-    def _measurement_covariance(self) -> np.ndarray:
-        return fix_covariance(
-            self.config.fix_position_std_m, math.radians(self.config.fix_heading_std_deg)
-        )
-
-    def _accept(self, episode: _Episode, fix: Pose) -> bool:
-        return innovation_accepted(
-            episode.estimate,
-            episode.covariance,
-            fix,
-            self._measurement_covariance(),
-            self.config.innovation_gate,
-        )
 
     def _drive_to(self, episode: _Episode, station_m: float) -> None:
         """Drive along the route to ``station_m``, steering from the EKF estimate."""

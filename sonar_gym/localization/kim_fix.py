@@ -21,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from sonar_gym.localization.ekf import ekf_update
 from sonar_gym.localization.kim import Anchor, Sweep, VoteLocalization, vote_localize
 from sonar_gym.localization.kim_grid import OccupancyGrid
 from sonar_gym.pose import FloatArray, Pose, angle_difference
@@ -99,7 +100,22 @@ def innovation_accepted(
     return float(innovation @ np.linalg.solve(spread, innovation)) <= gate
 
 
+def gated_ekf_update(
+    estimate: Pose,
+    covariance: FloatArray,
+    fix: Pose,
+    measurement_covariance: FloatArray,
+    gate: float | None,
+) -> tuple[Pose, FloatArray] | None:
+    """The EKF correction of sec. 3.2 with ``fix``, or None if :func:`innovation_accepted`
+    rejects it."""
+    if not innovation_accepted(estimate, covariance, fix, measurement_covariance, gate):
+        return None
+    return ekf_update(estimate, covariance, fix, measurement_covariance)
+
+
 __all__ = [
+    "gated_ekf_update",
     "MAX_HEADING_WINDOW_RAD",
     "MAX_SEARCH_RADIUS_M",
     "MIN_HEADING_WINDOW_RAD",
