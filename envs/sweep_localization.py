@@ -10,7 +10,6 @@ and combined through dead reckoning, feed the voting localization on the known o
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,19 +20,17 @@ import numpy as np
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.localization.kim_fix import fix_covariance, gated_ekf_update, vote_around_estimate
+from sonar_gym.localization.kim_grid import occupancy_grid_of, sweep_end_points
 from sonar_gym.localization.kim import (
     TABLE_1_TRUE_POSITIONS_M,
-    OccupancyGrid,
     Sweep,
-    VoteLocalization,
-    ekf_update,
-    predict,
-    proportional_encoder_noise,
-    vote_localize,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
-from sonar_gym.pose import Pose, angle_difference, wrap_angle
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
+from sonar_gym.odometry import OdometryConfig
+from sonar_gym.polyline import Route, draw_free_route, draw_polyline, follow_route
+from sonar_gym.pose import Pose, wrap_angle
+from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SweptSonar
 from sonar_gym.world import World
@@ -54,12 +51,6 @@ HEADING_STD_SCALE_RAD = math.radians(15.0)
 """Covariance feature: ``sqrt(P_thth) / 15 deg`` (clipped to 1)."""
 DISTANCE_SCALE_M = 2.0
 """Feature: distance driven since the last accepted fix / 2 m (clipped to 1)."""
-MIN_SEARCH_RADIUS_M = 0.1
-MAX_SEARCH_RADIUS_M = 0.6
-MIN_HEADING_WINDOW_RAD = math.radians(3.0)
-MAX_HEADING_WINDOW_RAD = math.radians(30.0)
-_ROUTE_CLEARANCE_M = 0.03
-_ROUTE_MIN_LEG_M = 0.3
 _RUNNING = "running"
 
 
@@ -134,54 +125,6 @@ class SweepLocalizationConfig:
         that the encoders cannot see, and only a fix corrects them.
         """
         return self.encoder_noise_std_m_per_sqrt_m**2 + self.wheel_scale_error**2 / 3.0
-
-
-@dataclass(frozen=True)
-class Route:
-    """A polyline in {W} the robot follows (metres).
-
-    Attributes:
-        vertices: ``(K, 2)`` corner points, the first one the start.
-        cumulative_m: ``(K,)`` route length at each vertex (0 at the start).
-    """
-
-    vertices: np.ndarray
-    cumulative_m: np.ndarray
-
-    @classmethod
-    def through(cls, points: np.ndarray) -> Route:
-        vertices = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        lengths = np.linalg.norm(np.diff(vertices, axis=0), axis=1)
-        return cls(vertices, np.concatenate([[0.0], np.cumsum(lengths)]))
-
-    @property
-    def length_m(self) -> float:
-        return float(self.cumulative_m[-1])
-
-    def point_at(self, s_m: float) -> np.ndarray:
-        """The point at route length ``s_m`` (clipped to the route)."""
-        s = min(max(s_m, 0.0), self.length_m)
-        index = int(np.searchsorted(self.cumulative_m, s, side="right")) - 1
-        index = min(max(index, 0), len(self.vertices) - 2)
-        span = self.cumulative_m[index + 1] - self.cumulative_m[index]
-        fraction = 0.0 if span <= 0.0 else (s - self.cumulative_m[index]) / span
-        return self.vertices[index] + fraction * (self.vertices[index + 1] - self.vertices[index])
-
-    def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
-        """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
-        inner = [
-            v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if start_m < s < stop_m
-        ]
-        return [*inner, self.point_at(stop_m)]
-
-    def heading_at_start(self) -> float:
-        delta = self.vertices[1] - self.vertices[0]
-        return math.atan2(delta[1], delta[0])
-
-    def truncated(self, length_m: float) -> Route:
-        """The first ``length_m`` metres of the route."""
-        keep = [v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if s < length_m]
-        return Route.through(np.array([*keep, self.point_at(length_m)]))
 
 
 @dataclass
@@ -412,7 +355,11 @@ class SweepLocalizationEnv(SonarEnv):
         config = self.config
         rng = self.np_random
         world = World(self._scenario, temperature_c=config.temperature_c)
-        route = self._table1_route if config.route == "table1" else self._random_route(world, rng)
+        route = (
+            self._table1_route
+            if config.route == "table1"
+            else draw_free_route(world, rng, config.route_length_m)
+        )
         start = Pose(
             float(route.vertices[0, 0]), float(route.vertices[0, 1]), route.heading_at_start()
         )
@@ -420,7 +367,7 @@ class SweepLocalizationEnv(SonarEnv):
         scale_left, scale_right = rng.uniform(
             -config.wheel_scale_error, config.wheel_scale_error, 2
         )
-        noise = OdometryNoise(
+        noise = OdometryConfig(
             encoder_std_m_per_sqrt_m=config.encoder_noise_std_m_per_sqrt_m,
             scale_error_left=float(scale_left),
             scale_error_right=float(scale_right),
@@ -448,25 +395,6 @@ class SweepLocalizationEnv(SonarEnv):
         self._episode.true_track.append(start.position)
         self._episode.estimate_track.append(estimate.position)
         return self._info(_RUNNING)
-
-    def _random_route(self, world: World, rng: np.random.Generator) -> Route:
-        """Free waypoints joined by collision-free legs, up to ``route_length_m``."""
-        target = self.config.route_length_m
-        for _ in range(50):
-            points = [world.sample_free_pose(rng, clearance=_ROUTE_CLEARANCE_M).position]
-            length = 0.0
-            for _ in range(200):
-                if length >= target:
-                    return Route.through(np.array(points)).truncated(target)
-                candidate = world.sample_free_pose(rng, clearance=_ROUTE_CLEARANCE_M).position
-                leg = float(np.linalg.norm(candidate - points[-1]))
-                if leg >= _ROUTE_MIN_LEG_M and _leg_is_free(world, points[-1], candidate):
-                    points.append(candidate)
-                    length += leg
-        raise RuntimeError(
-            f"scenario {world.scenario.name!r}: could not draw a free route of "
-            f"{target} m; use route='table1' or a roomier scenario"
-        )
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
@@ -533,10 +461,19 @@ class SweepLocalizationEnv(SonarEnv):
             duration_s += scan.duration_s
             odometry = _relative_pose(first_estimate, episode.estimate)
             sweeps.append(Sweep(scan.angles, scan.ranges, offset, odometry))
-            scan_points.append(_scan_points_world(true_pose, offset, scan.angles, scan.ranges))
+            scan_points.append(sweep_end_points(sweeps[-1], true_pose)[1])
             episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector
-        result = self._localize(first_estimate, first_covariance, sweeps)
+        with self._timed("localization"):
+            result = vote_around_estimate(
+                self.grid,
+                sweeps,
+                first_estimate,
+                first_covariance,
+                heading_step_rad=math.radians(config.heading_step_deg),
+                max_range_m=self.sonar.transducer.max_range_m,
+                anchor=config.anchor,  # type: ignore[arg-type]
+            )
         info: dict[str, Any] = {"fix_status": result.status}
         episode.last_fix_ok = False
         if result.ok and result.pose is not None and result.last_sweep_pose is not None:
@@ -547,89 +484,37 @@ class SweepLocalizationEnv(SonarEnv):
                 fix_estimated_pose=result.pose.as_array(),
                 fix_measured_pose=result.last_sweep_pose.as_array(),
             )
-            if self._accept(episode, result.last_sweep_pose):
-                episode.estimate, episode.covariance = ekf_update(
-                    episode.estimate,
-                    episode.covariance,
-                    result.last_sweep_pose,
-                    self._measurement_covariance(),
-                )
+            corrected = gated_ekf_update(
+                episode.estimate,
+                episode.covariance,
+                result.last_sweep_pose,
+                fix_covariance(config.fix_position_std_m, math.radians(config.fix_heading_std_deg)),
+                config.innovation_gate,
+            )
+            if corrected is not None:
+                episode.estimate, episode.covariance = corrected
                 episode.distance_since_fix_m = 0.0
                 episode.last_fix_ok = True
             else:
                 info["fix_status"] = "gated"
         return duration_s, info
 
-    def _localize(
-        self, center: Pose, covariance: np.ndarray, sweeps: list[Sweep]
-    ) -> VoteLocalization:
-        config = self.config
-        position_spread = math.sqrt(max(float(np.linalg.eigvalsh(covariance[:2, :2])[-1]), 0.0))
-        radius = float(
-            np.clip(
-                3.0 * position_spread + self.grid.cell_size_m,
-                MIN_SEARCH_RADIUS_M,
-                MAX_SEARCH_RADIUS_M,
-            )
-        )
-        step = math.radians(config.heading_step_deg)
-        window = float(
-            np.clip(
-                3.0 * math.sqrt(max(covariance[2, 2], 0.0)) + step,
-                MIN_HEADING_WINDOW_RAD,
-                MAX_HEADING_WINDOW_RAD,
-            )
-        )
-        with self._timed("localization"):
-            return vote_localize(
-                self.grid,
-                sweeps,
-                search_center=center,
-                search_radius=radius,
-                heading_step_rad=step,
-                heading_window_rad=window,
-                max_range_m=self.sonar.transducer.max_range_m,
-                anchor=config.anchor,  # type: ignore[arg-type]
-                return_vote_map=False,
-            )
-
-    def _measurement_covariance(self) -> np.ndarray:
-        position_var = self.config.fix_position_std_m**2
-        return np.diag(
-            [position_var, position_var, math.radians(self.config.fix_heading_std_deg) ** 2]
-        )
-
-    def _accept(self, episode: _Episode, fix: Pose) -> bool:
-        gate = self.config.innovation_gate
-        if gate is None:
-            return True
-        innovation = np.array(
-            [
-                fix.x - episode.estimate.x,
-                fix.y - episode.estimate.y,
-                angle_difference(fix.theta, episode.estimate.theta),
-            ]
-        )
-        spread = episode.covariance + self._measurement_covariance()
-        return float(innovation @ np.linalg.solve(spread, innovation)) <= gate
-
     def _drive_to(self, episode: _Episode, station_m: float) -> None:
         """Drive along the route to ``station_m``, steering from the EKF estimate."""
         if station_m <= episode.progress_m:
             return
-        wheel_base = episode.robot.wheel_base_for(episode.world)
-        variance_per_m = self.config.ekf_variance_per_m
-        for target in episode.route.targets_between(episode.progress_m, station_m):
-            motion = episode.robot.move_to(
-                episode.world, target, self.np_random, from_pose=episode.estimate
-            )
-            for part in motion.parts or (motion,):
-                episode.estimate, episode.covariance = _predicted(
-                    episode.estimate, episode.covariance, part, wheel_base, variance_per_m
-                )
-                episode.distance_since_fix_m += 0.5 * (
-                    abs(part.encoder_left_m) + abs(part.encoder_right_m)
-                )
+        leg = follow_route(
+            episode.robot,
+            episode.world,
+            episode.route,
+            (episode.progress_m, station_m),
+            episode.estimate,
+            episode.covariance,
+            self.config.ekf_variance_per_m,
+            self.np_random,
+        )
+        episode.estimate, episode.covariance = leg.estimate, leg.covariance
+        episode.distance_since_fix_m = sum((episode.distance_since_fix_m, *leg.rolled_m))
         episode.progress_m = station_m
         episode.true_track.append(episode.world.robot_pose.position)
         episode.estimate_track.append(episode.estimate.position)
@@ -723,9 +608,9 @@ class SweepLocalizationEnv(SonarEnv):
         def to_pixel(xy: np.ndarray) -> tuple[int, int]:
             return world_to_pixel(self._scenario, xy)
 
-        _draw_polyline(image, episode.route.vertices, to_pixel, (120, 120, 255))
-        _draw_polyline(image, np.array(episode.true_track), to_pixel, (40, 160, 40))
-        _draw_polyline(image, np.array(episode.estimate_track), to_pixel, (216, 27, 156))
+        draw_polyline(image, episode.route.vertices, to_pixel, (120, 120, 255))
+        draw_polyline(image, np.array(episode.true_track), to_pixel, (40, 160, 40))
+        draw_polyline(image, np.array(episode.estimate_track), to_pixel, (216, 27, 156))
         return image
 
     def _require_episode(self) -> _Episode:
@@ -734,69 +619,11 @@ class SweepLocalizationEnv(SonarEnv):
         return self._episode
 
 
-def occupancy_grid_of(scenario: Scenario, cell_size_m: float = 0.05) -> OccupancyGrid:
-    """The known map (sec. 2.2): mapped room walls, walls, box sides and cylinders on a grid.
-
-    The grid covers ``scenario.bounds`` with ``cell_size_m`` cells (5 cm, sec. 4.1).
-    """
-    segments: list[tuple[tuple[float, float], tuple[float, float]]] = []
-    if scenario.room is not None:
-        corners = scenario.room.corners
-        segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
-    segments += [(wall.a, wall.b) for wall in scenario.walls if wall.mapped]
-    for box in scenario.boxes:
-        if box.mapped:
-            corners = box.corners
-            segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
-    circles = [(c.center[0], c.center[1], c.radius) for c in scenario.cylinders if c.mapped]
-    (x_min, y_min), (x_max, y_max) = scenario.bounds
-    return OccupancyGrid.from_segments(
-        np.array(segments, dtype=np.float64).reshape(-1, 2, 2),
-        np.array(circles, dtype=np.float64).reshape(-1, 3),
-        (x_min, y_min, x_max, y_max),
-        cell_size_m,
-    )
-
-
-def _predicted(
-    estimate: Pose,
-    covariance: np.ndarray,
-    part: MotionResult,
-    wheel_base_m: float,
-    variance_per_m: float,
-) -> tuple[Pose, np.ndarray]:
-    """EKF prediction (sec. 3.1 eqs. (5)-(6)) over one elementary motion's encoder increments."""
-    left, right = part.encoder_left_m, part.encoder_right_m
-    return predict(
-        estimate,
-        covariance,
-        left,
-        right,
-        wheel_base_m,
-        encoder_noise=proportional_encoder_noise(left, right, variance_per_m),
-    )
-
-
 def _relative_pose(reference: Pose, pose: Pose) -> Pose:
     """``pose`` expressed in the frame of ``reference`` (both in {W})."""
     dx, dy = pose.x - reference.x, pose.y - reference.y
     c, s = math.cos(reference.theta), math.sin(reference.theta)
     return Pose(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
-
-
-def _scan_points_world(
-    pose: Pose, sensor_offset: tuple[float, float], angles: np.ndarray, ranges: np.ndarray
-) -> np.ndarray:
-    hit = np.isfinite(ranges)
-    sensor = pose.transform_point(sensor_offset)
-    directions = angles[hit] + pose.theta
-    return np.stack(
-        [
-            sensor[0] + ranges[hit] * np.cos(directions),
-            sensor[1] + ranges[hit] * np.sin(directions),
-        ],
-        axis=1,
-    )
 
 
 def _binned_ranges(normalised_ranges: np.ndarray | None, n_bins: int) -> np.ndarray:
@@ -810,31 +637,11 @@ def _binned_ranges(normalised_ranges: np.ndarray | None, n_bins: int) -> np.ndar
     return bins
 
 
-def _leg_is_free(world: World, start: np.ndarray, stop: np.ndarray) -> bool:
-    """Whether the robot disc (plus a margin) can drive straight from ``start`` to ``stop``."""
-    length = float(np.linalg.norm(stop - start))
-    count = max(2, math.ceil(length / 0.02) + 1)
-    radius = world.robot_radius + _ROUTE_CLEARANCE_M
-    return all(
-        world.is_free(start + f * (stop - start), radius) for f in np.linspace(0.0, 1.0, count)
-    )
-
-
-def _draw_polyline(
-    image: np.ndarray, points: np.ndarray, to_pixel: Any, colour: tuple[int, int, int]
-) -> None:
-    """Paint a 2-pixel polyline through world ``points`` onto ``image`` in place."""
-    if len(points) < 2:
-        return
-    height, width = image.shape[:2]
-    for start, stop in itertools.pairwise(points):
-        (r0, c0), (r1, c1) = to_pixel(start), to_pixel(stop)
-        count = max(abs(r1 - r0), abs(c1 - c0), 1) + 1
-        rows = np.rint(np.linspace(r0, r1, count)).astype(int)
-        cols = np.rint(np.linspace(c0, c1, count)).astype(int)
-        for dr in (0, 1):
-            for dc in (0, 1):
-                keep = (
-                    (rows + dr >= 0) & (rows + dr < height) & (cols + dc >= 0) & (cols + dc < width)
-                )
-                image[rows[keep] + dr, cols[keep] + dc] = colour
+__all__ = [
+    "SECTOR_CENTRES_RAD",
+    "SECTOR_NAMES",
+    "Route",
+    "SweepLocalizationConfig",
+    "SweepLocalizationEnv",
+    "occupancy_grid_of",
+]

@@ -6,15 +6,14 @@ Theorem 2); ``n`` repeated fixes are averaged (eqs (12)-(16), with the circular 
 headings). The robot crosses the room by dead reckoning; at each decision point the agent
 chooses ``n`` (0 keeps dead reckoning), trading pose error against measurement time.
 
-Beside the environment, the module holds the small models it needs to describe a fix's
-uncertainty to the agent and to the optional covariance-weighted correction:
-:func:`quantised_range_error`, :func:`predicted_fix_covariance` and
-:class:`TransmitterFrame`.
+The models that describe a fix's uncertainty to the agent and weight it in the optional
+covariance-weighted correction (:func:`quantised_range_error`,
+:func:`predicted_fix_covariance`, :class:`TransmitterFrame`) live in
+:mod:`sonar_gym.localization.wu_tsai_models`; they are re-exported here.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,25 +21,34 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from scipy.special import ndtr
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
-from sonar_gym.localization.kim_ekf import ekf_update, predict
+from sonar_gym.localization.ekf import ekf_update
+from sonar_gym.localization.wu_tsai_models import (
+    RangeErrorModel,
+    TransmitterFrame,
+    heading_std_rad,
+    position_std_m,
+    predicted_fix_covariance,
+    quantised_range_error,
+    rotate_covariance,
+)
 from sonar_gym.localization.wu_tsai import (
     PAPER_COUNTER_RATE_HZ,
     PAPER_REPEATED_FIXES,
     PAPER_TEMPERATURE_C,
     Fix,
-    average_fixes,
-    localize,
+    localize_repeated,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
+from sonar_gym.odometry import OdometryConfig, propagate_covariance
+from sonar_gym.polyline import densify, draw_equal_legs
 from sonar_gym.pose import FloatArray, Pose
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult, OdometryNoise
-from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
-from sonar_gym.sonar.ranging import WU_TSAI_RECEIVERS_XY, BeaconRanger
+from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/Trilateration-v0"
@@ -50,8 +58,6 @@ STATUS_OK = "ok"
 NO_FIX = "no_fix"
 TIME_SINCE_FIX_SCALE_S = 10.0
 """Time that maps to 0.5 in the ``time_since_fix`` feature, seconds."""
-_WAYPOINT_TRIES = 200
-_TRANSMITTER_FRAME_TOLERANCE = 1e-6
 
 
 # --------------------------------------------------------------------------------------------
@@ -153,232 +159,6 @@ class TrilaterationConfig:
 
 
 # --------------------------------------------------------------------------------------------
-# Uncertainty models
-# --------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class RangeErrorModel:
-    """Error of one counter-quantised, jittered one-way range (metres^2).
-
-    Attributes:
-        total_variance_m2: variance of the range error over jitter and over the position of the
-            true distance within a counter step.
-        persistent_variance_m2: the part that repeats when the same distance is measured again
-            (the conditional mean of the truncation error given the distance); averaging ``n``
-            repeated fixes cannot remove it.
-    """
-
-    total_variance_m2: float
-    persistent_variance_m2: float
-
-    def variance_of_mean(self, n: int) -> float:
-        """Variance of the mean of ``n`` repeated ranges of one distance, m^2 (``n >= 1``)."""
-        independent = self.total_variance_m2 - self.persistent_variance_m2
-        return self.persistent_variance_m2 + independent / n
-
-    def averaging_factor(self, n: int) -> float:
-        """``variance_of_mean(n) / variance_of_mean(1)``: how much ``n`` fixes shrink a variance."""
-        if self.total_variance_m2 <= 0.0:
-            return 1.0 / n
-        return self.variance_of_mean(n) / self.total_variance_m2
-
-
-def quantised_range_error(
-    noise_std_m: float, quantum_m: float, n_phases: int = 512
-) -> RangeErrorModel:
-    """Moments of ``q floor(d / q + nu / q) - d`` with ``nu ~ N(0, noise_std_m^2)``.
-
-    The distance's phase ``f = frac(d / q)`` is taken uniform on [0, 1). Given ``f`` the error
-    has the mean ``b(f) = q (E[floor(f + nu / q)] - f)``, which a repeated measurement of the same
-    distance repeats; its variance over ``f`` is the persistent part. With no jitter the whole
-    truncation error (variance ``q^2 / 12``) is persistent; with jitter much larger than ``q``
-    it is all independent, variance ``noise^2 + q^2 / 12``. The constant mean ``-q / 2`` of
-    truncation is left out: a common shift of every distance barely moves ``x`` and ``y``
-    (eqs (7)-(8) take differences of squared distances).
-
-    Args:
-        noise_std_m: standard deviation of the timing jitter as a distance, metres (>= 0).
-        quantum_m: range step of one counter period, metres (>= 0; 0 = no counter).
-        n_phases: phases ``f`` of the numerical average.
-    """
-    if not (math.isfinite(noise_std_m) and noise_std_m >= 0.0):
-        raise ValueError(f"argument 'noise_std_m' must be >= 0 metres; got {noise_std_m!r}")
-    if not (math.isfinite(quantum_m) and quantum_m >= 0.0):
-        raise ValueError(f"argument 'quantum_m' must be >= 0 metres; got {quantum_m!r}")
-    if quantum_m == 0.0:
-        return RangeErrorModel(noise_std_m**2, 0.0)
-    phases = (np.arange(n_phases) + 0.5) / n_phases
-    if noise_std_m == 0.0:
-        steps = np.zeros((n_phases, 1))
-        weights = np.ones((n_phases, 1))
-        offsets = np.zeros(1)
-    else:
-        spread = noise_std_m / quantum_m
-        reach = math.ceil(8.0 * spread) + 1
-        offsets = np.arange(-reach, reach + 1, dtype=np.float64)
-        # P(floor(f + z) = k) = Phi((k + 1 - f) / s) - Phi((k - f) / s), z ~ N(0, s^2)
-        upper = ndtr((offsets[None, :] + 1.0 - phases[:, None]) / spread)
-        lower = ndtr((offsets[None, :] - phases[:, None]) / spread)
-        weights = upper - lower
-        steps = np.broadcast_to(offsets, weights.shape)
-    error_steps = steps - phases[:, None]  # error in quanta for each (phase, floor value)
-    conditional_mean = np.sum(weights * error_steps, axis=1)
-    conditional_square = np.sum(weights * error_steps**2, axis=1)
-    total = float(np.mean(conditional_square) - np.mean(conditional_mean) ** 2)
-    persistent = float(np.var(conditional_mean))
-    q2 = quantum_m * quantum_m
-    return RangeErrorModel(total * q2, min(persistent, total) * q2)
-
-
-@dataclass(frozen=True)
-class TransmitterFrame:
-    """The paper's reference frame {T} placed in the world {W}.
-
-    The first three emitters of the scenario are the paper's transmitters at ``[0, 0, 0]``,
-    ``[a, 0, 0]`` and ``[0, a, 0]`` (Theorem 2). {T} has its origin at the first, its x-axis
-    towards the second, its y-axis towards the third and z up (Fig. 4), so a point at height
-    ``h`` above the floor has ``z = h - ceiling`` in {T}.
-
-    Attributes:
-        origin_xyz: the first transmitter in {W}, metres.
-        rotation_rad: angle of the {T} x-axis from the {W} x-axis, radians.
-        spacing_m: ``a``, metres.
-        names: the three emitters' names, in the order of Theorem 2.
-    """
-
-    origin_xyz: tuple[float, float, float]
-    rotation_rad: float
-    spacing_m: float
-    names: tuple[str, str, str]
-
-    @classmethod
-    def from_scenario(cls, scenario: Scenario) -> TransmitterFrame:
-        """Read and check the transmitters; ``ValueError`` naming ``scenario`` if unusable."""
-        if len(scenario.emitters) < 3:
-            raise ValueError(
-                f"argument 'scenario': {scenario.name!r} needs three emitters (the transmitters at "
-                f"[0,0,0], [a,0,0], [0,a,0] of Wu & Tsai); it has {len(scenario.emitters)}"
-            )
-        first, second, third = (
-            np.asarray(e.position, dtype=np.float64) for e in scenario.emitters[:3]
-        )
-        along_x, along_y = second - first, third - first
-        spacing = float(np.linalg.norm(along_x))
-        tolerance = _TRANSMITTER_FRAME_TOLERANCE * max(1.0, spacing)
-        if (
-            spacing <= 0.0
-            or abs(float(np.linalg.norm(along_y)) - spacing) > tolerance
-            or abs(float(np.dot(along_x, along_y))) > tolerance * spacing
-            or abs(along_x[2]) > tolerance
-            or abs(along_y[2]) > tolerance
-            or float(along_x[0] * along_y[1] - along_x[1] * along_y[0]) <= 0.0
-        ):
-            raise ValueError(
-                f"argument 'scenario': the first three emitters of {scenario.name!r} must sit at "
-                "[0,0,0], [a,0,0], [0,a,0] of a frame with z up (same height, equal spacing, "
-                "a right angle, counter-clockwise seen from above)"
-            )
-        if scenario.robot.sensor_height >= first[2]:
-            raise ValueError(
-                f"argument 'scenario': the receivers (robot.sensor_height = "
-                f"{scenario.robot.sensor_height} m) must be below the transmitters ({first[2]} m)"
-            )
-        return cls(
-            origin_xyz=(float(first[0]), float(first[1]), float(first[2])),
-            rotation_rad=math.atan2(float(along_x[1]), float(along_x[0])),
-            spacing_m=spacing,
-            names=tuple(e.name for e in scenario.emitters[:3]),  # type: ignore[arg-type]
-        )
-
-    def to_world(self, pose_in_t: Pose) -> Pose:
-        """A planar pose in {T} expressed in {W}."""
-        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
-        return Pose(
-            self.origin_xyz[0] + c * pose_in_t.x - s * pose_in_t.y,
-            self.origin_xyz[1] + s * pose_in_t.x + c * pose_in_t.y,
-            pose_in_t.theta + self.rotation_rad,
-        )
-
-    def to_transmitter(self, pose_in_w: Pose) -> Pose:
-        """A planar pose in {W} expressed in {T}."""
-        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
-        dx, dy = pose_in_w.x - self.origin_xyz[0], pose_in_w.y - self.origin_xyz[1]
-        return Pose(c * dx + s * dy, -s * dx + c * dy, pose_in_w.theta - self.rotation_rad)
-
-    def height_in_t(self, height_above_floor_m: float) -> float:
-        """``z`` in {T} of a point ``height_above_floor_m`` above the floor (negative below)."""
-        return height_above_floor_m - self.origin_xyz[2]
-
-    def centroid_xy(self) -> FloatArray:
-        """The centroid of the three transmitters in {W}, metres."""
-        reference = self.to_world(Pose(self.spacing_m / 3.0, self.spacing_m / 3.0, 0.0))
-        return reference.position
-
-
-def predicted_fix_covariance(
-    pose_in_t: Pose,
-    z_m: float,
-    spacing_m: float,
-    range_variance_m2: float,
-    receivers_xy: tuple[tuple[float, float], ...] = WU_TSAI_RECEIVERS_XY,
-) -> FloatArray:
-    """First-order covariance (3x3 over ``[x, y, theta]``, {T}) of one fix by Theorem 2.
-
-    Each receiver ``j`` is placed by eqs (7)-(8): ``x = (d0^2 - d1^2 + a^2) / 2a`` and
-    ``y = (d0^2 - d2^2 + a^2) / 2a``, so with independent range errors of variance ``s^2``
-    its ``(x, y)`` has covariance ``s^2 J J^T`` with ``J = [[d0, -d1, 0], [d0, 0, -d2]] / a``:
-    the error grows with the distances, i.e. away from below the transmitters. The robot's
-    position is the receivers' midpoint and its heading the direction of their baseline
-    (Theorem 2), whose error is the receivers' error across the baseline over its length.
-
-    Args:
-        pose_in_t: the (estimated) robot pose in {T}.
-        z_m: height of the receivers in {T} (negative: below the transmitters), metres.
-        spacing_m: ``a``, metres.
-        range_variance_m2: variance of one range error, m^2.
-        receivers_xy: receiver positions in the robot frame, metres (two, apart).
-    """
-    transmitters = np.array([[0.0, 0.0], [spacing_m, 0.0], [0.0, spacing_m]])
-    receivers = np.array([pose_in_t.transform_point(xy) for xy in receivers_xy])
-    n_receivers = len(receivers)
-    receiver_covariance = np.zeros((2 * n_receivers, 2 * n_receivers))
-    for j, point in enumerate(receivers):
-        d0, d1, d2 = np.sqrt(np.sum((transmitters - point) ** 2, axis=1) + z_m * z_m)
-        ranges_to_xy = np.array([[d0, -d1, 0.0], [d0, 0.0, -d2]]) / spacing_m
-        receiver_covariance[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = (
-            range_variance_m2 * ranges_to_xy @ ranges_to_xy.T
-        )
-    # pose = (midpoint of the receivers, direction of the baseline from the last to the first)
-    baseline = receivers[0] - receivers[-1]
-    length_sq = float(baseline @ baseline)
-    across = np.array([-baseline[1], baseline[0]]) / length_sq
-    jacobian = np.zeros((3, 2 * n_receivers))
-    for j in range(n_receivers):
-        jacobian[0, 2 * j] = jacobian[1, 2 * j + 1] = 1.0 / n_receivers
-    jacobian[2, 0:2] += across
-    jacobian[2, 2 * n_receivers - 2 :] -= across
-    return jacobian @ receiver_covariance @ jacobian.T
-
-
-def rotate_covariance(covariance: FloatArray, angle_rad: float) -> FloatArray:
-    """A 3x3 ``[x, y, theta]`` covariance seen from a frame rotated by ``angle_rad``."""
-    c, s = math.cos(angle_rad), math.sin(angle_rad)
-    rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return rotation @ covariance @ rotation.T
-
-
-def position_std_m(covariance: FloatArray) -> float:
-    """``sqrt(var x + var y)``: the RMS position error a covariance predicts, metres."""
-    return math.sqrt(max(float(covariance[0, 0] + covariance[1, 1]), 0.0))
-
-
-def heading_std_rad(covariance: FloatArray) -> float:
-    """The heading standard deviation a covariance predicts, radians."""
-    return math.sqrt(max(float(covariance[2, 2]), 0.0))
-
-
-# --------------------------------------------------------------------------------------------
 # The environment
 # --------------------------------------------------------------------------------------------
 
@@ -421,7 +201,7 @@ class TrilaterationEnv(SonarEnv):
     ``wall_clearance_m`` from the walls. The robot drives each leg by dead reckoning (turn,
     then straight, planned from its estimated pose) and its odometry drifts: encoder noise,
     wheel-radius errors drawn per episode, occasional wheel slip
-    (:class:`~sonar_gym.robot.OdometryNoise`). At the end of each leg, a decision point, the
+    (:class:`~sonar_gym.odometry.OdometryConfig`). At the end of each leg, a decision point, the
     agent chooses how many fixes to take. Why the choice matters: dead reckoning drifts
     between decision points; one fix is noisy (counter quantisation, jitter) and noisier away
     from below the transmitters (eqs (7)-(8) multiply range errors by about ``d / a``); each
@@ -439,7 +219,7 @@ class TrilaterationEnv(SonarEnv):
       predicted covariance (below). Heading still comes from the two receivers.
 
     The covariances: dead reckoning propagates ``P`` through each motion with the odometry
-    model of Kim et al. sec. 3.1 (:func:`sonar_gym.localization.kim_ekf.predict`), encoder
+    model of Kim et al. sec. 3.1 (:func:`sonar_gym.odometry.predict_step`), encoder
     variance ``encoder_std^2 |d|`` plus ``wheel_scale_error_std^2 d^2`` per wheel and command
     (slip is not modelled: it is what a fix is for). A fix's covariance is
     :func:`predicted_fix_covariance` at the estimated pose with the range variance of
@@ -656,14 +436,21 @@ class TrilaterationEnv(SonarEnv):
         scale_left, scale_right = np.clip(
             rng.normal(0.0, config.wheel_scale_error_std, 2), -0.05, 0.05
         )
-        noise = OdometryNoise(
+        noise = OdometryConfig(
             encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,
             scale_error_left=float(scale_left),
             scale_error_right=float(scale_right),
             slip_probability_per_m=config.slip_probability_per_m,
             slip_fraction_max=config.slip_fraction_max,
         )
-        waypoints = self._sample_route(world, rng)
+        waypoints = draw_equal_legs(
+            world,
+            rng,
+            config.n_decision_points,
+            config.leg_length_m,
+            config.wall_clearance_m,
+            fallback_towards=self._centre,
+        )
         start, first = waypoints[0], waypoints[1]
         true_start = Pose(
             float(start[0]), float(start[1]), math.atan2(first[1] - start[1], first[0] - start[0])
@@ -689,35 +476,6 @@ class TrilaterationEnv(SonarEnv):
         self._drive_next_leg(self._episode)
         return self._info(STATUS_RUNNING, n_fixes=0, fix_status=NO_FIX, measurement_time_s=0.0)
 
-    def _sample_route(self, world: World, rng: np.random.Generator) -> FloatArray:
-        """``n_decision_points + 1`` points in {W}: the start and the end of every leg."""
-        config = self.config
-        clearance = config.wall_clearance_m
-        margin = world.robot_radius + clearance
-        start = world.sample_free_pose(rng, clearance=clearance)
-        points = [start.position]
-        leg = config.leg_length_m
-        for _ in range(config.n_decision_points):
-            here = points[-1]
-            for _ in range(_WAYPOINT_TRIES):
-                direction = float(rng.uniform(-math.pi, math.pi))
-                candidate = here + leg * np.array([math.cos(direction), math.sin(direction)])
-                if self._leg_is_free(world, here, candidate, margin):
-                    break
-            else:  # head for the most open direction: towards the middle of the free space
-                towards = self._centre - here
-                towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
-                candidate = here + leg * towards
-            points.append(candidate)
-        return np.array(points)
-
-    @staticmethod
-    def _leg_is_free(world: World, start: FloatArray, end: FloatArray, margin: float) -> bool:
-        samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
-        return all(
-            world.is_free(start + t * (end - start), margin) for t in np.linspace(0.0, 1.0, samples)
-        )
-
     def _drive_next_leg(self, episode: _Episode) -> None:
         """Drive to the next waypoint; dead reckoning and its covariance follow."""
         target = episode.waypoints[episode.decisions + 1]
@@ -726,16 +484,23 @@ class TrilaterationEnv(SonarEnv):
         motion = episode.robot.move_to(
             episode.world, (float(target[0]), float(target[1])), self.np_random
         )
-        covariance = episode.covariance
-        pose = estimate_before
+        parts = motion.parts or (motion,)
+        config = self.config
+        covariance = propagate_covariance(
+            [estimate_before, *(part.odometry_pose for part in parts[:-1])],
+            [(part.encoder_left_m, part.encoder_right_m) for part in parts],
+            episode.covariance,
+            wheel_base,
+            config.encoder_std_m_per_sqrt_m**2,
+            config.wheel_scale_error_std**2,
+            integration="midpoint",
+        )
         drive_time = 0.0
         travelled = 0.0
-        for part in motion.parts or (motion,):
-            covariance = self._propagate(pose, covariance, part, wheel_base)
-            pose = part.odometry_pose
+        for part in parts:
             forward = 0.5 * abs(part.encoder_left_m + part.encoder_right_m)
             turn = abs(part.encoder_right_m - part.encoder_left_m) / wheel_base
-            drive_time += forward / self.config.robot_speed_mps + turn / self.config.turn_rate_rad_s
+            drive_time += forward / config.robot_speed_mps + turn / config.turn_rate_rad_s
             travelled += forward
         episode.true_pose = motion.true_pose
         episode.estimate = motion.odometry_pose
@@ -746,63 +511,41 @@ class TrilaterationEnv(SonarEnv):
         episode.distance_since_fix_m += travelled
         episode.true_trail.append((motion.true_pose.x, motion.true_pose.y))
 
-    def _propagate(
-        self, pose: Pose, covariance: FloatArray, part: MotionResult, wheel_base: float
-    ) -> FloatArray:
-        config = self.config
-        d_left, d_right = part.encoder_left_m, part.encoder_right_m
-        encoder_variance = config.encoder_std_m_per_sqrt_m**2
-        scale_variance = config.wheel_scale_error_std**2
-        wheel_noise = np.diag(
-            [
-                encoder_variance * abs(d_right) + scale_variance * d_right**2,
-                encoder_variance * abs(d_left) + scale_variance * d_left**2,
-            ]
-        )
-        _, propagated = predict(
-            pose,
-            covariance,
-            d_left,
-            d_right,
-            wheel_base,
-            encoder_noise=wheel_noise,
-            integration="midpoint",
-        )
-        return propagated
-
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
         config = self.config
         n_fixes = self.fix_count(action)
         dead_reckoning = episode.estimate
-        fixes: list[Fix] = []
         failure = NO_FIX
-        with self._timed("sensing"):
-            measurements = [
-                self.ranger.measure(
-                    episode.world, episode.true_pose, self.np_random, self.transmitter_frame.names
+        n_ok = 0
+        fix_pose: Pose | None = None
+        measurement_time_s = 0.0
+        if n_fixes > 0:
+            with self._timed("sensing"):
+                truth = episode.true_pose
+                rounds = self.ranger.measure_route(
+                    episode.world,
+                    np.repeat(truth.position[None, :], n_fixes, axis=0),
+                    self.np_random,
+                    self.transmitter_frame.names,
+                    headings_rad=np.full(n_fixes, truth.theta),
                 )
-                for _ in range(n_fixes)
-            ]
-        with self._timed("localization"):
-            for measurement in measurements:
-                result = localize(
-                    measurement.distances,
+            measurement_time_s = float(np.sum(rounds.round_durations_s))
+            with self._timed("localization"):
+                repeated = localize_repeated(
+                    rounds.distances,
                     self.transmitter_frame.spacing_m,
                     self.ranger.receivers_xy,
                     z_sign=-1,
                 )
-                if result.fix is not None:
-                    fixes.append(result.fix)
-                else:
-                    failure = result.status
-            fix_pose: Pose | None = None
-            if fixes:
-                averaged = average_fixes(fixes)  # eqs (12)-(16), circular mean of headings
-                fix_pose = self.transmitter_frame.to_world(averaged.pose)
-                episode.last_fix = averaged
-                self._correct(episode, fix_pose, len(fixes))
-        measurement_time_s = float(sum(m.duration_s for m in measurements))
+                n_ok = int(np.count_nonzero(repeated.ok))
+                if n_ok < n_fixes:
+                    failure = str(repeated.statuses[~repeated.ok][-1])
+                averaged = repeated.average()  # eqs (12)-(16), circular mean of headings
+                if averaged is not None:
+                    fix_pose = self.transmitter_frame.to_world(averaged.pose)
+                    episode.last_fix = averaged
+                    self._correct(episode, fix_pose, n_ok)
         episode.sensing_time_s += measurement_time_s
         episode.elapsed_time_s += measurement_time_s
         episode.decisions += 1
@@ -820,9 +563,9 @@ class TrilaterationEnv(SonarEnv):
         info = self._info(
             STATUS_OK if done else STATUS_RUNNING,
             n_fixes=n_fixes,
-            fix_status=STATUS_OK if fixes else failure,
+            fix_status=STATUS_OK if n_ok else failure,
             measurement_time_s=measurement_time_s,
-            n_fixes_ok=len(fixes),
+            n_fixes_ok=n_ok,
             dead_reckoning=dead_reckoning,
             fix_pose=fix_pose,
         )
@@ -930,7 +673,7 @@ class TrilaterationEnv(SonarEnv):
         from sonar_gym.render import render_topdown
 
         episode = self._require_episode()
-        points = [*_densify(episode.waypoints, 0.05), *episode.true_trail, *episode.fix_trail]
+        points = [*densify(episode.waypoints, 0.05), *episode.true_trail, *episode.fix_trail]
         return render_topdown(
             self.scenario,
             true_pose=episode.true_pose,
@@ -950,18 +693,6 @@ class TrilaterationEnv(SonarEnv):
         if self._episode is None:
             raise RuntimeError("TrilaterationEnv: call reset() first")
         return self._episode
-
-
-def _densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:
-    """Points every ``spacing_m`` metres along the polyline ``points`` (to draw it as dots)."""
-    dense: list[tuple[float, float]] = []
-    for start, end in itertools.pairwise(points):
-        steps = max(1, math.ceil(float(np.linalg.norm(end - start)) / spacing_m))
-        for t in np.arange(steps) / steps:
-            x, y = start + t * (end - start)
-            dense.append((float(x), float(y)))
-    dense.append((float(points[-1][0]), float(points[-1][1])))
-    return dense
 
 
 def _saturate(value: float, scale: float) -> float:

@@ -30,9 +30,11 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+import pymunk
 
+from sonar_gym.odometry import OdometryConfig, arc_displacements, integrate_substeps
 from sonar_gym.pose import Pose, angle_difference
-from sonar_gym.world import World
+from sonar_gym.world import STATIC_ONLY, World
 
 Integration = Literal["euler", "midpoint", "arc"]
 INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
@@ -95,69 +97,12 @@ def _sinc(x: float) -> float:
     return math.sin(x) / x
 
 
-@dataclass(frozen=True)
-class OdometryNoise:
-    """Odometry and wheel-ground errors of a small indoor differential-drive robot.
+OdometryNoise = OdometryConfig
+"""The robot's odometry errors: :class:`sonar_gym.odometry.OdometryConfig` (one vocabulary)."""
 
-    Attributes:
-        encoder_std_m_per_sqrt_m: random error of each encoder increment: zero-mean Gaussian
-            with variance ``encoder_std_m_per_sqrt_m**2 * |d|`` for a wheel increment ``d``
-            (metres), i.e. the standard deviation in metres after one metre of travel; the
-            variance grows with distance, so splitting a motion does not change it. This is
-            the wheel-speed error ``v(k)`` of Kim et al. Default 5 mm per metre.
-        scale_error_left, scale_error_right: systematic relative error of each wheel's
-            effective radius (dimensionless; 0.002 = the wheel rolls 0.2 % farther than the
-            encoder reports). Fixed for the robot, not redrawn. Defaults +/-0.2 %, i.e. a
-            heading drift of about 0.6 deg per metre on a 0.4 m wheel base.
-        slip_probability_per_m: probability that a wheel slips at least once while rolling one
-            metre, in [0, 1]; for an increment ``d`` the probability is
-            ``1 - (1 - p)**|d|``. Default 0.01.
-        slip_fraction_max: when a wheel slips, it loses a fraction ``U(0, slip_fraction_max)``
-            of its ground travel on that command (dimensionless, in [0, 1]). Default 0.3.
-    """
-
-    encoder_std_m_per_sqrt_m: float = 0.005
-    scale_error_left: float = 0.002
-    scale_error_right: float = -0.002
-    slip_probability_per_m: float = 0.01
-    slip_fraction_max: float = 0.3
-
-    def __post_init__(self) -> None:
-        for name in (
-            "encoder_std_m_per_sqrt_m",
-            "scale_error_left",
-            "scale_error_right",
-            "slip_probability_per_m",
-            "slip_fraction_max",
-        ):
-            value = getattr(self, name)
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, (int, float))
-                or not math.isfinite(value)
-            ):
-                raise ValueError(f"OdometryNoise.{name} must be a finite number; got {value!r}")
-            object.__setattr__(self, name, float(value))
-        if self.encoder_std_m_per_sqrt_m < 0.0:
-            raise ValueError(
-                "OdometryNoise.encoder_std_m_per_sqrt_m must be >= 0; "
-                f"got {self.encoder_std_m_per_sqrt_m}"
-            )
-        for name in ("scale_error_left", "scale_error_right"):
-            if not -0.5 < getattr(self, name) < 0.5:
-                raise ValueError(
-                    f"OdometryNoise.{name} must be in (-0.5, 0.5); got {getattr(self, name)}"
-                )
-        for name in ("slip_probability_per_m", "slip_fraction_max"):
-            if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(
-                    f"OdometryNoise.{name} must be in [0, 1]; got {getattr(self, name)}"
-                )
-
-    @classmethod
-    def none(cls) -> OdometryNoise:
-        """No noise at all: odometry equals the truth unless the robot is blocked."""
-        return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+PATH_CLEARANCE_M = 1e-3
+"""A command whose swept disc stays this far (metres) beyond the robot radius from every static
+shape meets no contact, so it is integrated without stepping the physics."""
 
 
 @dataclass(frozen=True)
@@ -299,28 +244,23 @@ class DifferentialDriveRobot:
         start = world.robot_pose
         odometry_start = start if self.odometry_pose is None else self.odometry_pose
 
-        fractions = np.arange(n + 1) / n
-        planned = np.array(
-            [
-                unicycle_step(start, f * ground[0], f * ground[1], wheel_base, "arc").as_array()
-                for f in fractions
-            ]
-        )
-        displacements = np.diff(planned, axis=0)
-        displacements[:, 2] = (ground[1] - ground[0]) / wheel_base / n
-        outcome = world.move_robot(displacements)
-
-        odometry = odometry_start
-        for _ in range(n):
-            odometry = unicycle_step(
-                odometry, encoder[0] / n, encoder[1] / n, wheel_base, self.odometry_integration
+        if _path_is_clear(world, start, ground, wheel_base):
+            true_pose, collided, path_length = _free_motion(world, start, ground, wheel_base, n)
+        else:
+            outcome = world.move_robot(
+                arc_displacements(start, ground[0], ground[1], wheel_base, n)
             )
+            true_pose, collided, path_length = outcome.pose, outcome.collided, outcome.path_length_m
+
+        odometry = integrate_substeps(
+            odometry_start, encoder[0], encoder[1], wheel_base, n, self.odometry_integration
+        )
         self.odometry_pose = odometry
         return MotionResult(
-            true_pose=outcome.pose,
+            true_pose=true_pose,
             odometry_pose=odometry,
-            collided=outcome.collided,
-            distance_m=outcome.path_length_m,
+            collided=collided,
+            distance_m=path_length,
             encoder_left_m=float(encoder[0]),
             encoder_right_m=float(encoder[1]),
         )
@@ -402,10 +342,97 @@ class DifferentialDriveRobot:
         )
 
 
+def _path_is_clear(world: World, start: Pose, ground: np.ndarray, wheel_base_m: float) -> bool:
+    """Whether the robot disc can follow the planned arc without touching a static shape.
+
+    The arc of length ``L`` turning by ``phi`` lies within its sagitta ``<= L |phi| / 8`` of
+    its chord, so the disc of the robot radius plus that sagitta plus :data:`PATH_CLEARANCE_M`
+    swept along the chord covers every position the body takes. pymunk's bounding-box index
+    picks the shapes near the chord; their exact distance to it decides.
+    """
+    turned = abs(float(ground[1] - ground[0])) / wheel_base_m
+    if turned > math.pi:
+        return False
+    arc_length = 0.5 * abs(float(ground[0] + ground[1]))
+    end = integrate_substeps(start, float(ground[0]), float(ground[1]), wheel_base_m, 1, "arc")
+    radius = world.robot_radius + arc_length * turned / 8.0 + PATH_CLEARANCE_M
+    a = (start.x, start.y)
+    b = (end.x, end.y)
+    box = pymunk.BB(
+        min(a[0], b[0]) - radius,
+        min(a[1], b[1]) - radius,
+        max(a[0], b[0]) + radius,
+        max(a[1], b[1]) + radius,
+    )
+    for shape in world.space.bb_query(box, STATIC_ONLY):
+        if isinstance(shape, pymunk.Segment):
+            p, q = (shape.a.x, shape.a.y), (shape.b.x, shape.b.y)
+            gap = _segment_distance(a, b, p, q) - shape.radius
+        elif isinstance(shape, pymunk.Circle) and shape.body is not None:
+            centre = shape.body.local_to_world(shape.offset)
+            gap = _point_segment_distance((centre.x, centre.y), a, b) - shape.radius
+        else:  # a shape this check does not know: let the physics decide
+            return False
+        if gap <= radius:
+            return False
+    return True
+
+
+def _point_segment_distance(
+    point: tuple[float, float], a: tuple[float, float], b: tuple[float, float]
+) -> float:
+    ex, ey = b[0] - a[0], b[1] - a[1]
+    length2 = ex * ex + ey * ey
+    t = 0.0 if length2 == 0.0 else ((point[0] - a[0]) * ex + (point[1] - a[1]) * ey) / length2
+    t = min(max(t, 0.0), 1.0)
+    return math.hypot(point[0] - a[0] - t * ex, point[1] - a[1] - t * ey)
+
+
+def _segment_distance(
+    a: tuple[float, float], b: tuple[float, float], p: tuple[float, float], q: tuple[float, float]
+) -> float:
+    """Shortest distance between the segments ``ab`` and ``pq`` (0 if they cross), metres."""
+
+    def side(o: tuple[float, float], u: tuple[float, float], v: tuple[float, float]) -> float:
+        return (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
+
+    if side(a, b, p) * side(a, b, q) < 0.0 and side(p, q, a) * side(p, q, b) < 0.0:
+        return 0.0
+    return min(
+        _point_segment_distance(a, p, q),
+        _point_segment_distance(b, p, q),
+        _point_segment_distance(p, a, b),
+        _point_segment_distance(q, a, b),
+    )
+
+
+def _free_motion(
+    world: World, start: Pose, ground: np.ndarray, wheel_base_m: float, substeps: int
+) -> tuple[Pose, bool, float]:
+    """The outcome of :meth:`World.move_robot` along the arc when no contact can occur.
+
+    With no contact the body integrates the imposed velocities exactly: it ends where the arc
+    ends, and its centre travels the ``n`` chords of the substeps, each ``|d / n|
+    sinc(delta / 2)`` long (``d`` the centre's arc length, ``delta`` the substep's turn).
+    """
+    left, right = float(ground[0]), float(ground[1])
+    pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
+    world.set_robot_pose(pose)
+    half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
+    sinc = (
+        1.0 - half_turn * half_turn / 6.0
+        if abs(half_turn) < 1e-4
+        else math.sin(half_turn) / half_turn
+    )
+    path_length = abs(0.5 * (left + right)) * abs(sinc)
+    return pose, False, path_length
+
+
 __all__ = [
     "DifferentialDriveRobot",
     "INTEGRATIONS",
     "MotionResult",
+    "OdometryConfig",
     "OdometryNoise",
     "unicycle_step",
 ]

@@ -3,8 +3,8 @@
 Kim, Lee & Jeong, *Self localization of mobile robot using sonar sensing and map building*.
 This module holds the voting localization of sec. 3.3 and re-exports the rest of the method:
 
-- :mod:`sonar_gym.localization.kim_ekf`: odometry prediction with covariance (sec. 3.1) and
-  the EKF correction (sec. 3.2);
+- :mod:`sonar_gym.localization.ekf` (also as ``kim_ekf``): odometry prediction with
+  covariance (sec. 3.1) and the EKF correction (sec. 3.2);
 - :mod:`sonar_gym.localization.kim_grid`: the occupancy / certainty grid (sec. 2.2) and the
   servo sweeps.
 
@@ -67,7 +67,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.localization.kim_ekf import (
+from sonar_gym.localization.ekf import (
     INTEGRATIONS,
     Integration,
     ekf_update,
@@ -346,10 +346,13 @@ def _resolve_headings(
 
 def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
     """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer, zero outside the grid."""
-    padded = np.pad(volume, ((0, 0), (1, 1), (0, 0)))
-    along_x = padded[:, :-2] + 2 * padded[:, 1:-1] + padded[:, 2:]
-    padded = np.pad(along_x, ((0, 0), (0, 0), (1, 1)))
-    return padded[:, :, :-2] + 2 * padded[:, :, 1:-1] + padded[:, :, 2:]
+    along_x = 2 * volume
+    along_x[:, 1:] += volume[:, :-1]
+    along_x[:, :-1] += volume[:, 1:]
+    smoothed = 2 * along_x
+    smoothed[:, :, 1:] += along_x[:, :, :-1]
+    smoothed[:, :, :-1] += along_x[:, :, 1:]
+    return smoothed
 
 
 # -- voting -------------------------------------------------------------------------------------
@@ -382,21 +385,51 @@ def _direction_index(
     return np.rint(turns).astype(np.intp) % direction_bins
 
 
+def _candidate_pairs(
+    readings: _Readings,
+    anchors: FloatArray,
+    center: FloatArray | None,
+    radius: float | None,
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+    """``(reading index, anchor index)`` of the pairs that can vote inside the search circle.
+
+    A vote ``t = a - R(heading) e`` lies within ``radius`` of the centre ``c`` only if
+    ``| |a - c| - |e| | <= radius`` (triangle inequality, any heading), so the other pairs are
+    dropped before the headings are tried. Pairs come reading-major, anchors ascending: the
+    order of the full ``(J, K)`` product, so votes and their sums are unchanged. Without a
+    search circle every pair is kept.
+    """
+    n_readings, n_anchors = readings.range_m.size, anchors.shape[0]
+    if center is None or radius is None:
+        pair_j, pair_k = np.divmod(np.arange(n_readings * n_anchors), n_anchors)
+        return pair_j, pair_k
+    anchor_distance = np.hypot(anchors[:, 0] - center[0], anchors[:, 1] - center[1])
+    reach = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])
+    slack = radius * (1.0 + 1e-9) + 1e-12
+    near = np.abs(anchor_distance[None, :] - reach[:, None]) <= slack  # (J, K)
+    pair_j, pair_k = np.nonzero(near)
+    return pair_j, pair_k
+
+
 def _vote_positions(
     readings: _Readings,
     anchors: FloatArray,
     table: FloatArray,
     headings: FloatArray,
     direction_index: npt.NDArray[np.intp],
+    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
 ) -> tuple[npt.NDArray[np.intp], FloatArray, FloatArray]:
     """Unobstructed hypotheses for a block of headings: ``(heading index, t_x, t_y)``.
 
     A reading ending at ``anchors[k]`` puts the robot at ``t = anchors[k] - R(heading) e``.
     ``table[d, k]`` is the free distance behind occupied cell ``k`` in direction ``d``; a
-    reading of range ``r`` may have ended at cell ``k`` when ``r`` is below it.
+    reading of range ``r`` may have ended at cell ``k`` when ``r`` is below it. Only the
+    ``(reading, anchor)`` ``pairs`` of :func:`_candidate_pairs` are tried.
     """
-    free = table[direction_index] > readings.range_m[None, :, None]  # (h, J, K)
-    heading_i, reading_i, cell_i = np.nonzero(free)
+    pair_j, pair_k = pairs
+    free = table[direction_index[:, pair_j], pair_k[None, :]] > readings.range_m[pair_j][None, :]
+    heading_i, pair_i = np.nonzero(free)  # (h, P)
+    reading_i, cell_i = pair_j[pair_i], pair_k[pair_i]
     cos_h, sin_h = np.cos(headings), np.sin(headings)
     end_x = readings.end_xy[:, 0]
     end_y = readings.end_xy[:, 1]
@@ -530,14 +563,18 @@ def vote_localize(
     nx, ny = grid.shape
     cells_per_layer = nx * ny
     volume = np.zeros((headings.size, nx, ny), dtype=np.int64)
-    per_heading = readings.range_m.size * anchors.shape[0]
-    block = max(1, _CHUNK_ELEMENTS // per_heading)
+    pairs = _candidate_pairs(readings, anchors, center, radius)
+    if pairs[0].size == 0:
+        return _failure(
+            NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
+        )
+    block = max(1, _CHUNK_ELEMENTS // pairs[0].size)
     for start in range(0, headings.size, block):
         block_headings = headings[start : start + block]
         direction_index = _direction_index(block_headings, readings, direction_bins)
         table = table_cache.columns(direction_index.ravel())
         heading_i, t_x, t_y = _vote_positions(
-            readings, anchors, table, block_headings, direction_index
+            readings, anchors, table, block_headings, direction_index, pairs
         )
         cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
         flat = heading_i[keep] * cells_per_layer + cell_x[keep] * ny + cell_y[keep]
@@ -571,7 +608,16 @@ def vote_localize(
         position = choice.centre
     else:
         position = _mean_vote_position(
-            grid, readings, table_cache, anchors, heading, direction_bins, choice, center, radius
+            grid,
+            readings,
+            table_cache,
+            anchors,
+            heading,
+            direction_bins,
+            choice,
+            center,
+            radius,
+            pairs,
         )
     pose = Pose(float(position[0]), float(position[1]), heading)
     return VoteLocalization(
@@ -661,12 +707,13 @@ def _mean_vote_position(
     choice: _Choice,
     center: FloatArray | None,
     radius: float | None,
+    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
 ) -> FloatArray:
     """Mean of the continuous vote positions in the chosen window of cells."""
     headings = np.array([heading])
     direction_index = _direction_index(headings, readings, direction_bins)
     table = table_cache.columns(direction_index.ravel())
-    _, t_x, t_y = _vote_positions(readings, anchors, table, headings, direction_index)
+    _, t_x, t_y = _vote_positions(readings, anchors, table, headings, direction_index, pairs)
     cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
     keep &= (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
     keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])

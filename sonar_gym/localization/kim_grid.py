@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.scenario import Scenario
 
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
@@ -49,7 +50,33 @@ PAPER_CELL_SIZE_M = 0.05
 _GEOMETRY_TOLERANCE = 1e-9
 """Relative tolerance (in cells) under which a shape touching a cell edge marks the cell."""
 
+
+def occupancy_grid_of(scenario: Scenario, cell_size_m: float = 0.05) -> OccupancyGrid:
+    """The known map (sec. 2.2): mapped room walls, walls, box sides and cylinders on a grid.
+
+    The grid covers ``scenario.bounds`` with ``cell_size_m`` cells (5 cm, sec. 4.1).
+    """
+    segments: list[tuple[tuple[float, float], tuple[float, float]]] = []
+    if scenario.room is not None:
+        corners = scenario.room.corners
+        segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+    segments += [(wall.a, wall.b) for wall in scenario.walls if wall.mapped]
+    for box in scenario.boxes:
+        if box.mapped:
+            corners = box.corners
+            segments += [(corners[i], corners[(i + 1) % 4]) for i in range(4)]
+    circles = [(c.center[0], c.center[1], c.radius) for c in scenario.cylinders if c.mapped]
+    (x_min, y_min), (x_max, y_max) = scenario.bounds
+    return OccupancyGrid.from_segments(
+        np.array(segments, dtype=np.float64).reshape(-1, 2, 2),
+        np.array(circles, dtype=np.float64).reshape(-1, 3),
+        (x_min, y_min, x_max, y_max),
+        cell_size_m,
+    )
+
+
 __all__ = [
+    "occupancy_grid_of",
     "PAPER_CELL_SIZE_M",
     "Bounds",
     "OccupancyGrid",

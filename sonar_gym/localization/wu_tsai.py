@@ -177,10 +177,13 @@ def receiver_position(d: npt.ArrayLike, a: float, z_sign: int = -1) -> FloatArra
     _require_z_sign(z_sign)
     if not np.all(np.isfinite(distances)):
         raise ValueError(f"d must be finite (NaN marks a dropout; use localize), got {d!r}")
-    d0_sq, d1_sq, d2_sq = distances**2
-    x = (d0_sq - d1_sq + a * a) / (2.0 * a)
-    y = (d0_sq - d2_sq + a * a) / (2.0 * a)
-    radicand = d0_sq - x * x - y * y
+    with np.errstate(over="ignore", invalid="ignore"):
+        d0_sq, d1_sq, d2_sq = distances**2
+        x = (d0_sq - d1_sq + a * a) / (2.0 * a)
+        y = (d0_sq - d2_sq + a * a) / (2.0 * a)
+        radicand = d0_sq - x * x - y * y
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(radicand)):
+        return _receiver_position_unsquared(distances, float(a), z_sign)
     if radicand < 0.0:
         if radicand < -_RELATIVE_RADICAND_TOLERANCE * (d0_sq + a * a):
             raise InconsistentDistances(
@@ -189,6 +192,48 @@ def receiver_position(d: npt.ArrayLike, a: float, z_sign: int = -1) -> FloatArra
             )
         radicand = 0.0
     return np.array([x, y, z_sign * math.sqrt(radicand)])
+
+
+def _receiver_position_unsquared(distances: FloatArray, a: float, z_sign: int) -> FloatArray:
+    """Theorem 2 for distances whose squares leave the float range (eqs (7)-(9) rearranged).
+
+    ``x = (d0 - d1) (d0 + d1) / (2a) + a/2`` (eq. (7)), the same for ``y`` (eq. (8)), and
+    ``|z| = sqrt(d0 - r) sqrt(d0 + r)`` with ``r = hypot(x, y)`` (eq. (9)): no square of a
+    distance is formed. A point beyond the float range raises :class:`InconsistentDistances`.
+    """
+    d0, d1, d2 = (float(v) for v in distances)
+
+    def half_difference_of_squares_over_a(d: float, other: float) -> float:
+        difference = d - other
+        if difference == 0.0:
+            return 0.0
+        return difference * ((0.5 * d + 0.5 * other) / a)
+
+    with np.errstate(over="ignore", invalid="ignore"):
+        x = half_difference_of_squares_over_a(d0, d1) + 0.5 * a
+        y = half_difference_of_squares_over_a(d0, d2) + 0.5 * a
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise InconsistentDistances(
+            f"distances {distances.tolist()} m with a = {a} m put the receiver beyond the "
+            "floating-point range in eqs (7)-(8)"
+        )
+    r = math.hypot(x, y)
+    if d0 >= r:
+        z = math.sqrt(d0 - r) * math.sqrt(0.5 * d0 + 0.5 * r) * math.sqrt(2.0)
+    else:
+        scale = max(r, a)
+        deficit = ((r - d0) / scale) * ((r + d0) / scale)
+        if deficit > _RELATIVE_RADICAND_TOLERANCE * ((d0 / scale) ** 2 + (a / scale) ** 2):
+            raise InconsistentDistances(
+                f"distances {distances.tolist()} m admit no point: d0 < hypot(x, y) in eq. (9)"
+            )
+        z = 0.0
+    if not math.isfinite(z):
+        raise InconsistentDistances(
+            f"distances {distances.tolist()} m put the receiver beyond the floating-point range "
+            "in eq. (9)"
+        )
+    return np.array([x, y, z_sign * z])
 
 
 def receiver_position_least_squares(
@@ -459,7 +504,7 @@ def localize(
     if np.any(missing):
         receivers, transmitters = np.nonzero(missing)
         pairs = ", ".join(
-            f"(receiver {r}, transmitter {t})" for r, t in zip(receivers, transmitters)
+            f"(receiver {r}, transmitter {t})" for r, t in zip(receivers, transmitters, strict=True)
         )
         return TransmitterLocalization(STATUS_MISSING_DISTANCE, message=f"no distance for {pairs}")
 
@@ -468,7 +513,7 @@ def localize(
     except InconsistentDistances as error:
         return TransmitterLocalization(STATUS_INCONSISTENT_DISTANCES, message=str(error))
 
-    mean_receiver = receivers_xyz.mean(axis=0)
+    mean_receiver = _mean_without_overflow(receivers_xyz, axis=0)
     offset_spread = offsets - offsets.mean(axis=0)
     if not np.any(np.hypot(offset_spread[:, 0], offset_spread[:, 1]) >= _MIN_BASELINE_M):
         return TransmitterLocalization(
@@ -498,6 +543,11 @@ def localize(
     mean_offset = offsets.mean(axis=0)
     x = mean_receiver[0] - (c * mean_offset[0] - s * mean_offset[1])
     y = mean_receiver[1] - (s * mean_offset[0] + c * mean_offset[1])
+    if not (math.isfinite(x) and math.isfinite(y)):
+        return TransmitterLocalization(
+            STATUS_INCONSISTENT_DISTANCES,
+            message="the fix lies beyond the floating-point range",
+        )
     fix = Fix(
         x=float(x),
         y=float(y),
@@ -506,6 +556,130 @@ def localize(
         receiver_positions=tuple(_as_triple(row) for row in receivers_xyz),
     )
     return TransmitterLocalization(OK, pose=fix.pose, position_3d=_as_triple(fix.position), fix=fix)
+
+
+@dataclass(frozen=True)
+class RepeatedFixes:
+    """``n`` fixes by Theorem 2 at once (see :func:`localize_repeated`), as arrays in {T}.
+
+    Attributes:
+        statuses: ``(n,)`` the :func:`localize` status of each fix (``"ok"`` or why not).
+        poses: ``(n, 3)`` ``[x, y, heading]`` of each fix (metres, radians); NaN where the
+            status is not ``"ok"``.
+        z: ``(n,)`` height of each fix in {T}, metres; NaN where not ``"ok"``.
+        receivers: ``(n, n_receivers, 3)`` receiver positions, metres; NaN where not ``"ok"``.
+    """
+
+    statuses: npt.NDArray[np.str_]
+    poses: FloatArray
+    z: FloatArray
+    receivers: FloatArray
+
+    @property
+    def ok(self) -> npt.NDArray[np.bool_]:
+        """``(n,)`` which fixes succeeded."""
+        return self.statuses == OK
+
+    def average(self) -> Fix | None:
+        """eqs (12)-(16) over the fixes that succeeded (:func:`average_fixes`); None if none."""
+        good = self.ok
+        if not np.any(good):
+            return None
+        positions = np.column_stack([self.poses[good, :2], self.z[good]])
+        headings = self.poses[good, 2]
+        x, y, z = positions.mean(axis=0)  # eqs (13)-(15)
+        heading = math.atan2(float(np.mean(np.sin(headings))), float(np.mean(np.cos(headings))))
+        receivers = np.mean(self.receivers[good], axis=0)
+        return Fix(
+            x=float(x),
+            y=float(y),
+            z=float(z),
+            heading=heading,
+            receiver_positions=tuple(_as_triple(row) for row in receivers),
+        )
+
+
+def localize_repeated(
+    distances: npt.ArrayLike, a: float, receiver_offsets: npt.ArrayLike, z_sign: int = -1
+) -> RepeatedFixes:
+    """:func:`localize` (closed form, eqs (7)-(9) and Theorem 2's heading) of ``n`` fixes at once.
+
+    Args:
+        distances: ``(n, n_receivers, 3)`` distances in metres, one :func:`localize` table per
+            fix; NaN or inf marks a dropout.
+        a: transmitter spacing, metres, > 0.
+        receiver_offsets: ``(n_receivers, 2)`` receiver positions in {AMR}, metres.
+        z_sign: side of the transmitter plane, -1 (below the ceiling) or +1.
+
+    Returns:
+        the fixes and their statuses, as :func:`localize` gives them one by one.
+
+    Raises:
+        ValueError: wrong shapes, negative distances, ``a <= 0``, ``z_sign`` not +-1.
+    """
+    _require_positive("a", a)
+    _require_z_sign(z_sign)
+    table = np.asarray(distances, dtype=np.float64)
+    if table.ndim != 3 or table.shape[1] < 1 or table.shape[2] != 3:
+        raise ValueError(f"distances must have shape (n, n_receivers >= 1, 3), got {table.shape}")
+    if np.any(table < 0.0):
+        raise ValueError("distances must be >= 0 metres (NaN marks a dropout)")
+    offsets = np.asarray(receiver_offsets, dtype=np.float64)
+    if offsets.shape != (table.shape[1], 2) or not np.all(np.isfinite(offsets)):
+        raise ValueError(
+            f"receiver_offsets must be a finite ({table.shape[1]}, 2) array, got {offsets.shape}"
+        )
+    n = table.shape[0]
+    statuses = np.full(n, OK, dtype=object)
+    finite = np.all(np.isfinite(table), axis=(1, 2))
+    statuses[~finite] = STATUS_MISSING_DISTANCE
+    clean = np.where(finite[:, None, None], table, 0.0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        d0_sq, d1_sq, d2_sq = clean[..., 0] ** 2, clean[..., 1] ** 2, clean[..., 2] ** 2
+        x = (d0_sq - d1_sq + a * a) / (2.0 * a)
+        y = (d0_sq - d2_sq + a * a) / (2.0 * a)
+        radicand = d0_sq - x * x - y * y
+    representable = np.all(np.isfinite(x) & np.isfinite(y) & np.isfinite(radicand), axis=1)
+    inconsistent = np.any(radicand < -_RELATIVE_RADICAND_TOLERANCE * (d0_sq + a * a), axis=1)
+    statuses[finite & representable & inconsistent] = STATUS_INCONSISTENT_DISTANCES
+    with np.errstate(over="ignore", invalid="ignore"):
+        z = z_sign * np.sqrt(np.maximum(radicand, 0.0))
+    for index in np.flatnonzero(finite & ~representable):  # beyond float range: the safe form
+        try:
+            point = np.array([receiver_position(row, a, z_sign) for row in table[index]])
+        except InconsistentDistances:
+            statuses[index] = STATUS_INCONSISTENT_DISTANCES
+            continue
+        x[index], y[index], z[index] = point[:, 0], point[:, 1], point[:, 2]
+    receivers = np.stack([x, y, z], axis=-1)  # (n, R, 3)
+
+    offset_spread = offsets - offsets.mean(axis=0)
+    if not np.any(np.hypot(offset_spread[:, 0], offset_spread[:, 1]) >= _MIN_BASELINE_M):
+        statuses[statuses == OK] = STATUS_HEADING_UNOBSERVABLE
+    with np.errstate(over="ignore", invalid="ignore"):
+        mean_receiver = _mean_without_overflow(receivers, axis=1)  # (n, 3)
+        measured_spread = receivers[:, :, :2] - mean_receiver[:, None, :2]
+        cross = np.sum(
+            offset_spread[None, :, 0] * measured_spread[:, :, 1]
+            - offset_spread[None, :, 1] * measured_spread[:, :, 0],
+            axis=1,
+        )
+        dot = np.sum(offset_spread[None] * measured_spread, axis=(1, 2))
+        coincide = ~(np.hypot(cross, dot) >= _MIN_BASELINE_M**2)
+        statuses[(statuses == OK) & coincide] = STATUS_INCONSISTENT_DISTANCES
+        heading = np.arctan2(cross, dot)
+        c, s = np.cos(heading), np.sin(heading)
+        mean_offset = offsets.mean(axis=0)
+        fix_x = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
+        fix_y = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
+    poses = np.stack([fix_x, fix_y, heading], axis=1)
+    good = statuses == OK
+    good &= np.all(np.isfinite(poses), axis=1) & np.isfinite(mean_receiver[:, 2])
+    statuses[(statuses == OK) & ~good] = STATUS_INCONSISTENT_DISTANCES
+    poses[~good] = np.nan
+    receivers[~good] = np.nan
+    z_fix = np.where(good, mean_receiver[:, 2], np.nan)
+    return RepeatedFixes(statuses.astype(str), poses, z_fix, receivers)
 
 
 def average_fixes(fixes: Sequence[Fix]) -> Fix:
@@ -562,6 +736,16 @@ def _receiver_positions(
     return np.array(
         [receiver_position_least_squares(row, all_transmitters, z_sign) for row in table]
     )
+
+
+def _mean_without_overflow(values: FloatArray, axis: int) -> FloatArray:
+    """``values.mean(axis)``; where the sum overflows, the sum of ``values / count`` instead."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        mean = values.mean(axis=axis)
+        if not np.all(np.isfinite(mean) | ~np.all(np.isfinite(values), axis=axis)):
+            safe = np.sum(values / values.shape[axis], axis=axis)
+            mean = np.where(np.isfinite(mean), mean, safe)
+    return np.asarray(mean)
 
 
 def _as_distances(values: npt.ArrayLike, name: str, expected_count: int) -> FloatArray:

@@ -22,6 +22,11 @@ Timing: the emitters fire one after another, ``firing_interval_s`` apart, in the
 for; every receiver listens to every firing. ``timestamps_s[j, i]`` is the time since the call
 started at which measurement ``(j, i)`` completed: ``i * interval + the measured TOF``, or the
 end of the firing's interval for a dropout. The pose is taken as fixed during the call.
+
+A whole route in one call: :meth:`BeaconRanger.measure_route` ranges ``n`` receiver poses at
+once, as arrays ``(samples, receivers, emitters)``. It is the same model as ``n`` calls of
+:meth:`BeaconRanger.measure`, one per sample in route order, and draws its jitter in the same
+order (sample, then receiver, then emitter), so for one seed both give the same numbers.
 """
 
 from __future__ import annotations
@@ -32,8 +37,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.scenario import Emitter
 from sonar_gym.sonar.acoustics import REFERENCE_TEMPERATURE_C, speed_of_sound_mps
 from sonar_gym.sonar.echoes import PATH_END_TOLERANCE
 from sonar_gym.sonar.pulse_echo import WorldLike
@@ -59,6 +66,32 @@ class RangeMeasurement:
     timestamps_s: FloatArray
     duration_s: float
     emitter_names: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class RouteMeasurement:
+    """One ranging round at every sample of a route.
+
+    Attributes:
+        distances: ``(n_samples, n_receivers, n_emitters)`` measured distances, metres;
+            NaN = dropout.
+        true_distances: same shape; the exact 3D distances, metres (also for dropouts).
+        timestamps_s: same shape; when each measurement completed, seconds since the start of
+            its sample's round.
+        round_duration_s: time one round (one sample) takes, seconds.
+        emitter_names: the emitters, in column order.
+    """
+
+    distances: FloatArray
+    true_distances: FloatArray
+    timestamps_s: FloatArray
+    round_duration_s: float
+    emitter_names: tuple[str, ...]
+
+    @property
+    def round_durations_s(self) -> FloatArray:
+        """``(n_samples,)`` the duration of each sample's round, seconds."""
+        return np.full(len(self.distances), self.round_duration_s)
 
 
 @dataclass(frozen=True)
@@ -143,24 +176,69 @@ class BeaconRanger:
             rng: the random generator for the jitter (None only when the noise is off).
             emitter_names: which emitters fire, in firing order.
         """
-        scenario = world.scenario
-        if emitter_names is None:
-            emitters = scenario.emitters
+        route = self.measure_route(
+            world, pose.position[None, :], rng, emitter_names, headings_rad=[pose.theta]
+        )
+        return RangeMeasurement(
+            distances=route.distances[0],
+            timestamps_s=route.timestamps_s[0],
+            duration_s=route.round_duration_s,
+            emitter_names=route.emitter_names,
+        )
+
+    def measure_route(
+        self,
+        world: WorldLike,
+        xy: npt.ArrayLike,
+        rng: np.random.Generator | None,
+        emitter_names: Sequence[str] | None = None,
+        headings_rad: npt.ArrayLike | None = None,
+    ) -> RouteMeasurement:
+        """One ranging round at every sample of a route, as arrays (see the module docstring).
+
+        Args:
+            world: the world (its scenario's emitters, walls and temperature are read).
+            xy: ``(n, 2)`` robot positions in {W}, metres, in route order.
+            rng: the random generator for the jitter (None only when the noise is off); drawn
+                as ``n`` calls of :meth:`measure` would draw it.
+            emitter_names: which emitters fire, in firing order (default all).
+            headings_rad: ``(n,)`` robot headings in {W}, radians (default 0: only matters for
+                receivers off the robot centre).
+        """
+        positions = _route_positions(xy)
+        n_samples = len(positions)
+        if headings_rad is None:
+            headings = np.zeros(n_samples)
         else:
-            if isinstance(emitter_names, str):
+            headings = np.asarray(headings_rad, dtype=np.float64)
+            if headings.shape != (n_samples,) or not np.isfinite(headings).all():
                 raise ValueError(
-                    "argument 'emitter_names' must be a sequence of names, not one string"
+                    f"argument 'headings_rad' must be {n_samples} finite radians (one per "
+                    f"sample); got shape {headings.shape}"
                 )
-            emitters = tuple(scenario.emitter(name) for name in emitter_names)
+        emitters = self._emitters(world, emitter_names)
         n_emitters = len(emitters)
+        scenario = world.scenario
         height = scenario.robot.sensor_height if self.height_m is None else self.height_m
-        receivers = np.array([pose.transform_point(xy) for xy in self.receivers_xy]).reshape(-1, 2)
+        offsets = np.asarray(self.receivers_xy, dtype=np.float64)  # (R, 2) in {R}
+        cos, sin = np.cos(headings)[:, None], np.sin(headings)[:, None]
+        receivers = np.stack(
+            (
+                positions[:, None, 0] + cos * offsets[:, 0] - sin * offsets[:, 1],
+                positions[:, None, 1] + sin * offsets[:, 0] + cos * offsets[:, 1],
+            ),
+            axis=-1,
+        )  # (n, R, 2) in {W}
+        n_receivers = offsets.shape[0]
         emitter_xyz = np.array([e.position for e in emitters], dtype=np.float64).reshape(-1, 3)
 
-        horizontal = emitter_xyz[None, :, :2] - receivers[:, None, :]  # (receivers, emitters, 2)
-        distance = np.sqrt((horizontal**2).sum(axis=2) + (emitter_xyz[None, :, 2] - height) ** 2)
-        heard = (distance <= self.max_range_m) & ~_blocked_by_walls(
-            world, receivers, emitter_xyz[:, :2]
+        horizontal = emitter_xyz[None, None, :, :2] - receivers[:, :, None, :]  # (n, R, E, 2)
+        distance = np.sqrt(
+            (horizontal**2).sum(axis=-1) + (emitter_xyz[None, None, :, 2] - height) ** 2
+        )
+        blocked = _blocked_by_walls(world, receivers.reshape(-1, 2), emitter_xyz[:, :2])
+        heard = (distance <= self.max_range_m) & ~blocked.reshape(
+            n_samples, n_receivers, n_emitters
         )
 
         true_speed = speed_of_sound_mps(world.temperature_c)
@@ -171,13 +249,35 @@ class BeaconRanger:
             tof = tof + rng.standard_normal(tof.shape) * (self.range_noise_std_m / true_speed)
         if self.quantisation and self.timer_period_s > 0.0:
             tof = np.floor(tof / self.timer_period_s) * self.timer_period_s
-        start = self.firing_interval_s * np.arange(n_emitters, dtype=np.float64)[None, :]
-        return RangeMeasurement(
+        start = self.firing_interval_s * np.arange(n_emitters, dtype=np.float64)
+        return RouteMeasurement(
             distances=np.where(heard, tof * self.assumed_speed_of_sound_mps, np.nan),
+            true_distances=distance,
             timestamps_s=np.where(heard, start + tof, start + self.firing_interval_s),
-            duration_s=n_emitters * self.firing_interval_s,
+            round_duration_s=n_emitters * self.firing_interval_s,
             emitter_names=tuple(e.name for e in emitters),
         )
+
+    @staticmethod
+    def _emitters(world: WorldLike, emitter_names: Sequence[str] | None) -> tuple[Emitter, ...]:
+        """The firing emitters: ``emitter_names`` in order, default all of the scenario."""
+        scenario = world.scenario
+        if emitter_names is None:
+            return tuple(scenario.emitters)
+        if isinstance(emitter_names, str):
+            raise ValueError("argument 'emitter_names' must be a sequence of names, not one string")
+        return tuple(scenario.emitter(name) for name in emitter_names)
+
+
+def _route_positions(xy: npt.ArrayLike) -> FloatArray:
+    """``xy`` as an ``(n, 2)`` float array of finite metres, or a ValueError naming it."""
+    positions = np.asarray(xy, dtype=np.float64)
+    if positions.ndim != 2 or positions.shape[1] != 2 or not np.isfinite(positions).all():
+        raise ValueError(
+            "argument 'xy' must be an (n, 2) array of finite positions in metres; "
+            f"got shape {positions.shape}"
+        )
+    return positions
 
 
 def _blocked_by_walls(world: WorldLike, receivers: FloatArray, emitters: FloatArray) -> np.ndarray:

@@ -14,11 +14,11 @@ from hypothesis import strategies as st
 import sonar_gym  # noqa: F401  (registers the ids)
 from sonar_gym.agents import agent_names, make_agent
 from sonar_gym.agents.sweep_localization import CovarianceAgent, PaperAgent, _decode_estimate
+from sonar_gym.polyline import leg_is_free as _leg_is_free
 from sonar_gym.envs.sweep_localization import (
     HEADING_STD_SCALE_RAD,
     POSITION_STD_SCALE_M,
     Route,
-    _leg_is_free,
     _relative_pose,
     occupancy_grid_of,
 )

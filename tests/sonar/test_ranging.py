@@ -136,3 +136,71 @@ def test_bad_ranger_arguments_raise_naming_the_argument(kwargs, name: str) -> No
 def test_unknown_emitter_names_raise() -> None:
     with pytest.raises(ValueError, match="T9"):
         BeaconRanger().measure(ceiling_room(), Pose(0, 0), None, emitter_names=["T9"])
+
+
+def route_samples() -> tuple[np.ndarray, np.ndarray]:
+    """Positions on both sides of a free wall at x = 1 and near the corners, with headings."""
+    xy = np.array([[0.5, 0.0], [1.5, 0.0], [1.6, 1.6], [-1.7, 1.2], [0.0, -1.9], [1.2, -0.4]])
+    headings = np.array([0.0, 0.6, -2.0, 3.0, 1.1, -0.3])
+    return xy, headings
+
+
+def test_a_route_in_one_call_matches_one_measure_per_sample_for_a_seed() -> None:
+    room = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    ranger = BeaconRanger.wu_tsai(range_noise_std_m=0.01, max_range_m=2.9)
+    xy, headings = route_samples()
+    route = ranger.measure_route(room, xy, np.random.default_rng(11), headings_rad=headings)
+    rng = np.random.default_rng(11)
+    for k, ((x, y), theta) in enumerate(zip(xy, headings, strict=True)):
+        single = ranger.measure(room, Pose(x, y, theta), rng)
+        np.testing.assert_array_equal(route.distances[k], single.distances)
+        np.testing.assert_array_equal(route.timestamps_s[k], single.timestamps_s)
+        assert route.round_duration_s == single.duration_s
+    assert route.emitter_names == single.emitter_names
+    dropped = np.isnan(route.distances)
+    assert dropped.any() and not dropped.all()
+
+
+def test_route_true_distances_and_dropouts_follow_the_geometry() -> None:
+    room = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    ranger = BeaconRanger.wu_tsai(noise=False, quantisation=False, max_range_m=2.9)
+    xy, headings = route_samples()
+    route = ranger.measure_route(room, xy, None, headings_rad=headings)
+    for k, ((x, y), theta) in enumerate(zip(xy, headings, strict=True)):
+        exact = exact_distances(Pose(x, y, theta), ranger.receivers_xy, 0.5)
+        np.testing.assert_allclose(route.true_distances[k], exact, rtol=1e-12)
+        heard = np.isfinite(route.distances[k])
+        np.testing.assert_allclose(route.distances[k][heard], exact[heard], rtol=1e-12)
+    # Behind the wall (x = 1.5, |y| < 1) every path to the emitters near the origin is cut.
+    assert np.all(np.isnan(route.distances[1]))
+    np.testing.assert_array_equal(np.isnan(route.distances[2]), route.true_distances[2] > 2.9)
+    np.testing.assert_array_equal(route.round_durations_s, np.full(len(xy), 3 * 0.05))
+
+
+def test_route_noise_is_seeded_unbiased_and_quantised() -> None:
+    ranger = BeaconRanger(range_noise_std_m=0.01, timer_period_s=1e-6)
+    xy = np.zeros((4000, 2))
+    first = ranger.measure_route(ceiling_room(), xy, np.random.default_rng(3))
+    again = ranger.measure_route(ceiling_room(), xy, np.random.default_rng(3))
+    np.testing.assert_array_equal(first.distances, again.distances)
+    exact = exact_distances(Pose(0.0, 0.0), ranger.receivers_xy, 0.5)[0, 0]
+    samples = first.distances[:, 0, 0]
+    assert np.mean(samples) == pytest.approx(exact, abs=0.001)
+    assert np.std(samples) == pytest.approx(0.01, rel=0.05)
+    counts = first.distances / ranger.range_quantum_m
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("xy", "headings", "name"),
+    [
+        (np.zeros((3, 3)), None, "xy"),
+        (np.array([[0.0, np.nan]]), None, "xy"),
+        (np.zeros(2), None, "xy"),
+        (np.zeros((3, 2)), np.zeros(2), "headings_rad"),
+        (np.zeros((1, 2)), np.array([np.inf]), "headings_rad"),
+    ],
+)
+def test_bad_routes_raise_naming_the_argument(xy, headings, name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        BeaconRanger(noise=False).measure_route(ceiling_room(), xy, None, headings_rad=headings)

@@ -1,0 +1,234 @@
+"""A route as a polyline in the world frame {W}, and free routes drawn at random.
+
+:class:`Route` is the path a robot follows (metres, {W}); :func:`draw_free_route` joins free
+waypoints by legs the robot disc can drive straight along, as the Kim et al. task uses for its
+``route="random"`` episodes.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from sonar_gym.odometry import predict_over_motion
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.world import World
+
+ROUTE_CLEARANCE_M = 0.03
+"""Margin beyond the robot radius a drawn route keeps from every obstacle, metres."""
+ROUTE_MIN_LEG_M = 0.3
+"""Shortest leg of a drawn route, metres."""
+
+
+@dataclass(frozen=True)
+class Route:
+    """A polyline in {W} the robot follows (metres).
+
+    Attributes:
+        vertices: ``(K, 2)`` corner points, the first one the start.
+        cumulative_m: ``(K,)`` route length at each vertex (0 at the start).
+    """
+
+    vertices: np.ndarray
+    cumulative_m: np.ndarray
+
+    @classmethod
+    def through(cls, points: np.ndarray) -> Route:
+        vertices = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        lengths = np.linalg.norm(np.diff(vertices, axis=0), axis=1)
+        return cls(vertices, np.concatenate([[0.0], np.cumsum(lengths)]))
+
+    @property
+    def length_m(self) -> float:
+        return float(self.cumulative_m[-1])
+
+    def point_at(self, s_m: float) -> np.ndarray:
+        """The point at route length ``s_m`` (clipped to the route)."""
+        s = min(max(s_m, 0.0), self.length_m)
+        index = int(np.searchsorted(self.cumulative_m, s, side="right")) - 1
+        index = min(max(index, 0), len(self.vertices) - 2)
+        span = self.cumulative_m[index + 1] - self.cumulative_m[index]
+        fraction = 0.0 if span <= 0.0 else (s - self.cumulative_m[index]) / span
+        return self.vertices[index] + fraction * (self.vertices[index + 1] - self.vertices[index])
+
+    def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
+        """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
+        inner = [
+            v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if start_m < s < stop_m
+        ]
+        return [*inner, self.point_at(stop_m)]
+
+    def heading_at_start(self) -> float:
+        delta = self.vertices[1] - self.vertices[0]
+        return math.atan2(delta[1], delta[0])
+
+    def truncated(self, length_m: float) -> Route:
+        """The first ``length_m`` metres of the route."""
+        keep = [v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if s < length_m]
+        return Route.through(np.array([*keep, self.point_at(length_m)]))
+
+
+def draw_free_route(world: World, rng: np.random.Generator, length_m: float) -> Route:
+    """Free waypoints joined by collision-free legs (at least 0.3 m), up to ``length_m`` metres.
+
+    Every draw comes from ``rng``. Raises ``RuntimeError`` if the scenario has no room for it.
+    """
+    for _ in range(50):
+        points = [world.sample_free_pose(rng, clearance=ROUTE_CLEARANCE_M).position]
+        length = 0.0
+        for _ in range(200):
+            if length >= length_m:
+                return Route.through(np.array(points)).truncated(length_m)
+            candidate = world.sample_free_pose(rng, clearance=ROUTE_CLEARANCE_M).position
+            leg = float(np.linalg.norm(candidate - points[-1]))
+            if leg >= ROUTE_MIN_LEG_M and leg_is_free(world, points[-1], candidate):
+                points.append(candidate)
+                length += leg
+    raise RuntimeError(
+        f"scenario {world.scenario.name!r}: could not draw a free route of "
+        f"{length_m} m; use route='table1' or a roomier scenario"
+    )
+
+
+def leg_is_free(world: World, start: np.ndarray, stop: np.ndarray) -> bool:
+    """Whether the robot disc (plus a margin) can drive straight from ``start`` to ``stop``."""
+    length = float(np.linalg.norm(stop - start))
+    count = max(2, math.ceil(length / 0.02) + 1)
+    radius = world.robot_radius + ROUTE_CLEARANCE_M
+    return all(
+        world.is_free(start + f * (stop - start), radius) for f in np.linspace(0.0, 1.0, count)
+    )
+
+
+def draw_polyline(
+    image: np.ndarray, points: np.ndarray, to_pixel: Any, colour: tuple[int, int, int]
+) -> None:
+    """Paint a 2-pixel polyline through world ``points`` onto ``image`` in place."""
+    if len(points) < 2:
+        return
+    height, width = image.shape[:2]
+    for start, stop in itertools.pairwise(points):
+        (r0, c0), (r1, c1) = to_pixel(start), to_pixel(stop)
+        count = max(abs(r1 - r0), abs(c1 - c0), 1) + 1
+        rows = np.rint(np.linspace(r0, r1, count)).astype(int)
+        cols = np.rint(np.linspace(c0, c1, count)).astype(int)
+        for dr in (0, 1):
+            for dc in (0, 1):
+                keep = (
+                    (rows + dr >= 0) & (rows + dr < height) & (cols + dc >= 0) & (cols + dc < width)
+                )
+                image[rows[keep] + dr, cols[keep] + dc] = colour
+
+
+def draw_equal_legs(
+    world: World,
+    rng: np.random.Generator,
+    n_legs: int,
+    leg_length_m: float,
+    clearance_m: float,
+    fallback_towards: FloatArray,
+    tries: int = 200,
+) -> FloatArray:
+    """``n_legs + 1`` points in {W}: a free start, then legs of ``leg_length_m`` in random
+    directions that keep the robot ``clearance_m`` beyond its radius from every obstacle.
+
+    A leg that finds no free direction in ``tries`` draws heads for ``fallback_towards`` (the
+    middle of the free space). Every draw comes from ``rng``.
+    """
+    margin = world.robot_radius + clearance_m
+    points = [world.sample_free_pose(rng, clearance=clearance_m).position]
+    for _ in range(n_legs):
+        here = points[-1]
+        for _ in range(tries):
+            direction = float(rng.uniform(-math.pi, math.pi))
+            candidate = here + leg_length_m * np.array([math.cos(direction), math.sin(direction)])
+            if _straight_leg_is_free(world, here, candidate, margin):
+                break
+        else:
+            towards = fallback_towards - here
+            towards = towards / max(float(np.linalg.norm(towards)), 1e-9)
+            candidate = here + leg_length_m * towards
+        points.append(candidate)
+    return np.array(points)
+
+
+def _straight_leg_is_free(
+    world: World, start: FloatArray, end: FloatArray, margin_m: float
+) -> bool:
+    samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
+    return all(
+        world.is_free(start + t * (end - start), margin_m) for t in np.linspace(0.0, 1.0, samples)
+    )
+
+
+def densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:
+    """Points every ``spacing_m`` metres along the polyline ``points`` (to draw it as dots)."""
+    dense: list[tuple[float, float]] = []
+    for start, end in itertools.pairwise(points):
+        steps = max(1, math.ceil(float(np.linalg.norm(end - start)) / spacing_m))
+        for t in np.arange(steps) / steps:
+            x, y = start + t * (end - start)
+            dense.append((float(x), float(y)))
+    dense.append((float(points[-1][0]), float(points[-1][1])))
+    return dense
+
+
+@dataclass(frozen=True)
+class FollowedLeg:
+    """The belief after :func:`follow_route`.
+
+    Attributes:
+        estimate: the EKF prediction at the end ({W}; metres, radians).
+        covariance: its 3x3 covariance over ``[x, y, theta]``.
+        rolled_m: the mean wheel travel ``(|d_l| + |d_r|) / 2`` of each elementary command,
+            metres, in order.
+    """
+
+    estimate: Pose
+    covariance: FloatArray
+    rolled_m: tuple[float, ...]
+
+
+def follow_route(
+    robot: DifferentialDriveRobot,
+    world: World,
+    route: Route,
+    span_m: tuple[float, float],
+    estimate: Pose,
+    covariance: FloatArray,
+    variance_per_m: float,
+    rng: np.random.Generator,
+) -> FollowedLeg:
+    """Drive along ``route`` from ``span_m[0]`` to ``span_m[1]`` metres, steering from the belief.
+
+    Each vertex in between, then the point at ``span_m[1]``, is reached by
+    :meth:`DifferentialDriveRobot.move_to` planned from the current estimate; the EKF predicts
+    over every motion's encoder increments (Kim et al. sec. 3.1 eqs. (5)-(6),
+    :func:`sonar_gym.odometry.predict_over_motion` with ``V`` of ``variance_per_m`` m^2 per
+    metre rolled).
+    """
+    wheel_base = robot.wheel_base_for(world)
+    rolled: list[float] = []
+    for target in route.targets_between(*span_m):
+        motion = robot.move_to(world, (float(target[0]), float(target[1])), rng, from_pose=estimate)
+        increments = [(p.encoder_left_m, p.encoder_right_m) for p in motion.parts or (motion,)]
+        estimate, covariance, _ = predict_over_motion(
+            estimate, covariance, increments, wheel_base, variance_per_m
+        )
+        rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments]
+    return FollowedLeg(estimate, covariance, tuple(rolled))
+
+
+__all__ = [
+    "ROUTE_CLEARANCE_M",
+    "ROUTE_MIN_LEG_M",
+    "Route",
+    "draw_free_route",
+    "draw_polyline",
+    "leg_is_free",
+]

@@ -1,0 +1,53 @@
+"""n fixes at once (localize_repeated) against n calls of localize and average_fixes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonar_gym.localization.wu_tsai import (
+    PAPER_RECEIVER_OFFSETS_M,
+    average_fixes,
+    localize,
+    localize_repeated,
+)
+from sonar_gym.pose import Pose
+
+A = 0.2
+OFFSETS = np.array(PAPER_RECEIVER_OFFSETS_M)
+
+
+def _distances(pose: Pose, z: float, rng: np.random.Generator, noise: float) -> np.ndarray:
+    transmitters = np.array([[0.0, 0.0, 0.0], [A, 0.0, 0.0], [0.0, A, 0.0]])
+    receivers = np.array([pose.transform_point(o) for o in OFFSETS])
+    points = np.column_stack([receivers, np.full(len(receivers), z)])
+    exact = np.linalg.norm(points[:, None, :] - transmitters[None, :, :], axis=2)
+    return np.abs(exact + rng.normal(0.0, noise, exact.shape))
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.002, 0.05])
+def test_repeated_fixes_match_one_by_one_localization(noise: float) -> None:
+    rng = np.random.default_rng(3)
+    tables = np.stack([_distances(Pose(0.4, -0.3, 0.7), -1.9, rng, noise) for _ in range(25)])
+    tables[4, 1, 2] = np.nan  # a dropout
+    tables[9, 0] = [0.1, 5.0, 5.0]  # no point (eq. (9) radicand < 0)
+    batch = localize_repeated(tables, A, OFFSETS)
+    singles = [localize(table, A, OFFSETS) for table in tables]
+    assert batch.statuses.tolist() == [r.status for r in singles]
+    assert batch.statuses[4] == "missing_distance"
+    assert batch.statuses[9] == "inconsistent_distances"
+    fixes = [r.fix for r in singles if r.fix is not None]
+    for row, single in zip(np.flatnonzero(batch.ok), fixes, strict=True):
+        assert batch.poses[row] == pytest.approx([single.x, single.y, single.heading], abs=1e-12)
+        assert batch.z[row] == pytest.approx(single.z, abs=1e-12)
+    averaged, expected = batch.average(), average_fixes(fixes)
+    assert averaged is not None
+    assert averaged.position == pytest.approx(expected.position, abs=1e-12)
+    assert averaged.heading == pytest.approx(expected.heading, abs=1e-12)
+    assert np.allclose(averaged.receiver_array, expected.receiver_array, atol=1e-12)
+
+
+def test_no_fix_succeeding_averages_to_none() -> None:
+    batch = localize_repeated(np.full((3, 2, 3), np.nan), A, OFFSETS)
+    assert not batch.ok.any() and batch.average() is None
+    assert np.isnan(batch.poses).all()
