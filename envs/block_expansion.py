@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from collections.abc import Sequence
 from typing import Any
 
 import gymnasium as gym
@@ -26,6 +27,7 @@ import numpy.typing as npt
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.geometry import StaticGeometry
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,
@@ -40,6 +42,7 @@ from sonar_gym.localization.roh import (
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.pulse_echo import WorldLike
 from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.world import World
 
@@ -173,40 +176,6 @@ PAPER_PATH = PathParameters(2.75, 0.55, (1.6, 1.45), -0.9)
 """The :func:`parabolic_path` defaults (ending at :data:`PAPER_PATH_X_END_M` per area count)."""
 
 
-class _RangingSeam:
-    """``measure(xy, beacon_xyz)`` for the runner: one :class:`BeaconRanger` round per position.
-
-    The runner asks for the beacons of a position one after another; the first request at a new
-    position fires every beacon once (one ranging round) and later requests read that round.
-    The rounds' durations are kept, so the sensing time of any stretch of the path is known.
-    """
-
-    def __init__(
-        self,
-        ranger: BeaconRanger,
-        world: World,
-        rng: np.random.Generator,
-        beacons_m: dict[str, tuple[float, float, float]],
-    ) -> None:
-        self.ranger = ranger
-        self.world = world
-        self.rng = rng
-        self.names = tuple(beacons_m)
-        self.column_of = {tuple(xyz): column for column, xyz in enumerate(beacons_m.values())}
-        self.durations_s: list[float] = []
-        self._position: tuple[float, float] | None = None
-        self._row: FloatArray = np.empty(0)
-
-    def __call__(self, xy: FloatArray, beacon_xyz: FloatArray) -> float:
-        position = (float(xy[0]), float(xy[1]))
-        if position != self._position:
-            round_ = self.ranger.measure(self.world, Pose(*position, 0.0), self.rng, self.names)
-            self._row = round_.distances[0]
-            self._position = position
-            self.durations_s.append(round_.duration_s)
-        return float(self._row[self.column_of[tuple(float(v) for v in beacon_xyz)]])
-
-
 def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> BeaconRanger:
     """The task's one-way ranging sensor: the config's noise, timer and range, one firing every
     :data:`FIRING_INTERVAL_S`, converting with the speed of sound at :data:`TEMPERATURE_C`."""
@@ -222,37 +191,45 @@ def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> Beac
 
 def measure_path_ranges(
     ranger: BeaconRanger,
-    world: World,
+    world: WorldLike,
     path: npt.ArrayLike,
-    runner_config: BlockExpansionConfig,
+    beacon_names: Sequence[str],
     rng: np.random.Generator,
 ) -> tuple[FloatArray, FloatArray]:
-    """Range every beacon along a path with the sensor, through the runner's ``measure`` seam.
+    """Range every beacon along a path with the sensor, one ranging round per position.
 
     Args:
-        ranger: the one-way ranging sensor.
-        world: the world whose emitters are the beacons of ``runner_config``.
+        ranger: the one-way ranging sensor (its first receiver is the runner's sensor).
+        world: the world whose emitters are the beacons.
         path: ``(n, 2)`` true receiver positions, metres.
-        runner_config: the block expansion setup (its beacons fix the column order); its own
-            ``range_noise_std_m`` must be 0, the noise comes from the sensor.
+        beacon_names: the beacons in the column order of the runner's distance table
+            (:attr:`BlockExpansionConfig.beacon_names`).
         rng: the sensor's jitter.
 
     Returns:
         ``(ranges, durations)``: ``(n, beacons)`` measured ranges in metres (NaN for a dropout)
         and ``(n,)`` the duration of each position's ranging round, seconds.
     """
-    if runner_config.range_noise_std_m != 0.0:
-        raise ValueError("runner_config.range_noise_std_m must be 0: the sensor adds the noise")
-    seam = _RangingSeam(ranger, world, rng, dict(runner_config.beacons_m))
-    ranges = BlockExpansion(runner_config).measure_ranges(path, measure=seam)
-    return ranges, np.array(seam.durations_s)
+    route = ranger.measure_route(world, path, rng, tuple(beacon_names))
+    ranges = route.distances[:, 0, :]
+    return np.where(ranges >= 0.0, ranges, np.nan), route.round_durations_s
+
+
+@dataclass(frozen=True)
+class _RangingWorld:
+    """What the ranging sensor reads of a world (:class:`~sonar_gym.sonar.pulse_echo.WorldLike`):
+    the room's static geometry, shared by every episode, with the episode's beacons."""
+
+    geometry: StaticGeometry
+    temperature_c: float
+    scenario: Scenario
 
 
 @dataclass
 class _Episode:
     """Everything one episode holds; pickles with the env."""
 
-    world: World
+    world: _RangingWorld
     scenario: Scenario
     beacons_m: dict[str, tuple[float, float, float]]
     prior_m: dict[str, FloatArray]
@@ -413,6 +390,8 @@ class BlockExpansionEnv(SonarEnv):
         self._areas = PAPER_TWO_AREAS if config.n_areas == 2 else PAPER_THREE_AREAS
         self._slot_names = (*self._areas[0], *_new_beacons(self._areas))
         self._new_beacons = self._slot_names[3:]
+        self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
+        self._paper_path_samples: dict[PathParameters, FloatArray] = {}
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
@@ -428,6 +407,10 @@ class BlockExpansionEnv(SonarEnv):
         }
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
         self._episode: _Episode | None = None
+
+    @property
+    def _paper_path(self) -> PathParameters:
+        return dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[self.config.n_areas])
 
     @property
     def areas(self) -> tuple[tuple[str, str, str], ...]:
@@ -527,11 +510,12 @@ class BlockExpansionEnv(SonarEnv):
         }
         emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
         scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
-        world = World(scenario, temperature_c=TEMPERATURE_C)
-        path = path_parameters.sample()
+        # Only the beacons move between episodes: the room's geometry is built once.
+        world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+        path = self._sampled_path(path_parameters)
         with self._timed("sensing"):
             ranges, durations_s = measure_path_ranges(
-                self.ranger, world, path, self._runner_config(beacons_m, ()), rng
+                self.ranger, world, path, tuple(beacons_m), rng
             )
         self._episode = _Episode(
             world=world,
@@ -545,13 +529,23 @@ class BlockExpansionEnv(SonarEnv):
         )
         return self._info(position_error_m=0.0)
 
+    def _sampled_path(self, parameters: PathParameters) -> FloatArray:
+        """The path's samples; the paper path's are computed once per env (read-only)."""
+        if parameters != self._paper_path:
+            return parameters.sample()
+        if parameters not in self._paper_path_samples:
+            samples = parameters.sample()
+            samples.flags.writeable = False
+            self._paper_path_samples[parameters] = samples
+        return self._paper_path_samples[parameters]
+
     def _draw_layout_and_path(
         self, rng: np.random.Generator
     ) -> tuple[dict[str, tuple[float, float, float]], PathParameters]:
         """Beacons and path of an episode; random ones are redrawn until they are valid."""
         config = self.config
         table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
-        paper_path = dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas])
+        paper_path = self._paper_path
         if config.layout == "table_i" and config.path == "paper":
             return table_i, paper_path
         for _ in range(MAX_LAYOUT_TRIES):

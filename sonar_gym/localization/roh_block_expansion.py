@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -46,8 +47,9 @@ from sonar_gym.localization.roh_trilateration import (
     _frozen,
     auto_calibrate,
     trilaterate,
+    trilaterate_path,
 )
-from sonar_gym.pose import FloatArray
+from sonar_gym.pose import FloatArray, Pose
 
 IntArray = npt.NDArray[np.int64]
 
@@ -164,10 +166,18 @@ def distance_to_segment(
     return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
 
 
+POLYLINE_BLOCK_SEGMENTS = 16
+"""Consecutive polyline segments bounded together by one circle in :func:`distances_to_polyline`."""
+
+
 def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
     """Distance (metres) from each point to the nearest segment of a polyline.
 
-    This is the per-point "path error" of Figs. 5, 7 and 8.
+    This is the per-point "path error" of Figs. 5, 7 and 8. The segments are taken in blocks
+    of :data:`POLYLINE_BLOCK_SEGMENTS`, each bounded by a circle; a block is searched only
+    when its circle could hold a point nearer than the farthest point of the nearest circle,
+    so the result is the exact minimum over all segments (as
+    :func:`distances_to_polyline_reference`, which searches every segment).
 
     Args:
         points: ``(m, 2)`` points, metres.
@@ -176,6 +186,43 @@ def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> Flo
     Returns:
         ``(m,)`` distances.
     """
+    p = _points_array(points, "points")
+    line = _points_array(polyline, "polyline", min_count=2)
+    n_segments = len(line) - 1
+    n_blocks = -(-n_segments // POLYLINE_BLOCK_SEGMENTS)
+    # Segment indices per block; the last block repeats its last segment (harmless for a min).
+    members = np.minimum(
+        np.arange(n_blocks * POLYLINE_BLOCK_SEGMENTS).reshape(n_blocks, -1), n_segments - 1
+    )
+    block_vertices = np.concatenate([line[members], line[members[:, -1:] + 1]], axis=1)
+    low, high = block_vertices.min(axis=1), block_vertices.max(axis=1)
+    centres = 0.5 * (low + high)
+    radii = np.sqrt(((block_vertices - centres[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
+    to_centre = np.hypot(p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1])
+    upper = (to_centre + radii).min(axis=1)
+    # The slack absorbs the rounding of the bounds (far below any distance that matters).
+    slack = 1e-9 * (1.0 + upper)
+    point_index, block_index = np.nonzero(to_centre - radii <= (upper + slack)[:, None])
+    starts = line[members]  # (blocks, block size, 2)
+    direction = line[members + 1] - starts
+    length_sq = direction[..., 0] * direction[..., 0] + direction[..., 1] * direction[..., 1]
+    safe_length_sq = np.where(length_sq > 0.0, length_sq, 1.0)
+    sx, sy = starts[block_index, :, 0], starts[block_index, :, 1]  # (pairs, block size)
+    dx, dy = direction[block_index, :, 0], direction[block_index, :, 1]
+    rx = p[point_index, 0, None] - sx
+    ry = p[point_index, 1, None] - sy
+    t = np.clip((rx * dx + ry * dy) / safe_length_sq[block_index], 0.0, 1.0)
+    t = np.where(length_sq[block_index] > 0.0, t, 0.0)
+    gx, gy = rx - t * dx, ry - t * dy
+    nearest_sq = (gx * gx + gy * gy).min(axis=1)
+    # np.nonzero lists the pairs point by point, and every point has its nearest block.
+    first_pair = np.flatnonzero(np.diff(point_index, prepend=-1))
+    return np.sqrt(np.minimum.reduceat(nearest_sq, first_pair))
+
+
+def distances_to_polyline_reference(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
+    """:func:`distances_to_polyline` by searching every segment for every point (the
+    reference the fast search is tested against), metres."""
     p = _points_array(points, "points")
     line = _points_array(polyline, "polyline", min_count=2)
     starts, ends = line[:-1], line[1:]
@@ -394,6 +441,49 @@ class ThreePointExtractor:
         """Feed the next position (metres) with its sample index; returns how many were saved."""
         point = np.asarray(position, dtype=np.float64).reshape(2)
         saved_before = self.found
+        self._update(point, index)
+        return self.found - saved_before
+
+    def update_path(self, positions: npt.ArrayLike, indices: npt.ArrayLike) -> int:
+        """Feed positions in order, as :meth:`update` one by one would, until all are saved.
+
+        The boundary distances of all positions are computed at once and the stretches where
+        ``D`` stays on one side of the distance sought are skipped; the samples where it
+        changes side go through :meth:`update`'s own step.
+
+        Args:
+            positions: ``(m, 2)`` positions in the order visited, metres.
+            indices: ``(m,)`` their sample indices.
+
+        Returns:
+            How many positions were used: all ``m``, or up to and including the one at which
+            the third point was saved.
+        """
+        points = _points_array(positions, "positions", min_count=0)
+        index_array = np.asarray(indices, dtype=np.int64).reshape(-1)
+        if index_array.shape != (len(points),):
+            raise ValueError(
+                f"indices must hold one index per position ({len(points)}), "
+                f"got shape {index_array.shape}"
+            )
+        distances = distance_to_segment(points, self.boundary_a, self.boundary_b)
+        current = 0
+        while current < len(points) and not self.done:
+            if self._reference_sign is not None:
+                target = self.distances_m[self.found]
+                sides = np.sign(distances[current:] - target)
+                changes = np.flatnonzero(sides != self._reference_sign)
+                if len(changes) == 0:
+                    self._previous = points[-1].copy()
+                    return len(points)
+                if changes[0] > 0:
+                    current += int(changes[0])
+                    self._previous = points[current - 1].copy()
+            self._update(points[current].copy(), int(index_array[current]))
+            current += 1
+        return current
+
+    def _update(self, point: FloatArray, index: int) -> None:
         boundary_distance = self.boundary_distance(point)
         if self._reference_sign is not None and not self.done:
             target = self.distances_m[self.found]
@@ -410,7 +500,6 @@ class ThreePointExtractor:
             else:
                 self._reference_sign = side
         self._previous = point
-        return self.found - saved_before
 
     def result(self) -> ThreePoints:
         """The points saved so far, with status ``"ok"`` or ``"not_reached"``."""
@@ -643,6 +732,52 @@ class BoundaryCalibration:
     switch_index: int | None
 
 
+@dataclass(frozen=True)
+class PathFixLog:
+    """What the runner needs to rebuild each fix's full :class:`TrilaterationResult`.
+
+    Attributes:
+        statuses: ``(n,)`` the trilateration status per path point.
+        positions: ``(n, 2)`` the fixes, metres; NaN where not ok.
+        used_radical_centre: ``(n,)`` whether the paper method fell back to the radical centre.
+        ranges_m: ``(n, beacons)`` the ranges the runner used, metres (NaN for a dropout).
+        area_beacons_m: per area, ``(3, 3)`` the beacon positions the robot used there.
+        area_columns: per area, the table columns of its three beacons.
+        sensor_height_m: the sensor height, metres.
+        method: the trilateration method.
+    """
+
+    statuses: tuple[str, ...]
+    positions: FloatArray
+    used_radical_centre: npt.NDArray[np.bool_]
+    ranges_m: FloatArray
+    area_beacons_m: tuple[FloatArray, ...]
+    area_columns: tuple[tuple[int, int, int], ...]
+    sensor_height_m: float
+    method: str
+
+    def result(self, index: int, area: int) -> TrilaterationResult:
+        """The :func:`trilaterate` result of path point ``index``, localized in ``area``."""
+        if self.statuses[index] != OK:
+            columns = list(self.area_columns[area])
+            return trilaterate(
+                self.area_beacons_m[area],
+                self.ranges_m[index, columns],
+                self.sensor_height_m,
+                self.method,
+            )
+        x, y = (float(v) for v in self.positions[index])
+        return TrilaterationResult(
+            status=OK,
+            pose=Pose(x, y, 0.0),
+            position=_frozen(self.positions[index]),
+            method=self.method,
+            has_heading=False,
+            beacon_indices=(0, 1, 2),
+            used_radical_centre=bool(self.used_radical_centre[index]),
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class BlockExpansionResult:
     """Outcome of :meth:`BlockExpansion.run`.
@@ -651,7 +786,7 @@ class BlockExpansionResult:
         status: ``"ok"``; ``"calibration_failed"`` when some boundary was not calibrated or
             not passed; ``"localization_failed"`` when every boundary succeeded but some
             fix did not.
-        localizations: per path point, the trilateration result.
+        fixes: the per-point trilateration outcome as arrays (see :attr:`localizations`).
         area_indices: ``(n,)`` index of the area whose beacons were used at each point.
         estimated_indices: ``(k,)`` path indices of the successful fixes.
         estimated_xy: ``(k, 2)`` those fixes, metres.
@@ -660,12 +795,19 @@ class BlockExpansionResult:
     """
 
     status: str
-    localizations: tuple[TrilaterationResult, ...]
+    fixes: PathFixLog
     area_indices: IntArray
     estimated_indices: IntArray
     estimated_xy: FloatArray
     calibrations: tuple[BoundaryCalibration, ...]
     message: str = ""
+
+    @cached_property
+    def localizations(self) -> tuple[TrilaterationResult, ...]:
+        """Per path point, the trilateration result (built on first use)."""
+        return tuple(
+            self.fixes.result(index, int(area)) for index, area in enumerate(self.area_indices)
+        )
 
     @property
     def ok(self) -> bool:
@@ -675,7 +817,7 @@ class BlockExpansionResult:
     @property
     def statuses(self) -> tuple[str, ...]:
         """Per path point, the trilateration status."""
-        return tuple(result.status for result in self.localizations)
+        return self.fixes.statuses
 
     @property
     def calibrated_beacons_m(self) -> dict[str, FloatArray]:
@@ -729,6 +871,13 @@ class _BoundaryProgress:
         """Whether a position lies strictly on the far side of the boundary line."""
         side = self._side(xy)
         return side != 0.0 and side != self.inner_side
+
+    def first_past(self, xy: FloatArray) -> int | None:
+        """Index of the first of ``(m, 2)`` positions that :meth:`is_past`, or None."""
+        offset = xy - self.origin
+        sides = np.sign(self.direction[0] * offset[:, 1] - self.direction[1] * offset[:, 0])
+        past = np.flatnonzero((sides != 0.0) & (sides != self.inner_side))
+        return int(past[0]) if len(past) else None
 
 
 class BlockExpansion:
@@ -833,64 +982,89 @@ class BlockExpansion:
             name: np.array(config.beacons_m[name]) for name in config.areas[0]
         }
         boundary_count = len(config.areas) - 1
+        n_points = len(positions)
         progress: list[_BoundaryProgress] = []
-        if boundary_count:
-            progress.append(_BoundaryProgress(config, 0, known))
-        area = 0
-        localizations: list[TrilaterationResult] = []
-        area_indices = np.empty(len(positions), dtype=np.int64)
-
-        for index, ranges in enumerate(table):
-            area_names = config.areas[area]
-            columns = [names.index(n) for n in area_names]
-            fix = trilaterate(
-                np.array([known[n] for n in area_names]),
-                ranges[columns],
+        statuses = np.full(n_points, OK, dtype=object)
+        fixes_xy = np.full((n_points, 2), np.nan)
+        used_radical_centre = np.zeros(n_points, dtype=bool)
+        area_indices = np.empty(n_points, dtype=np.int64)
+        area_beacons: list[FloatArray] = []
+        area_columns: list[tuple[int, int, int]] = []
+        start, area = 0, 0
+        # Each area's beacons localize every point from its first one on; the next area takes
+        # over from the fix after the switch (Sec. II, Fig. 3).
+        while True:
+            columns = tuple(names.index(n) for n in config.areas[area])
+            beacons = np.array([known[n] for n in config.areas[area]])
+            area_beacons.append(_frozen(beacons))
+            area_columns.append(columns)  # type: ignore[arg-type]
+            fixes = trilaterate_path(
+                beacons,
+                table[start:, list(columns)],
                 config.sensor_height_m,
                 config.trilateration_method,
             )
-            localizations.append(fix)
-            area_indices[index] = area
-            if not fix.ok or area >= boundary_count:
-                continue
-            assert fix.position is not None
-            current = progress[area]
-            if current.calibration is None:
-                self._extract(current, fix.position, index, ranges)
-            calibration = current.calibration
-            if calibration is not None and calibration.ok and current.is_past(fix.position):
-                assert calibration.position is not None
-                known[current.new_beacon] = np.array(calibration.position)
-                current.switch_index = index + 1
-                area += 1
-                if area < boundary_count:
-                    progress.append(_BoundaryProgress(config, area, known))
+            statuses[start:] = fixes.statuses
+            fixes_xy[start:] = fixes.positions
+            used_radical_centre[start:] = fixes.used_radical_centre
+            area_indices[start:] = area
+            if area >= boundary_count:
+                break
+            current = _BoundaryProgress(config, area, known)
+            progress.append(current)
+            switch = self._cross(current, fixes.positions, start, table)
+            if switch is None:
+                break
+            known[current.new_beacon] = np.array(current.calibration.position)  # type: ignore[union-attr]
+            current.switch_index = switch + 1
+            start, area = switch + 1, area + 1
 
-        return self._result(localizations, area_indices, progress, positions)
+        log = PathFixLog(
+            statuses=tuple(statuses),
+            positions=_frozen(fixes_xy),
+            used_radical_centre=used_radical_centre,
+            ranges_m=_frozen(table),
+            area_beacons_m=tuple(area_beacons),
+            area_columns=tuple(area_columns),
+            sensor_height_m=config.sensor_height_m,
+            method=config.trilateration_method,
+        )
+        return self._result(log, area_indices, progress, positions)
 
-    def _extract(
-        self, current: _BoundaryProgress, position: FloatArray, index: int, ranges: FloatArray
-    ) -> None:
-        """Feed one fix to the extraction; calibrate once the three samples are saved.
+    def _cross(
+        self, current: _BoundaryProgress, fixes_xy: FloatArray, start: int, table: FloatArray
+    ) -> int | None:
+        """Extract, calibrate and find where the robot passes one boundary.
 
-        As in Fig. 1 the robot keeps the saved samples themselves (its estimate and the range
-        to the new beacon measured there): no range was measured at an interpolated crossing.
+        The successful fixes (``fixes_xy``, NaN for a failed one, from path index ``start``)
+        feed the three-point extraction; once the three samples are saved the new beacon is
+        auto-calibrated from them. As in Fig. 1 the robot keeps the saved samples themselves
+        (its estimate and the range to the new beacon measured there): no range was measured
+        at an interpolated crossing. Returns the path index of the first fix, from the third
+        saved sample on, past the boundary, or None (not reached or not calibrated).
         """
-        saved = current.extractor.update(position, index)
-        for _ in range(saved):
-            current.points.append(np.array(position))
-            current.ranges.append(float(ranges[current.new_column]))
-        if current.extractor.done:
-            current.calibration = auto_calibrate(
-                np.array(current.points),
-                np.array(current.ranges),
-                self.config.sensor_height_m,
-                max_condition=self.config.max_calibration_condition,
-            )
+        ok = np.flatnonzero(np.isfinite(fixes_xy[:, 0]))
+        ok_xy = fixes_xy[ok]
+        used = current.extractor.update_path(ok_xy, start + ok)
+        if not current.extractor.done:
+            return None
+        for index in current.extractor.result().indices:
+            current.points.append(np.array(fixes_xy[index - start]))
+            current.ranges.append(float(table[index, current.new_column]))
+        current.calibration = auto_calibrate(
+            np.array(current.points),
+            np.array(current.ranges),
+            self.config.sensor_height_m,
+            max_condition=self.config.max_calibration_condition,
+        )
+        if not current.calibration.ok:
+            return None
+        past = current.first_past(ok_xy[used - 1 :])
+        return None if past is None else int(start + ok[used - 1 + past])
 
     def _result(
         self,
-        localizations: list[TrilaterationResult],
+        log: PathFixLog,
         area_indices: IntArray,
         progress: list[_BoundaryProgress],
         positions: FloatArray,
@@ -944,10 +1118,8 @@ class BlockExpansion:
                     switch_index=item.switch_index,
                 )
             )
-        ok_indices = np.array([i for i, r in enumerate(localizations) if r.ok], dtype=np.int64)
-        estimated = np.array(
-            [r.position for r in localizations if r.position is not None], dtype=np.float64
-        ).reshape(-1, 2)
+        ok_indices = np.flatnonzero(np.isfinite(log.positions[:, 0])).astype(np.int64)
+        estimated = log.positions[ok_indices]
         failed_boundaries = [c for c in calibrations if c.status != OK]
         if failed_boundaries:
             status = STATUS_CALIBRATION_FAILED
@@ -963,7 +1135,7 @@ class BlockExpansion:
         ok_indices.flags.writeable = False
         return BlockExpansionResult(
             status=status,
-            localizations=tuple(localizations),
+            fixes=log,
             area_indices=area_indices,
             estimated_indices=ok_indices,
             estimated_xy=_frozen(estimated),

@@ -162,9 +162,11 @@ def circle_intersections(
     separation = math.hypot(offset[0], offset[1])
     if separation == 0.0:
         return np.empty((0, 2))
-    along = (radius_a**2 - radius_b**2 + separation**2) / (2.0 * separation)
-    half_chord_sq = radius_a**2 - along**2
-    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(radius_a**2, radius_b**2, separation**2)
+    # Squares as products, as :func:`trilaterate_path` computes them over arrays.
+    ra_sq, rb_sq = radius_a * radius_a, radius_b * radius_b
+    along = (ra_sq - rb_sq + separation**2) / (2.0 * separation)
+    half_chord_sq = ra_sq - along * along
+    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(ra_sq, rb_sq, separation**2)
     if half_chord_sq < -tolerance:
         return np.empty((0, 2))
     unit = offset / separation
@@ -466,6 +468,172 @@ def trilaterate(
         beacon_indices=chosen,
         used_radical_centre=used_radical_centre,
     )
+
+
+@dataclass(frozen=True, eq=False)
+class PathFixes:
+    """Outcome of :func:`trilaterate_path`: one fix per row of a range table.
+
+    Attributes:
+        statuses: ``(n,)`` the :func:`trilaterate` status of each row.
+        positions: ``(n, 2)`` estimated ``(x, y)`` in {W}, metres; NaN where not ok.
+        used_radical_centre: ``(n,)`` whether the paper method fell back to the radical centre.
+    """
+
+    statuses: tuple[str, ...]
+    positions: FloatArray
+    used_radical_centre: npt.NDArray[np.bool_]
+
+    @property
+    def ok(self) -> npt.NDArray[np.bool_]:
+        """``(n,)`` whether each row gave a position."""
+        return np.isfinite(self.positions[:, 0])
+
+
+def trilaterate_path(
+    beacons: npt.ArrayLike,
+    distances: npt.ArrayLike,
+    sensor_height: float,
+    method: str = "paper",
+    *,
+    height_tolerance_m: float = DEFAULT_HEIGHT_TOLERANCE_M,
+    collinearity_tolerance: float = DEFAULT_COLLINEARITY_TOLERANCE,
+) -> PathFixes:
+    """:func:`trilaterate` for every row of a range table at once (Sec. III.A).
+
+    The paper method with three beacons runs as arrays over the rows, with the same
+    arithmetic as :func:`circle_intersections` and :func:`paper_centroid`; the rows that need
+    the radical-centre fallback, and every row of other setups (``"least_squares"``, more
+    than three beacons), go through :func:`trilaterate` one by one.
+
+    Args:
+        beacons: ``(b, 3)`` beacon positions ``(x, y, z)`` in {W}, metres.
+        distances: ``(n, b)`` measured slant ranges, metres; NaN (or inf) marks a missing one.
+        sensor_height, method, height_tolerance_m, collinearity_tolerance: as
+            :func:`trilaterate`.
+
+    Returns:
+        A :class:`PathFixes` whose row ``i`` agrees with ``trilaterate(beacons, distances[i],
+        ...)`` in status and position.
+
+    Raises:
+        ValueError: as :func:`trilaterate`, and for a table that is not ``(n, b)``.
+    """
+    beacon_array = _beacon_array(beacons, "beacons")
+    table = np.asarray(distances, dtype=np.float64)
+    if table.ndim != 2 or table.shape[1] != len(beacon_array):
+        raise ValueError(
+            f"distances must have shape (n, {len(beacon_array)}) (rows x beacons), "
+            f"got {table.shape}"
+        )
+    if np.any(table[np.isfinite(table)] < 0.0):
+        raise ValueError("distances must be non-negative metres (NaN marks a missing range)")
+    height = _finite_float(sensor_height, "sensor_height")
+    if method not in TRILATERATION_METHODS:
+        raise ValueError(f"method must be one of {TRILATERATION_METHODS}, got {method!r}")
+    if not height_tolerance_m >= 0.0:
+        raise ValueError(f"height_tolerance_m must be >= 0, got {height_tolerance_m!r}")
+    if not collinearity_tolerance >= 0.0:
+        raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
+    n_rows = len(table)
+    positions = np.full((n_rows, 2), np.nan)
+    statuses = np.full(n_rows, OK, dtype=object)
+    fallback = np.zeros(n_rows, dtype=bool)
+    options = {
+        "height_tolerance_m": height_tolerance_m,
+        "collinearity_tolerance": collinearity_tolerance,
+    }
+    if method != "paper" or len(beacon_array) != 3:
+        one_by_one = np.arange(n_rows)
+    else:
+        valid = np.isfinite(table).all(axis=1)
+        statuses[~valid] = STATUS_TOO_FEW_BEACONS
+        vertical = beacon_array[:, 2] - height
+        with np.errstate(invalid="ignore"):
+            short = (table < np.abs(vertical) - height_tolerance_m).any(axis=1) & valid
+        statuses[short] = STATUS_DISTANCE_BELOW_HEIGHT
+        usable = valid & ~short
+        centres = beacon_array[:, :2]
+        if _are_collinear(centres, collinearity_tolerance):
+            statuses[usable] = STATUS_COLLINEAR_BEACONS
+            return PathFixes(tuple(statuses), positions, fallback)
+        radii = np.sqrt(np.maximum(table[usable] ** 2 - vertical**2, 0.0))
+        centroid, met = _paper_centroids(centres, radii)
+        rows = np.flatnonzero(usable)
+        positions[rows[met]] = centroid[met]
+        centre = _radical_centres(centres, radii[~met]) if not met.all() else None
+        if centre is None:
+            one_by_one = rows[~met]
+        else:
+            positions[rows[~met]] = centre
+            fallback[rows[~met]] = True
+            one_by_one = rows[:0]
+    for row in one_by_one:
+        fix = trilaterate(beacon_array, table[row], height, method, **options)  # type: ignore[arg-type]
+        statuses[row] = fix.status
+        fallback[row] = fix.used_radical_centre
+        if fix.position is not None:
+            positions[row] = fix.position
+    bad = (statuses == OK) & ~np.isfinite(positions).all(axis=1)
+    statuses[bad] = STATUS_NUMERICAL_FAILURE
+    positions[bad] = np.nan
+    return PathFixes(tuple(statuses), positions, fallback)
+
+
+def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | None:
+    """:func:`radical_centre` of one set of three centres for rows of radii ``(m, 3)``.
+
+    The same least-squares problem as :func:`linearised_least_squares`, solved for all rows
+    at once (one right-hand side per row); ``None`` when the centres are collinear.
+    """
+    squared_norms = np.einsum("ij,ij->i", centres, centres)
+    design = -2.0 * (centres - centres.mean(axis=0))
+    radii_sq = radii**2
+    rhs = (radii_sq - np.mean(radii_sq, axis=1, keepdims=True)) - (
+        squared_norms - squared_norms.mean()
+    )
+    solution, _, rank, _ = np.linalg.lstsq(design, rhs.T, rcond=None)
+    if rank < 2:
+        return None
+    return np.asarray(solution.T)
+
+
+def _paper_centroids(
+    centres: FloatArray, radii: FloatArray
+) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
+    """:func:`paper_centroid` over rows of radii ``(m, 3)`` for one set of three centres.
+
+    Returns ``(centroids (m, 2), met (m,))``; ``met`` is False where some pair of circles does
+    not intersect (those rows need the radical-centre fallback; their centroid is garbage).
+    """
+    kept = np.empty((len(radii), 3, 2))
+    met = np.ones(len(radii), dtype=bool)
+    for slot, (i, j) in enumerate(((0, 1), (1, 2), (0, 2))):
+        k = 3 - i - j
+        ca, cb = centres[i], centres[j]
+        offset = cb - ca
+        separation = math.hypot(offset[0], offset[1])
+        if separation == 0.0:
+            met[:] = False
+            continue
+        ra, rb = radii[:, i], radii[:, j]
+        ra_sq, rb_sq = ra * ra, rb * rb
+        along = (ra_sq - rb_sq + separation**2) / (2.0 * separation)
+        half_chord_sq = ra_sq - along * along
+        tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(
+            np.maximum(ra_sq, rb_sq), separation**2
+        )
+        met &= half_chord_sq >= -tolerance
+        unit = offset / separation
+        foot = ca + along[:, None] * unit
+        half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
+        normal = np.array([-unit[1], unit[0]])
+        first = foot + half_chord[:, None] * normal
+        second = foot - half_chord[:, None] * normal
+        miss_first = np.abs(np.hypot(*(first - centres[k]).T) - radii[:, k])
+        miss_second = np.abs(np.hypot(*(second - centres[k]).T) - radii[:, k])
+        kept[:, slot] = np.where((miss_second < miss_first)[:, None], second, first)
+    return np.mean(kept, axis=1), met
 
 
 # ---------------------------------------------------------------------------------------------

@@ -224,9 +224,8 @@ def run_table(setup: Setup, n_runs: int, seed: int) -> list[RowResult]:
     ranger = make_ranger(setup.config, setup.sensor_height_m)
     for run in range(n_runs):
         rng = np.random.default_rng([seed, len(table.areas), run])
-        ranges, _ = measure_path_ranges(
-            ranger, setup.world, setup.path, setup.runner_config(table.distances_mm[0]), rng
-        )
+        names = setup.runner_config(table.distances_mm[0]).beacon_names
+        ranges, _ = measure_path_ranges(ranger, setup.world, setup.path, names, rng)
         for row in rows:
             result = BlockExpansion(setup.runner_config(row.distances_mm)).run(
                 setup.path, distance_table=ranges
