@@ -166,7 +166,7 @@ def distance_to_segment(
     return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
 
 
-POLYLINE_BLOCK_SEGMENTS = 16
+POLYLINE_BLOCK_SEGMENTS = 8
 """Consecutive polyline segments bounded together by one circle in :func:`distances_to_polyline`."""
 
 
@@ -174,10 +174,11 @@ def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> Flo
     """Distance (metres) from each point to the nearest segment of a polyline.
 
     This is the per-point "path error" of Figs. 5, 7 and 8. The segments are taken in blocks
-    of :data:`POLYLINE_BLOCK_SEGMENTS`, each bounded by a circle; a block is searched only
-    when its circle could hold a point nearer than the farthest point of the nearest circle,
-    so the result is the exact minimum over all segments (as
-    :func:`distances_to_polyline_reference`, which searches every segment).
+    of :data:`POLYLINE_BLOCK_SEGMENTS`, each bounded by a circle. For each point the block
+    whose circle comes nearest is searched first; its distance bounds the answer, so only the
+    blocks whose circles come within that distance are searched too. The result is the exact
+    minimum over all segments (as :func:`distances_to_polyline_reference`, which searches
+    every segment).
 
     Args:
         points: ``(m, 2)`` points, metres.
@@ -195,29 +196,43 @@ def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> Flo
         np.arange(n_blocks * POLYLINE_BLOCK_SEGMENTS).reshape(n_blocks, -1), n_segments - 1
     )
     block_vertices = np.concatenate([line[members], line[members[:, -1:] + 1]], axis=1)
-    low, high = block_vertices.min(axis=1), block_vertices.max(axis=1)
-    centres = 0.5 * (low + high)
+    centres = 0.5 * (block_vertices.min(axis=1) + block_vertices.max(axis=1))
     radii = np.sqrt(((block_vertices - centres[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
-    to_centre = np.hypot(p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1])
-    upper = (to_centre + radii).min(axis=1)
+    lower = np.hypot(p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1]) - radii
+    blocks = _PolylineBlocks(line, members)
+    rows = np.arange(len(p))
+    upper = np.sqrt(blocks.nearest_sq(p, rows, np.argmin(lower, axis=1)))
     # The slack absorbs the rounding of the bounds (far below any distance that matters).
-    slack = 1e-9 * (1.0 + upper)
-    point_index, block_index = np.nonzero(to_centre - radii <= (upper + slack)[:, None])
-    starts = line[members]  # (blocks, block size, 2)
-    direction = line[members + 1] - starts
-    length_sq = direction[..., 0] * direction[..., 0] + direction[..., 1] * direction[..., 1]
-    safe_length_sq = np.where(length_sq > 0.0, length_sq, 1.0)
-    sx, sy = starts[block_index, :, 0], starts[block_index, :, 1]  # (pairs, block size)
-    dx, dy = direction[block_index, :, 0], direction[block_index, :, 1]
-    rx = p[point_index, 0, None] - sx
-    ry = p[point_index, 1, None] - sy
-    t = np.clip((rx * dx + ry * dy) / safe_length_sq[block_index], 0.0, 1.0)
-    t = np.where(length_sq[block_index] > 0.0, t, 0.0)
-    gx, gy = rx - t * dx, ry - t * dy
-    nearest_sq = (gx * gx + gy * gy).min(axis=1)
-    # np.nonzero lists the pairs point by point, and every point has its nearest block.
+    point_index, block_index = np.nonzero(lower <= (upper + 1e-9 * (1.0 + upper))[:, None])
+    nearest_sq = blocks.nearest_sq(p, point_index, block_index)
+    # np.nonzero lists the pairs point by point, and every point has its first block.
     first_pair = np.flatnonzero(np.diff(point_index, prepend=-1))
     return np.sqrt(np.minimum.reduceat(nearest_sq, first_pair))
+
+
+class _PolylineBlocks:
+    """The segments of a polyline in blocks, as component arrays ``(blocks, block size)``."""
+
+    def __init__(self, line: FloatArray, members: npt.NDArray[np.intp]) -> None:
+        starts = line[members]
+        direction = line[members + 1] - starts
+        self.sx, self.sy = starts[..., 0], starts[..., 1]
+        self.dx, self.dy = direction[..., 0], direction[..., 1]
+        length_sq = self.dx * self.dx + self.dy * self.dy
+        self.degenerate = length_sq == 0.0
+        self.safe_length_sq = np.where(self.degenerate, 1.0, length_sq)
+
+    def nearest_sq(
+        self, p: FloatArray, point_index: npt.NDArray[np.intp], block_index: npt.NDArray[np.intp]
+    ) -> FloatArray:
+        """Per (point, block) pair, the squared distance to the block's nearest segment."""
+        dx, dy = self.dx[block_index], self.dy[block_index]
+        rx = p[point_index, 0, None] - self.sx[block_index]
+        ry = p[point_index, 1, None] - self.sy[block_index]
+        t = np.clip((rx * dx + ry * dy) / self.safe_length_sq[block_index], 0.0, 1.0)
+        t[self.degenerate[block_index]] = 0.0
+        gx, gy = rx - t * dx, ry - t * dy
+        return np.asarray((gx * gx + gy * gy).min(axis=1))
 
 
 def distances_to_polyline_reference(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
