@@ -308,6 +308,10 @@ def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, f
     return sigma, sigma_prime
 
 
+MAX_PATH_SAMPLES = 1_000_000
+"""Most samples :func:`parabolic_path` returns (a 40 km drive at the paper's 4 mm step)."""
+
+
 def parabolic_path(
     x_start_m: float = 2.75,
     x_end_m: float = 0.55,
@@ -329,6 +333,10 @@ def parabolic_path(
 
     Returns:
         ``(n, 2)`` points from ``x_start_m`` towards ``x_end_m``; the last is the end point.
+
+    Raises:
+        ValueError: for non-finite arguments, equal ends, a non-positive step, or a curve
+            whose arc length is not finite or needs more than :data:`MAX_PATH_SAMPLES` steps.
     """
     for name, value in (
         ("x_start_m", x_start_m),
@@ -346,8 +354,21 @@ def parabolic_path(
     def curve(x: FloatArray) -> FloatArray:
         return np.column_stack([x, vertex[1] + quadratic_coefficient_per_m * (x - vertex[0]) ** 2])
 
-    dense = curve(np.linspace(x_start_m, x_end_m, 20001))
-    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    with np.errstate(over="ignore", invalid="ignore"):
+        dense = curve(np.linspace(x_start_m, x_end_m, 20001))
+        arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    if not np.all(np.isfinite(dense)) or not math.isfinite(arc[-1]):
+        raise ValueError(
+            "the parabola's arc length is not finite in float64: choose smaller coordinates "
+            f"or coefficient (x_start_m={x_start_m!r}, x_end_m={x_end_m!r}, "
+            f"quadratic_coefficient_per_m={quadratic_coefficient_per_m!r})"
+        )
+    length = float(arc[-1])
+    if length > MAX_PATH_SAMPLES * step_m:
+        raise ValueError(
+            f"the path is {length:.3g} m long, more than MAX_PATH_SAMPLES "
+            f"({MAX_PATH_SAMPLES}) steps of step_m = {step_m!r} m: increase step_m or shorten it"
+        )
     stations = np.arange(0.0, arc[-1], step_m)
     if arc[-1] - stations[-1] > 1e-9:
         stations = np.append(stations, arc[-1])

@@ -143,6 +143,46 @@ class CalibrationResult:
         return self.status == OK
 
 
+SAFE_EXPONENT = 200
+"""Inputs whose magnitudes all lie within ``2**+-200`` are computed as given (their squares stay
+far from overflow and underflow); larger or smaller ones are first scaled by a power of two,
+which is exact, and the results scaled back."""
+
+
+def unit_scale(*arrays: npt.ArrayLike) -> float:
+    """The power of two to divide lengths by so that the largest finite magnitude of
+    ``arrays`` is about 1, or 1.0 when every magnitude lies within ``2**+-SAFE_EXPONENT``."""
+    largest = 0.0
+    for values in arrays:
+        magnitudes = np.abs(np.asarray(values, dtype=np.float64))
+        finite = magnitudes[np.isfinite(magnitudes)]
+        if finite.size:
+            largest = max(largest, float(finite.max()))
+    if largest == 0.0 or math.ldexp(1.0, -SAFE_EXPONENT) <= largest <= math.ldexp(
+        1.0, SAFE_EXPONENT
+    ):
+        return 1.0
+    return math.ldexp(1.0, math.frexp(largest)[1])
+
+
+def _finite_points(values: npt.ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
+    """``values`` as a float array of ``shape``, or a ValueError naming ``name``."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.shape != shape and not (array.size == math.prod(shape) and array.ndim <= 1):
+        raise ValueError(f"{name} must have shape {shape} (metres), got {array.shape}")
+    array = array.reshape(shape)
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite metres, got {array.tolist()!r}")
+    return array
+
+
+def _radius(value: float, name: str) -> float:
+    number = float(value)
+    if not (math.isfinite(number) and number >= 0.0):
+        raise ValueError(f"{name} must be a finite non-negative number of metres, got {value!r}")
+    return number
+
+
 # ---------------------------------------------------------------------------------------------
 # Circle geometry in the sensor plane
 # ---------------------------------------------------------------------------------------------
@@ -154,19 +194,37 @@ def circle_intersections(
     """Intersection points of two circles in the plane, as a ``(k, 2)`` array, k in {0, 1, 2}.
 
     Circles that miss each other by a rounding error (relative 1e-12 of the squared radius)
-    are taken as tangent and give one point. Concentric circles give no point.
+    are taken as tangent and give one point. Concentric circles give no point. Any finite
+    input is answered (lengths beyond ``2**+-SAFE_EXPONENT`` are scaled first).
+
+    Raises:
+        ValueError: for centres that are not finite ``(2,)`` points or radii that are not
+            finite and non-negative.
     """
-    ca = np.asarray(centre_a, dtype=np.float64).reshape(2)
-    cb = np.asarray(centre_b, dtype=np.float64).reshape(2)
+    ca = _finite_points(centre_a, (2,), "centre_a")
+    cb = _finite_points(centre_b, (2,), "centre_b")
+    radius_a = _radius(radius_a, "radius_a")
+    radius_b = _radius(radius_b, "radius_b")
+    scale = unit_scale(ca, cb, radius_a, radius_b)
+    if scale != 1.0:
+        return scale * _circle_intersections(
+            ca / scale, radius_a / scale, cb / scale, radius_b / scale
+        )
+    return _circle_intersections(ca, radius_a, cb, radius_b)
+
+
+def _circle_intersections(
+    ca: FloatArray, radius_a: float, cb: FloatArray, radius_b: float
+) -> FloatArray:
     offset = cb - ca
     separation = math.hypot(offset[0], offset[1])
     if separation == 0.0:
         return np.empty((0, 2))
     # Squares as products, as :func:`trilaterate_path` computes them over arrays.
     ra_sq, rb_sq = radius_a * radius_a, radius_b * radius_b
-    along = (ra_sq - rb_sq + separation**2) / (2.0 * separation)
+    along = (ra_sq - rb_sq + separation * separation) / (2.0 * separation)
     half_chord_sq = ra_sq - along * along
-    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(ra_sq, rb_sq, separation**2)
+    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(ra_sq, rb_sq, separation * separation)
     if half_chord_sq < -tolerance:
         return np.empty((0, 2))
     unit = offset / separation
@@ -187,10 +245,16 @@ def radical_axis(
     ``2 (c_b - c_a) . p = r_a^2 - r_b^2 + |c_b|^2 - |c_a|^2``; when the circles meet, this is
     the line through both intersection points (the "line of intersection" of Sec. III.A).
     """
-    ca = np.asarray(centre_a, dtype=np.float64).reshape(2)
-    cb = np.asarray(centre_b, dtype=np.float64).reshape(2)
+    ca = _finite_points(centre_a, (2,), "centre_a")
+    cb = _finite_points(centre_b, (2,), "centre_b")
+    radius_a = _radius(radius_a, "radius_a")
+    radius_b = _radius(radius_b, "radius_b")
+    # The line is unchanged when both sides are divided by a power of two; beyond
+    # 2**+-SAFE_EXPONENT the equation is returned divided so, to stay finite.
+    scale = unit_scale(ca, cb, radius_a, radius_b)
+    ca, cb, radius_a, radius_b = ca / scale, cb / scale, radius_a / scale, radius_b / scale
     normal = 2.0 * (cb - ca)
-    offset = float(radius_a**2 - radius_b**2 + cb @ cb - ca @ ca)
+    offset = float(radius_a * radius_a - radius_b * radius_b + cb @ cb - ca @ ca)
     return normal, offset
 
 
@@ -203,8 +267,18 @@ def linearised_least_squares(centres: npt.ArrayLike, radii: npt.ArrayLike) -> Fl
     consistent and the solution is their radical centre. ``None`` when the centres are
     collinear (rank below 2).
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
-    r = np.asarray(radii, dtype=np.float64).reshape(-1)
+    c = np.asarray(centres, dtype=np.float64)
+    if c.ndim != 2 or c.shape[1] != 2 or len(c) < 2 or not np.all(np.isfinite(c)):
+        raise ValueError(
+            f"centres must be an (n, 2) array of finite metres with n >= 2, got shape {c.shape}"
+        )
+    r = np.asarray(radii, dtype=np.float64)
+    if r.shape != (len(c),) or not np.all(np.isfinite(r)):
+        raise ValueError(f"radii must be {len(c)} finite metres, got shape {r.shape}")
+    scale = unit_scale(c, r)
+    if scale != 1.0:
+        solution = linearised_least_squares(c / scale, r / scale)
+        return None if solution is None else scale * solution
     squared_norms = np.einsum("ij,ij->i", c, c)
     design = -2.0 * (c - c.mean(axis=0))
     rhs = (r**2 - np.mean(r**2)) - (squared_norms - squared_norms.mean())
@@ -219,8 +293,8 @@ def radical_centre(centres: npt.ArrayLike, radii: npt.ArrayLike) -> FloatArray |
 
     ``None`` when the centres are collinear (the axes are parallel).
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(3, 2)
-    return linearised_least_squares(c, np.asarray(radii, dtype=np.float64).reshape(3))
+    c = _finite_points(centres, (3, 2), "centres")
+    return linearised_least_squares(c, _finite_points(radii, (3,), "radii"))
 
 
 def paper_centroid(centres: npt.ArrayLike, radii: npt.ArrayLike) -> tuple[FloatArray | None, bool]:
@@ -235,8 +309,10 @@ def paper_centroid(centres: npt.ArrayLike, radii: npt.ArrayLike) -> tuple[FloatA
         ``(position, used_radical_centre)``; position is ``None`` only for collinear centres
         when the fallback is needed.
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(3, 2)
-    r = np.asarray(radii, dtype=np.float64).reshape(3)
+    c = _finite_points(centres, (3, 2), "centres")
+    r = _finite_points(radii, (3,), "radii")
+    if np.any(r < 0.0):
+        raise ValueError(f"radii must be non-negative metres, got {r.tolist()!r}")
     kept: list[FloatArray] = []
     for i, j in ((0, 1), (1, 2), (0, 2)):
         k = 3 - i - j
@@ -404,6 +480,30 @@ def trilaterate(
         raise ValueError(f"height_tolerance_m must be >= 0, got {height_tolerance_m!r}")
     if not collinearity_tolerance >= 0.0:
         raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
+
+    scale = unit_scale(beacon_array, distance_array, height)
+    if scale != 1.0:
+        scaled = trilaterate(
+            beacon_array / scale,
+            distance_array / scale,
+            height / scale,
+            method,
+            refine=refine,
+            height_tolerance_m=height_tolerance_m / scale,
+            collinearity_tolerance=collinearity_tolerance,
+        )
+        if scaled.position is None:
+            return scaled
+        position = scale * np.asarray(scaled.position)
+        return TrilaterationResult(
+            status=OK,
+            pose=Pose(float(position[0]), float(position[1]), 0.0),
+            position=_frozen(position),
+            method=method,
+            has_heading=False,
+            beacon_indices=scaled.beacon_indices,
+            used_radical_centre=scaled.used_radical_centre,
+        )
 
     valid_indices = np.flatnonzero(np.isfinite(distance_array))
     if len(valid_indices) < 3:
@@ -641,6 +741,17 @@ def _paper_centroids(
 # ---------------------------------------------------------------------------------------------
 
 
+def _scaled_back(result: CalibrationResult, scale: float) -> CalibrationResult:
+    """A calibration computed on lengths divided by ``scale``, in the caller's units."""
+    return CalibrationResult(
+        status=result.status,
+        position=None if result.position is None else _frozen(scale * result.position),
+        condition=result.condition,
+        triangle_area_m2=result.triangle_area_m2 * scale * scale,
+        message=result.message,
+    )
+
+
 def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> FloatArray:
     array = np.asarray(positions, dtype=np.float64)
     if array.shape not in ((3, 2), (3, 3)):
@@ -705,6 +816,17 @@ def auto_calibrate(
         raise ValueError(f"max_condition must be > 1, got {max_condition!r}")
     if not intersection_tolerance_m >= 0.0:
         raise ValueError(f"intersection_tolerance_m must be >= 0, got {intersection_tolerance_m!r}")
+    scale = unit_scale(points, ranges)
+    if scale != 1.0:
+        return _scaled_back(
+            auto_calibrate(
+                points / scale,
+                ranges / scale,
+                max_condition=max_condition,
+                intersection_tolerance_m=intersection_tolerance_m / scale,
+            ),
+            scale,
+        )
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
@@ -734,11 +856,29 @@ def auto_calibrate(
     along_x = float(e_x @ displacements[1])
     across = displacements[1] - along_x * e_x
     along_y = float(np.linalg.norm(across))
+    if not along_y > 0.0:
+        return CalibrationResult(
+            status=STATUS_COLLINEAR_POSITIONS,
+            condition=condition,
+            triangle_area_m2=area,
+            message="calibration positions are collinear to float precision",
+        )
     e_y = across / along_y
     e_z = np.cross(e_x, e_y)
-    x = (d1**2 - d2**2 + separation**2) / (2.0 * separation)
-    y = (d1**2 - d3**2 + along_x**2 + along_y**2) / (2.0 * along_y) - along_x * x / along_y
-    height_sq = d1**2 - x**2 - y**2
+    # Products, not ``**``: under an extreme (user-allowed) condition they overflow to inf
+    # instead of raising OverflowError, and the check below reports it.
+    x = (d1 * d1 - d2 * d2 + separation * separation) / (2.0 * separation)
+    y = (d1 * d1 - d3 * d3 + along_x * along_x + along_y * along_y) / (
+        2.0 * along_y
+    ) - along_x * x / along_y
+    height_sq = d1 * d1 - x * x - y * y
+    if not math.isfinite(height_sq):
+        return CalibrationResult(
+            status=STATUS_COLLINEAR_POSITIONS,
+            condition=condition,
+            triangle_area_m2=area,
+            message="calibration positions are too nearly collinear to compute with",
+        )
     if height_sq < 0.0:
         # The radical line of the three spheres pierces the plane of the positions at the
         # local (x, y); it lies outside the spheres by this radial gap.
