@@ -566,10 +566,24 @@ class ThreePointExtractor:
         if current_side == 0.0:
             return 1.0
 
-        def excess(t: float) -> float:
-            return self.boundary_distance(previous + t * (current - previous)) - target
+        ax, ay = (float(v) for v in self.boundary_a)
+        ux, uy = float(self.boundary_b[0]) - ax, float(self.boundary_b[1]) - ay
+        length_sq = ux * ux + uy * uy
+        px, py = float(previous[0]) - ax, float(previous[1]) - ay
+        qx, qy = float(current[0]) - float(previous[0]), float(current[1]) - float(previous[1])
 
-        return float(brentq(excess, 0.0, 1.0, xtol=1e-15, rtol=4.0 * np.finfo(float).eps))
+        def excess(t: float) -> float:
+            # D(previous + t (current - previous)) - target, in plain floats.
+            rx, ry = px + t * qx, py + t * qy
+            s = min(max((rx * ux + ry * uy) / length_sq, 0.0), 1.0)
+            return math.hypot(rx - s * ux, ry - s * uy) - target
+
+        # D carries rounding noise of about 1e-16 m, which moves its root along the segment
+        # by more than 1e-15: the root is asked to 1e-12, and brentq is not asked to raise if
+        # the noise keeps it from meeting even that.
+        return float(
+            brentq(excess, 0.0, 1.0, xtol=1e-12, rtol=4.0 * np.finfo(float).eps, disp=False)
+        )
 
 
 def extract_three_points(
