@@ -59,7 +59,7 @@ from sonar_gym.routes import (
 )
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
-from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/BlockExpansion-v0"
@@ -353,6 +353,7 @@ class BlockExpansionEnv(SonarEnv):
         self._new_beacons = self._slot_names[3:]
         self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
         self._paper_path_samples: dict[PathParameters, FloatArray] = {}
+        self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
@@ -475,7 +476,15 @@ class BlockExpansionEnv(SonarEnv):
         world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
         path = self._sampled_path(path_parameters)
         with self._timed("sensing"):
-            ranges, durations_s = range_along_route(self.ranger, world, path, tuple(beacons_m), rng)
+            key = (path_parameters, tuple(beacons_m.items()))
+            if self._route_geometry is None or self._route_geometry[0] != key:
+                # Kept for the next episode: with the Table I layout and the paper path
+                # only the noise changes.
+                geometry = self.ranger.route_geometry(world, path, tuple(beacons_m))
+                self._route_geometry = (key, geometry)
+            ranges, durations_s = range_along_route(
+                self.ranger, world, path, tuple(beacons_m), rng, self._route_geometry[1]
+            )
         self._episode = _Episode(
             world=world,
             scenario=scenario,

@@ -20,7 +20,7 @@ from sonar_gym.localization.roh import parabolic_path
 from sonar_gym.maps import inside_triangle, side_of_line, triangle_area
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar.pulse_echo import WorldLike
-from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
 
 LOCALIZATION_PERIOD_S = 0.04
 """Roh et al. Sec. III.C: "The localization occurs once every 40ms in our system"."""
@@ -154,6 +154,7 @@ def range_along_route(
     path: npt.ArrayLike,
     beacon_names: Sequence[str],
     rng: np.random.Generator,
+    geometry: RouteGeometry | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Range every beacon from every route sample, one ranging round per sample.
 
@@ -164,11 +165,19 @@ def range_along_route(
         beacon_names: the beacons, in the column order wanted (e.g.
             :attr:`~sonar_gym.localization.roh.BlockExpansionConfig.beacon_names`).
         rng: the sensor's jitter.
+        geometry: ``ranger.route_geometry(world, path, beacon_names)`` if already known
+            (the same route among the same beacons again); computed when None.
 
     Returns:
         ``(ranges, durations)``: ``(n, beacons)`` measured ranges in metres (NaN for a
         dropout) and ``(n,)`` the duration of each sample's ranging round, seconds.
     """
-    route = ranger.measure_route(world, path, rng, tuple(beacon_names))
+    if geometry is None:
+        geometry = ranger.route_geometry(world, path, tuple(beacon_names))
+    elif geometry.emitter_names != tuple(beacon_names):
+        raise ValueError(
+            f"geometry is for the beacons {geometry.emitter_names}, not {tuple(beacon_names)}"
+        )
+    route = ranger.measure_geometry(geometry, world.temperature_c, rng)
     ranges = route.distances[:, 0, :]
     return np.where(ranges >= 0.0, ranges, np.nan), route.round_durations_s
