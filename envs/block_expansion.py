@@ -9,8 +9,9 @@ boundary (Sec. III.C), auto-calibrates the next area's beacon from the ranges me
 lie on a short stretch of a gently curved path, so the calibration is badly conditioned; which
 d's keep it in check is the free choice the paper leaves to its user (Sec. IV.E). Here an agent
 makes that choice. The method itself runs unchanged:
-:class:`sonar_gym.localization.roh.BlockExpansion`, fed by the one-way ranging sensor
-:class:`sonar_gym.sonar.ranging.BeaconRanger` through the runner's ``measure`` seam.
+:class:`sonar_gym.localization.roh.BlockExpansion`, fed a distance table (path samples x
+beacons) that the one-way ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger`
+measures along the whole path at reset (:func:`sonar_gym.routes.range_along_route`).
 """
 
 from __future__ import annotations

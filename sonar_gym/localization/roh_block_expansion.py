@@ -198,7 +198,8 @@ def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> Flo
     block_vertices = np.concatenate([line[members], line[members[:, -1:] + 1]], axis=1)
     centres = 0.5 * (block_vertices.min(axis=1) + block_vertices.max(axis=1))
     radii = np.sqrt(((block_vertices - centres[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
-    lower = np.hypot(p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1]) - radii
+    dx, dy = p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1]
+    lower = np.sqrt(dx * dx + dy * dy) - radii
     blocks = _PolylineBlocks(line, members)
     rows = np.arange(len(p))
     upper = np.sqrt(blocks.nearest_sq(p, rows, np.argmin(lower, axis=1)))

@@ -494,11 +494,11 @@ def trilaterate(
         )
         if scaled.position is None:
             return scaled
-        position = scale * np.asarray(scaled.position)
+        unscaled = scale * np.asarray(scaled.position)
         return TrilaterationResult(
             status=OK,
-            pose=Pose(float(position[0]), float(position[1]), 0.0),
-            position=_frozen(position),
+            pose=Pose(float(unscaled[0]), float(unscaled[1]), 0.0),
+            position=_frozen(unscaled),
             method=method,
             has_heading=False,
             beacon_indices=scaled.beacon_indices,
