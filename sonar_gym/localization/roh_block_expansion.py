@@ -305,8 +305,53 @@ def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, f
         raise ValueError("true must be a path y = f(x): its x must be strictly monotonic")
     y_difference = points[:, 1] - _y_on_path(points[:, 0], true_path)
     sigma = float(np.sqrt(np.mean(y_difference**2)))
-    sigma_prime = float(np.mean(distances_to_polyline(points, true_path)))
+    sigma_prime = float(np.mean(_distances_to_function_path(points, true_path, y_difference)))
     return sigma, sigma_prime
+
+
+MAX_WINDOW_SEGMENTS = 32
+"""Most segments :func:`_distances_to_function_path` searches per point as one window."""
+
+
+def _distances_to_function_path(
+    points: FloatArray, true_path: FloatArray, y_difference: FloatArray
+) -> FloatArray:
+    """:func:`distances_to_polyline` for a path ``y = f(x)`` (x strictly monotonic), metres.
+
+    The vertical gap ``|y - f(x)|`` (inside the path's x range), or the distance to the
+    nearer end vertex, bounds each point's distance ``u``; the nearest point of the path then
+    lies within ``x +- u``, so only the segments overlapping that x window can hold it. Points
+    whose window spans more than :data:`MAX_WINDOW_SEGMENTS` segments take the general search.
+    The per-segment arithmetic is :func:`distances_to_polyline`'s, so the results agree.
+    """
+    line = true_path
+    increasing = bool(line[0, 0] < line[-1, 0])
+    xs = line[:, 0] if increasing else line[::-1, 0]
+    to_ends = np.minimum(
+        np.hypot(points[:, 0] - line[0, 0], points[:, 1] - line[0, 1]),
+        np.hypot(points[:, 0] - line[-1, 0], points[:, 1] - line[-1, 1]),
+    )
+    within = (points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])
+    bound = np.where(within, np.minimum(np.abs(y_difference), to_ends), to_ends)
+    bound = bound * (1.0 + 1e-9) + 1e-12  # rounding slack
+    n_segments = len(line) - 1
+    # Segment k spans [xs[k], xs[k + 1]]; those meeting [x - bound, x + bound]:
+    first = np.clip(np.searchsorted(xs, points[:, 0] - bound, side="right") - 1, 0, n_segments - 1)
+    last = np.clip(np.searchsorted(xs, points[:, 0] + bound, side="left"), 1, n_segments) - 1
+    if not increasing:  # segment k of the reversed vertices is segment n - 1 - k of the path
+        first, last = n_segments - 1 - last, n_segments - 1 - first
+    count = last - first + 1
+    result = np.empty(len(points))
+    narrow = count <= MAX_WINDOW_SEGMENTS
+    if np.any(~narrow):
+        result[~narrow] = distances_to_polyline(points[~narrow], line)
+    if np.any(narrow):
+        width = int(count[narrow].max())
+        members = np.minimum(first[narrow, None] + np.arange(width), last[narrow, None])
+        blocks = _PolylineBlocks(line, members)
+        rows = np.arange(int(np.count_nonzero(narrow)))
+        result[narrow] = np.sqrt(blocks.nearest_sq(points[narrow], rows, rows))
+    return result
 
 
 MAX_PATH_SAMPLES = 1_000_000

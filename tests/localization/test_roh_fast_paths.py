@@ -19,6 +19,7 @@ from sonar_gym.localization.roh import (
     auto_calibrate,
     distances_to_polyline,
     parabolic_path,
+    path_errors,
     trilaterate,
     trilaterate_path,
 )
@@ -224,3 +225,17 @@ def test_the_array_run_is_the_fix_by_fix_run(areas, distances, method, seed: int
             fix.message,
             fix.used_radical_centre,
         )
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_path_errors_sigma_prime_is_the_mean_distance_over_every_segment(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 600))
+    x = np.linspace(-2.0, 3.0, n) + rng.uniform(-1e-3, 1e-3, n) * (n > 2)
+    x = np.sort(x) if seed % 2 else np.sort(x)[::-1]
+    path = np.column_stack([x, np.cumsum(rng.normal(0.0, rng.uniform(0.001, 0.5), n))])
+    noise = [1e-4, 1e-2, 0.3, 5.0][seed % 4]
+    points = path[rng.integers(0, n, 300)] + rng.normal(0.0, noise, (300, 2))
+    _, sigma_prime = path_errors(points, path)
+    reference = float(np.mean(distances_to_polyline_reference(points, path)))
+    assert sigma_prime == pytest.approx(reference, rel=1e-12, abs=1e-15)
