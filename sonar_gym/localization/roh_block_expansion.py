@@ -309,7 +309,7 @@ def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, f
     return sigma, sigma_prime
 
 
-MAX_WINDOW_SEGMENTS = 32
+MAX_WINDOW_SEGMENTS = 8
 """Most segments :func:`_distances_to_function_path` searches per point as one window."""
 
 
