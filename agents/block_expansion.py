@@ -33,18 +33,15 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.agents.base import ScriptedAgent
-from sonar_gym.envs.block_expansion import (
-    CURVATURE_SCALE_PER_M,
-    FRAME_CENTRE_M,
-    FRAME_HALF_SPAN_M,
-    PATH_STEP_M,
-    PRIOR_ONLY,
-    SURVEYED,
-    UNUSED,
-    BlockExpansionEnv,
-)
+from sonar_gym.envs.block_expansion import BlockExpansionEnv
+from sonar_gym.maps import MAP_FRAME_CENTRE_M as FRAME_CENTRE_M
+from sonar_gym.maps import MAP_FRAME_HALF_SPAN_M as FRAME_HALF_SPAN_M
+from sonar_gym.maps import PRIOR_ONLY, SURVEYED, UNUSED
 from sonar_gym.localization.roh import distance_to_segment, parabolic_path
 from sonar_gym.pose import FloatArray
+from sonar_gym.routes import CURVATURE_SCALE_PER_M, PATH_STEP_M
+
+ENV_ID = "SonarGym/BlockExpansion-v0"
 
 PAPER_FIRST_TRIPLE_M = (0.45, 0.25, 0.05)
 """d1, d2, d3 of Tables II-III and Figs. 6-7, metres."""

@@ -9,8 +9,9 @@ boundary (Sec. III.C), auto-calibrates the next area's beacon from the ranges me
 lie on a short stretch of a gently curved path, so the calibration is badly conditioned; which
 d's keep it in check is the free choice the paper leaves to its user (Sec. IV.E). Here an agent
 makes that choice. The method itself runs unchanged:
-:class:`sonar_gym.localization.roh.BlockExpansion`, fed by the one-way ranging sensor
-:class:`sonar_gym.sonar.ranging.BeaconRanger` through the runner's ``measure`` seam.
+:class:`sonar_gym.localization.roh.BlockExpansion`, fed a distance table (path samples x
+beacons) that the one-way ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger`
+measures along the whole path at reset (:func:`sonar_gym.routes.range_along_route`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ import numpy.typing as npt
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.geometry import StaticGeometry
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,
@@ -34,13 +36,31 @@ from sonar_gym.localization.roh import (
     BlockExpansion,
     BlockExpansionConfig,
     BlockExpansionResult,
-    parabolic_path,
     path_errors,
 )
+from sonar_gym.maps import (
+    CALIBRATED,
+    MAP_FRAME_CENTRE_M,
+    MAP_FRAME_HALF_SPAN_M,
+    PRIOR_ONLY,
+    SURVEYED,
+    UNUSED,
+    jittered_beacons,
+    new_beacons_of_areas,
+    to_map_frame,
+)
 from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.routes import (
+    CURVATURE_SCALE_PER_M,
+    PAPER_ROUTE,
+    ParabolicRoute,
+    random_parabolic_route,
+    range_along_route,
+    route_suits_areas,
+)
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
-from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/BlockExpansion-v0"
@@ -50,12 +70,6 @@ SCENARIO_NAME = "roh_beacons"
 TEMPERATURE_C = 20.0
 """Air temperature, deg C; the ranger converts with the speed of sound at this temperature too."""
 
-LOCALIZATION_PERIOD_S = 0.04
-"""Sec. III.C: "The localization occurs once every 40ms in our system"."""
-ROBOT_SPEED_MPS = 0.1
-"""Not in the paper (chosen): the robot's speed along the path, metres per second."""
-PATH_STEP_M = ROBOT_SPEED_MPS * LOCALIZATION_PERIOD_S
-"""Arc length between two fixes, metres (4 mm)."""
 FIRING_INTERVAL_S = 0.008
 """Not in the paper (chosen): time between two beacons' firings, seconds; a round of all five
 beacons takes the paper's 40 ms localization period."""
@@ -81,17 +95,13 @@ MIN_BEACON_CLEARANCE_M = 0.3
 BOUNDARY_END_MARGIN_M = 0.1
 """A path must cross each boundary at least this far from the boundary's end beacons, metres."""
 
-# Normalisation frame of positions in the observation: value = (coordinate - centre) / half.
-FRAME_CENTRE_M = np.array([2.0, 1.0, 1.25])
-FRAME_HALF_SPAN_M = np.array([2.5, 2.0, 1.25])
-CURVATURE_SCALE_PER_M = 2.0
+# Normalisation of the observation (positions use the beacon map's frame, sonar_gym.maps).
+FRAME_CENTRE_M = MAP_FRAME_CENTRE_M
+FRAME_HALF_SPAN_M = MAP_FRAME_HALF_SPAN_M
 CONDITION_LOG_SCALE = 4.0
 TRIANGLE_AREA_SCALE_M2 = 0.1
 NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
-
-SURVEYED, CALIBRATED, PRIOR_ONLY, UNUSED = 1.0, 0.5, 0.0, -1.0
-"""Beacon slot status values in the observation."""
 
 STATUS_RUNNING = "running"
 STATUS_LOCALIZATION_FAILED = "localization_failed"
@@ -146,65 +156,9 @@ class BlockExpansionEnvConfig:
         return self.n_areas - 1
 
 
-@dataclass(frozen=True)
-class PathParameters:
-    """The parabola ``y = vertex_y + curvature (x - vertex_x)^2`` from ``x_start`` to ``x_end``.
-
-    Metres and 1/m in {W}; sampled by :func:`parabolic_path` every :data:`PATH_STEP_M`.
-    """
-
-    x_start_m: float
-    x_end_m: float
-    vertex_m: tuple[float, float]
-    curvature_per_m: float
-
-    def sample(self) -> FloatArray:
-        """``(n, 2)`` positions of the receiver along the path, metres."""
-        return parabolic_path(
-            self.x_start_m, self.x_end_m, self.vertex_m, self.curvature_per_m, PATH_STEP_M
-        )
-
-    def y_at(self, x_m: float) -> float:
-        """y of the parabola at ``x_m``, metres."""
-        return self.vertex_m[1] + self.curvature_per_m * (x_m - self.vertex_m[0]) ** 2
-
-
-PAPER_PATH = PathParameters(2.75, 0.55, (1.6, 1.45), -0.9)
-"""The :func:`parabolic_path` defaults (ending at :data:`PAPER_PATH_X_END_M` per area count)."""
-
-
-class _RangingSeam:
-    """``measure(xy, beacon_xyz)`` for the runner: one :class:`BeaconRanger` round per position.
-
-    The runner asks for the beacons of a position one after another; the first request at a new
-    position fires every beacon once (one ranging round) and later requests read that round.
-    The rounds' durations are kept, so the sensing time of any stretch of the path is known.
-    """
-
-    def __init__(
-        self,
-        ranger: BeaconRanger,
-        world: World,
-        rng: np.random.Generator,
-        beacons_m: dict[str, tuple[float, float, float]],
-    ) -> None:
-        self.ranger = ranger
-        self.world = world
-        self.rng = rng
-        self.names = tuple(beacons_m)
-        self.column_of = {tuple(xyz): column for column, xyz in enumerate(beacons_m.values())}
-        self.durations_s: list[float] = []
-        self._position: tuple[float, float] | None = None
-        self._row: FloatArray = np.empty(0)
-
-    def __call__(self, xy: FloatArray, beacon_xyz: FloatArray) -> float:
-        position = (float(xy[0]), float(xy[1]))
-        if position != self._position:
-            round_ = self.ranger.measure(self.world, Pose(*position, 0.0), self.rng, self.names)
-            self._row = round_.distances[0]
-            self._position = position
-            self.durations_s.append(round_.duration_s)
-        return float(self._row[self.column_of[tuple(float(v) for v in beacon_xyz)]])
+PathParameters = ParabolicRoute
+PAPER_PATH = PAPER_ROUTE
+"""The paper-like parabola (ending at :data:`PAPER_PATH_X_END_M` per area count)."""
 
 
 def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> BeaconRanger:
@@ -220,39 +174,21 @@ def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> Beac
     )
 
 
-def measure_path_ranges(
-    ranger: BeaconRanger,
-    world: World,
-    path: npt.ArrayLike,
-    runner_config: BlockExpansionConfig,
-    rng: np.random.Generator,
-) -> tuple[FloatArray, FloatArray]:
-    """Range every beacon along a path with the sensor, through the runner's ``measure`` seam.
+@dataclass(frozen=True)
+class _RangingWorld:
+    """What the ranging sensor reads of a world (:class:`~sonar_gym.sonar.pulse_echo.WorldLike`):
+    the room's static geometry, shared by every episode, with the episode's beacons."""
 
-    Args:
-        ranger: the one-way ranging sensor.
-        world: the world whose emitters are the beacons of ``runner_config``.
-        path: ``(n, 2)`` true receiver positions, metres.
-        runner_config: the block expansion setup (its beacons fix the column order); its own
-            ``range_noise_std_m`` must be 0, the noise comes from the sensor.
-        rng: the sensor's jitter.
-
-    Returns:
-        ``(ranges, durations)``: ``(n, beacons)`` measured ranges in metres (NaN for a dropout)
-        and ``(n,)`` the duration of each position's ranging round, seconds.
-    """
-    if runner_config.range_noise_std_m != 0.0:
-        raise ValueError("runner_config.range_noise_std_m must be 0: the sensor adds the noise")
-    seam = _RangingSeam(ranger, world, rng, dict(runner_config.beacons_m))
-    ranges = BlockExpansion(runner_config).measure_ranges(path, measure=seam)
-    return ranges, np.array(seam.durations_s)
+    geometry: StaticGeometry
+    temperature_c: float
+    scenario: Scenario
 
 
 @dataclass
 class _Episode:
     """Everything one episode holds; pickles with the env."""
 
-    world: World
+    world: _RangingWorld
     scenario: Scenario
     beacons_m: dict[str, tuple[float, float, float]]
     prior_m: dict[str, FloatArray]
@@ -311,13 +247,16 @@ class BlockExpansionEnv(SonarEnv):
 
     | slice | meaning | range |
     |---|---|---|
-    | ``[0, 20)`` | 5 beacon slots (Area 1's three, then the new beacons in order): x, y, z, status | [-1, 1] |
-    | ``[20, 27)`` | path: x_start, y_start, x_end, y_end, vertex x, vertex y (scaled), curvature a / 2 per m | [-1, 1] |
-    | ``[27, 29)`` | one-hot: the boundary the action is for (the first when all at once; zeros at the end) | {0, 1} |
+    | ``[0, 20)`` | 5 beacon slots (Area 1's three, then the new ones): x, y, z, status | [-1, 1] |
+    | ``[20, 27)`` | path: x, y of start, end, vertex (scaled), curvature a / 2 per m | [-1, 1] |
+    | ``[27, 29)`` | one-hot: the boundary the action is for (see below) | {0, 1} |
     | ``29`` | 1 for three areas, 0 for two | {0, 1} |
     | ``30`` | fraction of the path already driven when this boundary's extraction starts | [0, 1] |
-    | ``[31, 34)`` | previous calibration: outcome (1 ok, -1 failed, 0 none), log10(condition) / 4, triangle area / 0.1 m^2 | [-1, 1] |
+    | ``[31, 34)`` | previous calibration: outcome, log10(condition) / 4, area / 0.1 m^2 | [-1, 1] |
     | ``[34, 36)`` | ranging: noise std / 0.01 m, timer period / 1e-4 s | [0, 1] |
+
+    The boundary one-hot marks the first boundary when all d's are chosen at once and is all
+    zeros at the end. The calibration outcome is 1 ok, -1 failed, 0 none yet.
 
     A slot's status is 1 for a surveyed beacon (exact), 0.5 for one the robot has calibrated
     (its calibrated position), 0 for one not yet calibrated (a rough prior: the true position
@@ -411,8 +350,11 @@ class BlockExpansionEnv(SonarEnv):
         config = self.config
         self._base_scenario = load_scenario(SCENARIO_NAME)
         self._areas = PAPER_TWO_AREAS if config.n_areas == 2 else PAPER_THREE_AREAS
-        self._slot_names = (*self._areas[0], *_new_beacons(self._areas))
+        self._slot_names = (*self._areas[0], *new_beacons_of_areas(self._areas))
         self._new_beacons = self._slot_names[3:]
+        self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
+        self._paper_path_samples: dict[PathParameters, FloatArray] = {}
+        self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
@@ -428,6 +370,10 @@ class BlockExpansionEnv(SonarEnv):
         }
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
         self._episode: _Episode | None = None
+
+    @property
+    def _paper_path(self) -> PathParameters:
+        return dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[self.config.n_areas])
 
     @property
     def areas(self) -> tuple[tuple[str, str, str], ...]:
@@ -527,11 +473,18 @@ class BlockExpansionEnv(SonarEnv):
         }
         emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
         scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
-        world = World(scenario, temperature_c=TEMPERATURE_C)
-        path = path_parameters.sample()
+        # Only the beacons move between episodes: the room's geometry is built once.
+        world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+        path = self._sampled_path(path_parameters)
         with self._timed("sensing"):
-            ranges, durations_s = measure_path_ranges(
-                self.ranger, world, path, self._runner_config(beacons_m, ()), rng
+            key = (path_parameters, tuple(beacons_m.items()))
+            if self._route_geometry is None or self._route_geometry[0] != key:
+                # Kept for the next episode: with the Table I layout and the paper path
+                # only the noise changes.
+                geometry = self.ranger.route_geometry(world, path, tuple(beacons_m))
+                self._route_geometry = (key, geometry)
+            ranges, durations_s = range_along_route(
+                self.ranger, world, path, tuple(beacons_m), rng, self._route_geometry[1]
             )
         self._episode = _Episode(
             world=world,
@@ -545,60 +498,48 @@ class BlockExpansionEnv(SonarEnv):
         )
         return self._info(position_error_m=0.0)
 
+    def _sampled_path(self, parameters: PathParameters) -> FloatArray:
+        """The path's samples; the paper path's are computed once per env (read-only)."""
+        if parameters != self._paper_path:
+            return parameters.sample()
+        if parameters not in self._paper_path_samples:
+            samples = parameters.sample()
+            samples.flags.writeable = False
+            self._paper_path_samples[parameters] = samples
+        return self._paper_path_samples[parameters]
+
     def _draw_layout_and_path(
         self, rng: np.random.Generator
     ) -> tuple[dict[str, tuple[float, float, float]], PathParameters]:
         """Beacons and path of an episode; random ones are redrawn until they are valid."""
         config = self.config
         table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
-        paper_path = dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas])
+        paper_path = self._paper_path
         if config.layout == "table_i" and config.path == "paper":
             return table_i, paper_path
         for _ in range(MAX_LAYOUT_TRIES):
-            beacons = table_i if config.layout == "table_i" else _jittered(table_i, rng)
-            path = paper_path if config.path == "paper" else _random_path(config.n_areas, rng)
-            if self._is_valid(beacons, path):
+            beacons = (
+                table_i
+                if config.layout == "table_i"
+                else jittered_beacons(table_i, rng, LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M)
+            )
+            path = (
+                paper_path
+                if config.path == "paper"
+                else random_parabolic_route(
+                    rng, PAPER_PATH_X_END_M[config.n_areas], RANDOM_CURVATURE_PER_M
+                )
+            )
+            if route_suits_areas(
+                path.sample(),
+                beacons,
+                self._areas,
+                self._base_scenario.bounds,
+                self.sensor_height_m + MIN_BEACON_CLEARANCE_M,
+                BOUNDARY_END_MARGIN_M,
+            ):
                 return beacons, path
         return table_i, paper_path
-
-    def _is_valid(
-        self, beacons: dict[str, tuple[float, float, float]], path_parameters: PathParameters
-    ) -> bool:
-        """Whether the path starts in Area 1, crosses each boundary once, in order, away from
-        its ends, and ends in the last area."""
-        xyz = {name: np.asarray(position) for name, position in beacons.items()}
-        if min(p[2] for p in xyz.values()) < self.sensor_height_m + MIN_BEACON_CLEARANCE_M:
-            return False
-        path = path_parameters.sample()
-        (x_min, y_min), (x_max, y_max) = self._base_scenario.bounds
-        if not (
-            np.all((path[:, 0] > x_min) & (path[:, 0] < x_max))
-            and np.all((path[:, 1] > y_min) & (path[:, 1] < y_max))
-        ):
-            return False
-        triangles = [np.array([xyz[n][:2] for n in area]) for area in self._areas]
-        if any(_triangle_area(t) < 0.3 for t in triangles):
-            return False
-        if not (_inside(path[0], triangles[0]) and _inside(path[-1], triangles[-1])):
-            return False
-        last_crossing = -1
-        for area, following in zip(self._areas[:-1], self._areas[1:], strict=True):
-            a, b = (xyz[n][:2] for n in area if n in following)
-            opposite = next(xyz[n][:2] for n in area if n not in following)
-            new = next(xyz[n][:2] for n in following if n not in area)
-            if _side(opposite, a, b) * _side(new, a, b) >= 0.0:
-                return False
-            sides = _side(path, a, b)
-            changes = np.flatnonzero(sides[1:] != sides[:-1])
-            if len(changes) != 1 or changes[0] <= last_crossing:
-                return False
-            crossing = path[changes[0] + 1]
-            length = float(np.linalg.norm(b - a))
-            along = float((crossing - a) @ (b - a)) / length
-            if not BOUNDARY_END_MARGIN_M < along < length - BOUNDARY_END_MARGIN_M:
-                return False
-            last_crossing = int(changes[0])
-        return True
 
     def _runner_config(
         self,
@@ -687,16 +628,16 @@ class BlockExpansionEnv(SonarEnv):
                 position, status = calibrated[name], CALIBRATED
             else:
                 position, status = episode.prior_m[name], PRIOR_ONLY
-            slots[index, :3] = _scaled_position(position)
+            slots[index, :3] = to_map_frame(position)
             slots[index, 3] = status
         observation[layout["beacons"]] = slots.reshape(-1)
         parameters = episode.path_parameters
         start = (parameters.x_start_m, parameters.y_at(parameters.x_start_m), 0.0)
         end = (parameters.x_end_m, parameters.y_at(parameters.x_end_m), 0.0)
         observation[layout["path"]] = [
-            *_scaled_position(start)[:2],
-            *_scaled_position(end)[:2],
-            *_scaled_position((*parameters.vertex_m, 0.0))[:2],
+            *to_map_frame(start)[:2],
+            *to_map_frame(end)[:2],
+            *to_map_frame((*parameters.vertex_m, 0.0))[:2],
             np.clip(parameters.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0),
         ]
         decided = len(episode.chosen)
@@ -817,62 +758,6 @@ def _unit_fraction(numerator: float, denominator: float) -> float:
     if denominator <= 0.0:
         return 0.0
     return float(np.clip(numerator / denominator, 0.0, 1.0))
-
-
-def _scaled_position(position: npt.ArrayLike) -> FloatArray:
-    """A position in {W} in the observation's [-1, 1] frame."""
-    scaled = (np.asarray(position, dtype=np.float64) - FRAME_CENTRE_M) / FRAME_HALF_SPAN_M
-    return np.clip(scaled, -1.0, 1.0)
-
-
-def _side(points: npt.ArrayLike, a: FloatArray, b: FloatArray) -> FloatArray:
-    """Sign of the cross product: which side of the line a-b each point lies on."""
-    p = np.asarray(points, dtype=np.float64)
-    direction = b - a
-    offset = p - a
-    return np.sign(direction[0] * offset[..., 1] - direction[1] * offset[..., 0])
-
-
-def _triangle_area(corners: FloatArray) -> float:
-    a, b, c = corners
-    return 0.5 * abs(float((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])))
-
-
-def _inside(point: FloatArray, corners: FloatArray) -> bool:
-    """Whether a point lies strictly inside a triangle."""
-    signs = [_side(point, corners[i], corners[(i + 1) % 3]) for i in range(3)]
-    return bool(all(s > 0 for s in signs) or all(s < 0 for s in signs))
-
-
-def _jittered(
-    beacons: dict[str, tuple[float, float, float]], rng: np.random.Generator
-) -> dict[str, tuple[float, float, float]]:
-    """Each beacon moved uniformly within the layout jitter."""
-    moved = {}
-    for name, (x, y, z) in beacons.items():
-        dx, dy = rng.uniform(-LAYOUT_JITTER_XY_M, LAYOUT_JITTER_XY_M, 2)
-        dz = rng.uniform(-LAYOUT_JITTER_Z_M, LAYOUT_JITTER_Z_M)
-        moved[name] = (float(x + dx), float(y + dy), float(z + dz))
-    return moved
-
-
-def _random_path(n_areas: int, rng: np.random.Generator) -> PathParameters:
-    """A parabola of random curvature from near the paper path's start to near its end."""
-    x_start = float(rng.uniform(2.65, 2.85))
-    x_end = float(PAPER_PATH_X_END_M[n_areas] + rng.uniform(-0.1, 0.1))
-    vertex_x = float(rng.uniform(1.45, 1.75))
-    curvature = float(rng.uniform(*RANDOM_CURVATURE_PER_M))
-    y_start = float(rng.uniform(0.15, 0.45))
-    vertex_y = y_start - curvature * (x_start - vertex_x) ** 2
-    return PathParameters(x_start, x_end, (vertex_x, vertex_y), curvature)
-
-
-def _new_beacons(areas: tuple[tuple[str, str, str], ...]) -> tuple[str, ...]:
-    """The beacon each later area adds to the one before it."""
-    return tuple(
-        next(name for name in following if name not in area)
-        for area, following in zip(areas[:-1], areas[1:], strict=True)
-    )
 
 
 def _final_status(result: BlockExpansionResult) -> str:

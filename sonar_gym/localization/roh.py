@@ -30,6 +30,7 @@ from sonar_gym.localization.roh_block_expansion import (
     BlockExpansionConfig,
     BlockExpansionResult,
     BoundaryCalibration,
+    PathFixLog,
     RangeFunction,
     ThreePointExtractor,
     ThreePoints,
@@ -43,6 +44,7 @@ from sonar_gym.localization.roh_trilateration import (
     DEFAULT_SENSOR_HEIGHT_M,
     TRILATERATION_METHODS,
     CalibrationResult,
+    PathFixes,
     TrilaterationResult,
     auto_calibrate,
     circle_intersections,
@@ -51,6 +53,7 @@ from sonar_gym.localization.roh_trilateration import (
     radical_axis,
     radical_centre,
     trilaterate,
+    trilaterate_path,
 )
 
 __all__ = [
@@ -72,6 +75,8 @@ __all__ = [
     "BlockExpansionResult",
     "BoundaryCalibration",
     "CalibrationResult",
+    "PathFixLog",
+    "PathFixes",
     "RangeFunction",
     "ThreePointExtractor",
     "ThreePoints",
@@ -88,4 +93,5 @@ __all__ = [
     "radical_axis",
     "radical_centre",
     "trilaterate",
+    "trilaterate_path",
 ]

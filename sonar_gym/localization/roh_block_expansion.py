@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -46,8 +47,9 @@ from sonar_gym.localization.roh_trilateration import (
     _frozen,
     auto_calibrate,
     trilaterate,
+    trilaterate_path,
 )
-from sonar_gym.pose import FloatArray
+from sonar_gym.pose import FloatArray, Pose
 
 IntArray = npt.NDArray[np.int64]
 
@@ -164,10 +166,19 @@ def distance_to_segment(
     return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
 
 
+POLYLINE_BLOCK_SEGMENTS = 8
+"""Consecutive polyline segments bounded together by one circle in :func:`distances_to_polyline`."""
+
+
 def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
     """Distance (metres) from each point to the nearest segment of a polyline.
 
-    This is the per-point "path error" of Figs. 5, 7 and 8.
+    This is the per-point "path error" of Figs. 5, 7 and 8. The segments are taken in blocks
+    of :data:`POLYLINE_BLOCK_SEGMENTS`, each bounded by a circle. For each point the block
+    whose circle comes nearest is searched first; its distance bounds the answer, so only the
+    blocks whose circles come within that distance are searched too. The result is the exact
+    minimum over all segments (as :func:`distances_to_polyline_reference`, which searches
+    every segment).
 
     Args:
         points: ``(m, 2)`` points, metres.
@@ -176,6 +187,58 @@ def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> Flo
     Returns:
         ``(m,)`` distances.
     """
+    p = _points_array(points, "points")
+    line = _points_array(polyline, "polyline", min_count=2)
+    n_segments = len(line) - 1
+    n_blocks = -(-n_segments // POLYLINE_BLOCK_SEGMENTS)
+    # Segment indices per block; the last block repeats its last segment (harmless for a min).
+    members = np.minimum(
+        np.arange(n_blocks * POLYLINE_BLOCK_SEGMENTS).reshape(n_blocks, -1), n_segments - 1
+    )
+    block_vertices = np.concatenate([line[members], line[members[:, -1:] + 1]], axis=1)
+    centres = 0.5 * (block_vertices.min(axis=1) + block_vertices.max(axis=1))
+    radii = np.sqrt(((block_vertices - centres[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
+    dx, dy = p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1]
+    lower = np.sqrt(dx * dx + dy * dy) - radii
+    blocks = _PolylineBlocks(line, members)
+    rows = np.arange(len(p))
+    upper = np.sqrt(blocks.nearest_sq(p, rows, np.argmin(lower, axis=1)))
+    # The slack absorbs the rounding of the bounds (far below any distance that matters).
+    point_index, block_index = np.nonzero(lower <= (upper + 1e-9 * (1.0 + upper))[:, None])
+    nearest_sq = blocks.nearest_sq(p, point_index, block_index)
+    # np.nonzero lists the pairs point by point, and every point has its first block.
+    first_pair = np.flatnonzero(np.diff(point_index, prepend=-1))
+    return np.sqrt(np.minimum.reduceat(nearest_sq, first_pair))
+
+
+class _PolylineBlocks:
+    """The segments of a polyline in blocks, as component arrays ``(blocks, block size)``."""
+
+    def __init__(self, line: FloatArray, members: npt.NDArray[np.intp]) -> None:
+        starts = line[members]
+        direction = line[members + 1] - starts
+        self.sx, self.sy = starts[..., 0], starts[..., 1]
+        self.dx, self.dy = direction[..., 0], direction[..., 1]
+        length_sq = self.dx * self.dx + self.dy * self.dy
+        self.degenerate = length_sq == 0.0
+        self.safe_length_sq = np.where(self.degenerate, 1.0, length_sq)
+
+    def nearest_sq(
+        self, p: FloatArray, point_index: npt.NDArray[np.intp], block_index: npt.NDArray[np.intp]
+    ) -> FloatArray:
+        """Per (point, block) pair, the squared distance to the block's nearest segment."""
+        dx, dy = self.dx[block_index], self.dy[block_index]
+        rx = p[point_index, 0, None] - self.sx[block_index]
+        ry = p[point_index, 1, None] - self.sy[block_index]
+        t = np.clip((rx * dx + ry * dy) / self.safe_length_sq[block_index], 0.0, 1.0)
+        t[self.degenerate[block_index]] = 0.0
+        gx, gy = rx - t * dx, ry - t * dy
+        return np.asarray((gx * gx + gy * gy).min(axis=1))
+
+
+def distances_to_polyline_reference(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
+    """:func:`distances_to_polyline` by searching every segment for every point (the
+    reference the fast search is tested against), metres."""
     p = _points_array(points, "points")
     line = _points_array(polyline, "polyline", min_count=2)
     starts, ends = line[:-1], line[1:]
@@ -242,8 +305,57 @@ def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, f
         raise ValueError("true must be a path y = f(x): its x must be strictly monotonic")
     y_difference = points[:, 1] - _y_on_path(points[:, 0], true_path)
     sigma = float(np.sqrt(np.mean(y_difference**2)))
-    sigma_prime = float(np.mean(distances_to_polyline(points, true_path)))
+    sigma_prime = float(np.mean(_distances_to_function_path(points, true_path, y_difference)))
     return sigma, sigma_prime
+
+
+MAX_WINDOW_SEGMENTS = 8
+"""Most segments :func:`_distances_to_function_path` searches per point as one window."""
+
+
+def _distances_to_function_path(
+    points: FloatArray, true_path: FloatArray, y_difference: FloatArray
+) -> FloatArray:
+    """:func:`distances_to_polyline` for a path ``y = f(x)`` (x strictly monotonic), metres.
+
+    The vertical gap ``|y - f(x)|`` (inside the path's x range), or the distance to the
+    nearer end vertex, bounds each point's distance ``u``; the nearest point of the path then
+    lies within ``x +- u``, so only the segments overlapping that x window can hold it. Points
+    whose window spans more than :data:`MAX_WINDOW_SEGMENTS` segments take the general search.
+    The per-segment arithmetic is :func:`distances_to_polyline`'s, so the results agree.
+    """
+    line = true_path
+    increasing = bool(line[0, 0] < line[-1, 0])
+    xs = line[:, 0] if increasing else line[::-1, 0]
+    to_ends = np.minimum(
+        np.hypot(points[:, 0] - line[0, 0], points[:, 1] - line[0, 1]),
+        np.hypot(points[:, 0] - line[-1, 0], points[:, 1] - line[-1, 1]),
+    )
+    within = (points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])
+    bound = np.where(within, np.minimum(np.abs(y_difference), to_ends), to_ends)
+    bound = bound * (1.0 + 1e-9) + 1e-12  # rounding slack
+    n_segments = len(line) - 1
+    # Segment k spans [xs[k], xs[k + 1]]; those meeting [x - bound, x + bound]:
+    first = np.clip(np.searchsorted(xs, points[:, 0] - bound, side="right") - 1, 0, n_segments - 1)
+    last = np.clip(np.searchsorted(xs, points[:, 0] + bound, side="left"), 1, n_segments) - 1
+    if not increasing:  # segment k of the reversed vertices is segment n - 1 - k of the path
+        first, last = n_segments - 1 - last, n_segments - 1 - first
+    count = last - first + 1
+    result = np.empty(len(points))
+    narrow = count <= MAX_WINDOW_SEGMENTS
+    if np.any(~narrow):
+        result[~narrow] = distances_to_polyline(points[~narrow], line)
+    if np.any(narrow):
+        width = int(count[narrow].max())
+        members = np.minimum(first[narrow, None] + np.arange(width), last[narrow, None])
+        blocks = _PolylineBlocks(line, members)
+        rows = np.arange(int(np.count_nonzero(narrow)))
+        result[narrow] = np.sqrt(blocks.nearest_sq(points[narrow], rows, rows))
+    return result
+
+
+MAX_PATH_SAMPLES = 1_000_000
+"""Most samples :func:`parabolic_path` returns (a 40 km drive at the paper's 4 mm step)."""
 
 
 def parabolic_path(
@@ -267,6 +379,10 @@ def parabolic_path(
 
     Returns:
         ``(n, 2)`` points from ``x_start_m`` towards ``x_end_m``; the last is the end point.
+
+    Raises:
+        ValueError: for non-finite arguments, equal ends, a non-positive step, or a curve
+            whose arc length is not finite or needs more than :data:`MAX_PATH_SAMPLES` steps.
     """
     for name, value in (
         ("x_start_m", x_start_m),
@@ -284,8 +400,21 @@ def parabolic_path(
     def curve(x: FloatArray) -> FloatArray:
         return np.column_stack([x, vertex[1] + quadratic_coefficient_per_m * (x - vertex[0]) ** 2])
 
-    dense = curve(np.linspace(x_start_m, x_end_m, 20001))
-    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    with np.errstate(over="ignore", invalid="ignore"):
+        dense = curve(np.linspace(x_start_m, x_end_m, 20001))
+        arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(dense, axis=0).T))])
+    if not np.all(np.isfinite(dense)) or not math.isfinite(arc[-1]):
+        raise ValueError(
+            "the parabola's arc length is not finite in float64: choose smaller coordinates "
+            f"or coefficient (x_start_m={x_start_m!r}, x_end_m={x_end_m!r}, "
+            f"quadratic_coefficient_per_m={quadratic_coefficient_per_m!r})"
+        )
+    length = float(arc[-1])
+    if length > MAX_PATH_SAMPLES * step_m:
+        raise ValueError(
+            f"the path is {length:.3g} m long, more than MAX_PATH_SAMPLES "
+            f"({MAX_PATH_SAMPLES}) steps of step_m = {step_m!r} m: increase step_m or shorten it"
+        )
     stations = np.arange(0.0, arc[-1], step_m)
     if arc[-1] - stations[-1] > 1e-9:
         stations = np.append(stations, arc[-1])
@@ -394,6 +523,49 @@ class ThreePointExtractor:
         """Feed the next position (metres) with its sample index; returns how many were saved."""
         point = np.asarray(position, dtype=np.float64).reshape(2)
         saved_before = self.found
+        self._update(point, index)
+        return self.found - saved_before
+
+    def update_path(self, positions: npt.ArrayLike, indices: npt.ArrayLike) -> int:
+        """Feed positions in order, as :meth:`update` one by one would, until all are saved.
+
+        The boundary distances of all positions are computed at once and the stretches where
+        ``D`` stays on one side of the distance sought are skipped; the samples where it
+        changes side go through :meth:`update`'s own step.
+
+        Args:
+            positions: ``(m, 2)`` positions in the order visited, metres.
+            indices: ``(m,)`` their sample indices.
+
+        Returns:
+            How many positions were used: all ``m``, or up to and including the one at which
+            the third point was saved.
+        """
+        points = _points_array(positions, "positions", min_count=0)
+        index_array = np.asarray(indices, dtype=np.int64).reshape(-1)
+        if index_array.shape != (len(points),):
+            raise ValueError(
+                f"indices must hold one index per position ({len(points)}), "
+                f"got shape {index_array.shape}"
+            )
+        distances = distance_to_segment(points, self.boundary_a, self.boundary_b)
+        current = 0
+        while current < len(points) and not self.done:
+            if self._reference_sign is not None:
+                target = self.distances_m[self.found]
+                sides = np.sign(distances[current:] - target)
+                changes = np.flatnonzero(sides != self._reference_sign)
+                if len(changes) == 0:
+                    self._previous = points[-1].copy()
+                    return len(points)
+                if changes[0] > 0:
+                    current += int(changes[0])
+                    self._previous = points[current - 1].copy()
+            self._update(points[current].copy(), int(index_array[current]))
+            current += 1
+        return current
+
+    def _update(self, point: FloatArray, index: int) -> None:
         boundary_distance = self.boundary_distance(point)
         if self._reference_sign is not None and not self.done:
             target = self.distances_m[self.found]
@@ -410,7 +582,6 @@ class ThreePointExtractor:
             else:
                 self._reference_sign = side
         self._previous = point
-        return self.found - saved_before
 
     def result(self) -> ThreePoints:
         """The points saved so far, with status ``"ok"`` or ``"not_reached"``."""
@@ -441,10 +612,24 @@ class ThreePointExtractor:
         if current_side == 0.0:
             return 1.0
 
-        def excess(t: float) -> float:
-            return self.boundary_distance(previous + t * (current - previous)) - target
+        ax, ay = (float(v) for v in self.boundary_a)
+        ux, uy = float(self.boundary_b[0]) - ax, float(self.boundary_b[1]) - ay
+        length_sq = ux * ux + uy * uy
+        px, py = float(previous[0]) - ax, float(previous[1]) - ay
+        qx, qy = float(current[0]) - float(previous[0]), float(current[1]) - float(previous[1])
 
-        return float(brentq(excess, 0.0, 1.0, xtol=1e-15, rtol=4.0 * np.finfo(float).eps))
+        def excess(t: float) -> float:
+            # D(previous + t (current - previous)) - target, in plain floats.
+            rx, ry = px + t * qx, py + t * qy
+            s = min(max((rx * ux + ry * uy) / length_sq, 0.0), 1.0)
+            return math.hypot(rx - s * ux, ry - s * uy) - target
+
+        # D carries rounding noise of about 1e-16 m, which moves its root along the segment
+        # by more than 1e-15: the root is asked to 1e-12, and brentq is not asked to raise if
+        # the noise keeps it from meeting even that.
+        return float(
+            brentq(excess, 0.0, 1.0, xtol=1e-12, rtol=4.0 * np.finfo(float).eps, disp=False)
+        )
 
 
 def extract_three_points(
@@ -643,6 +828,52 @@ class BoundaryCalibration:
     switch_index: int | None
 
 
+@dataclass(frozen=True)
+class PathFixLog:
+    """What the runner needs to rebuild each fix's full :class:`TrilaterationResult`.
+
+    Attributes:
+        statuses: ``(n,)`` the trilateration status per path point.
+        positions: ``(n, 2)`` the fixes, metres; NaN where not ok.
+        used_radical_centre: ``(n,)`` whether the paper method fell back to the radical centre.
+        ranges_m: ``(n, beacons)`` the ranges the runner used, metres (NaN for a dropout).
+        area_beacons_m: per area, ``(3, 3)`` the beacon positions the robot used there.
+        area_columns: per area, the table columns of its three beacons.
+        sensor_height_m: the sensor height, metres.
+        method: the trilateration method.
+    """
+
+    statuses: tuple[str, ...]
+    positions: FloatArray
+    used_radical_centre: npt.NDArray[np.bool_]
+    ranges_m: FloatArray
+    area_beacons_m: tuple[FloatArray, ...]
+    area_columns: tuple[tuple[int, int, int], ...]
+    sensor_height_m: float
+    method: str
+
+    def result(self, index: int, area: int) -> TrilaterationResult:
+        """The :func:`trilaterate` result of path point ``index``, localized in ``area``."""
+        if self.statuses[index] != OK:
+            columns = list(self.area_columns[area])
+            return trilaterate(
+                self.area_beacons_m[area],
+                self.ranges_m[index, columns],
+                self.sensor_height_m,
+                self.method,
+            )
+        x, y = (float(v) for v in self.positions[index])
+        return TrilaterationResult(
+            status=OK,
+            pose=Pose(x, y, 0.0),
+            position=_frozen(self.positions[index]),
+            method=self.method,
+            has_heading=False,
+            beacon_indices=(0, 1, 2),
+            used_radical_centre=bool(self.used_radical_centre[index]),
+        )
+
+
 @dataclass(frozen=True, eq=False)
 class BlockExpansionResult:
     """Outcome of :meth:`BlockExpansion.run`.
@@ -651,7 +882,7 @@ class BlockExpansionResult:
         status: ``"ok"``; ``"calibration_failed"`` when some boundary was not calibrated or
             not passed; ``"localization_failed"`` when every boundary succeeded but some
             fix did not.
-        localizations: per path point, the trilateration result.
+        fixes: the per-point trilateration outcome as arrays (see :attr:`localizations`).
         area_indices: ``(n,)`` index of the area whose beacons were used at each point.
         estimated_indices: ``(k,)`` path indices of the successful fixes.
         estimated_xy: ``(k, 2)`` those fixes, metres.
@@ -660,12 +891,19 @@ class BlockExpansionResult:
     """
 
     status: str
-    localizations: tuple[TrilaterationResult, ...]
+    fixes: PathFixLog
     area_indices: IntArray
     estimated_indices: IntArray
     estimated_xy: FloatArray
     calibrations: tuple[BoundaryCalibration, ...]
     message: str = ""
+
+    @cached_property
+    def localizations(self) -> tuple[TrilaterationResult, ...]:
+        """Per path point, the trilateration result (built on first use)."""
+        return tuple(
+            self.fixes.result(index, int(area)) for index, area in enumerate(self.area_indices)
+        )
 
     @property
     def ok(self) -> bool:
@@ -675,7 +913,7 @@ class BlockExpansionResult:
     @property
     def statuses(self) -> tuple[str, ...]:
         """Per path point, the trilateration status."""
-        return tuple(result.status for result in self.localizations)
+        return self.fixes.statuses
 
     @property
     def calibrated_beacons_m(self) -> dict[str, FloatArray]:
@@ -729,6 +967,13 @@ class _BoundaryProgress:
         """Whether a position lies strictly on the far side of the boundary line."""
         side = self._side(xy)
         return side != 0.0 and side != self.inner_side
+
+    def first_past(self, xy: FloatArray) -> int | None:
+        """Index of the first of ``(m, 2)`` positions that :meth:`is_past`, or None."""
+        offset = xy - self.origin
+        sides = np.sign(self.direction[0] * offset[:, 1] - self.direction[1] * offset[:, 0])
+        past = np.flatnonzero((sides != 0.0) & (sides != self.inner_side))
+        return int(past[0]) if len(past) else None
 
 
 class BlockExpansion:
@@ -833,64 +1078,89 @@ class BlockExpansion:
             name: np.array(config.beacons_m[name]) for name in config.areas[0]
         }
         boundary_count = len(config.areas) - 1
+        n_points = len(positions)
         progress: list[_BoundaryProgress] = []
-        if boundary_count:
-            progress.append(_BoundaryProgress(config, 0, known))
-        area = 0
-        localizations: list[TrilaterationResult] = []
-        area_indices = np.empty(len(positions), dtype=np.int64)
-
-        for index, ranges in enumerate(table):
-            area_names = config.areas[area]
-            columns = [names.index(n) for n in area_names]
-            fix = trilaterate(
-                np.array([known[n] for n in area_names]),
-                ranges[columns],
+        statuses = np.full(n_points, OK, dtype=object)
+        fixes_xy = np.full((n_points, 2), np.nan)
+        used_radical_centre = np.zeros(n_points, dtype=bool)
+        area_indices = np.empty(n_points, dtype=np.int64)
+        area_beacons: list[FloatArray] = []
+        area_columns: list[tuple[int, int, int]] = []
+        start, area = 0, 0
+        # Each area's beacons localize every point from its first one on; the next area takes
+        # over from the fix after the switch (Sec. II, Fig. 3).
+        while True:
+            columns = tuple(names.index(n) for n in config.areas[area])
+            beacons = np.array([known[n] for n in config.areas[area]])
+            area_beacons.append(_frozen(beacons))
+            area_columns.append(columns)  # type: ignore[arg-type]
+            fixes = trilaterate_path(
+                beacons,
+                table[start:, list(columns)],
                 config.sensor_height_m,
                 config.trilateration_method,
             )
-            localizations.append(fix)
-            area_indices[index] = area
-            if not fix.ok or area >= boundary_count:
-                continue
-            assert fix.position is not None
-            current = progress[area]
-            if current.calibration is None:
-                self._extract(current, fix.position, index, ranges)
-            calibration = current.calibration
-            if calibration is not None and calibration.ok and current.is_past(fix.position):
-                assert calibration.position is not None
-                known[current.new_beacon] = np.array(calibration.position)
-                current.switch_index = index + 1
-                area += 1
-                if area < boundary_count:
-                    progress.append(_BoundaryProgress(config, area, known))
+            statuses[start:] = fixes.statuses
+            fixes_xy[start:] = fixes.positions
+            used_radical_centre[start:] = fixes.used_radical_centre
+            area_indices[start:] = area
+            if area >= boundary_count:
+                break
+            current = _BoundaryProgress(config, area, known)
+            progress.append(current)
+            switch = self._cross(current, fixes.positions, start, table)
+            if switch is None:
+                break
+            known[current.new_beacon] = np.array(current.calibration.position)  # type: ignore[union-attr]
+            current.switch_index = switch + 1
+            start, area = switch + 1, area + 1
 
-        return self._result(localizations, area_indices, progress, positions)
+        log = PathFixLog(
+            statuses=tuple(statuses),
+            positions=_frozen(fixes_xy),
+            used_radical_centre=used_radical_centre,
+            ranges_m=_frozen(table),
+            area_beacons_m=tuple(area_beacons),
+            area_columns=tuple(area_columns),
+            sensor_height_m=config.sensor_height_m,
+            method=config.trilateration_method,
+        )
+        return self._result(log, area_indices, progress, positions)
 
-    def _extract(
-        self, current: _BoundaryProgress, position: FloatArray, index: int, ranges: FloatArray
-    ) -> None:
-        """Feed one fix to the extraction; calibrate once the three samples are saved.
+    def _cross(
+        self, current: _BoundaryProgress, fixes_xy: FloatArray, start: int, table: FloatArray
+    ) -> int | None:
+        """Extract, calibrate and find where the robot passes one boundary.
 
-        As in Fig. 1 the robot keeps the saved samples themselves (its estimate and the range
-        to the new beacon measured there): no range was measured at an interpolated crossing.
+        The successful fixes (``fixes_xy``, NaN for a failed one, from path index ``start``)
+        feed the three-point extraction; once the three samples are saved the new beacon is
+        auto-calibrated from them. As in Fig. 1 the robot keeps the saved samples themselves
+        (its estimate and the range to the new beacon measured there): no range was measured
+        at an interpolated crossing. Returns the path index of the first fix, from the third
+        saved sample on, past the boundary, or None (not reached or not calibrated).
         """
-        saved = current.extractor.update(position, index)
-        for _ in range(saved):
-            current.points.append(np.array(position))
-            current.ranges.append(float(ranges[current.new_column]))
-        if current.extractor.done:
-            current.calibration = auto_calibrate(
-                np.array(current.points),
-                np.array(current.ranges),
-                self.config.sensor_height_m,
-                max_condition=self.config.max_calibration_condition,
-            )
+        ok = np.flatnonzero(np.isfinite(fixes_xy[:, 0]))
+        ok_xy = fixes_xy[ok]
+        used = current.extractor.update_path(ok_xy, start + ok)
+        if not current.extractor.done:
+            return None
+        for index in current.extractor.result().indices:
+            current.points.append(np.array(fixes_xy[index - start]))
+            current.ranges.append(float(table[index, current.new_column]))
+        current.calibration = auto_calibrate(
+            np.array(current.points),
+            np.array(current.ranges),
+            self.config.sensor_height_m,
+            max_condition=self.config.max_calibration_condition,
+        )
+        if not current.calibration.ok:
+            return None
+        past = current.first_past(ok_xy[used - 1 :])
+        return None if past is None else int(start + ok[used - 1 + past])
 
     def _result(
         self,
-        localizations: list[TrilaterationResult],
+        log: PathFixLog,
         area_indices: IntArray,
         progress: list[_BoundaryProgress],
         positions: FloatArray,
@@ -944,10 +1214,8 @@ class BlockExpansion:
                     switch_index=item.switch_index,
                 )
             )
-        ok_indices = np.array([i for i, r in enumerate(localizations) if r.ok], dtype=np.int64)
-        estimated = np.array(
-            [r.position for r in localizations if r.position is not None], dtype=np.float64
-        ).reshape(-1, 2)
+        ok_indices = np.flatnonzero(np.isfinite(log.positions[:, 0])).astype(np.int64)
+        estimated = log.positions[ok_indices]
         failed_boundaries = [c for c in calibrations if c.status != OK]
         if failed_boundaries:
             status = STATUS_CALIBRATION_FAILED
@@ -963,7 +1231,7 @@ class BlockExpansion:
         ok_indices.flags.writeable = False
         return BlockExpansionResult(
             status=status,
-            localizations=tuple(localizations),
+            fixes=log,
             area_indices=area_indices,
             estimated_indices=ok_indices,
             estimated_xy=_frozen(estimated),

@@ -143,6 +143,46 @@ class CalibrationResult:
         return self.status == OK
 
 
+SAFE_EXPONENT = 200
+"""Inputs whose magnitudes all lie within ``2**+-200`` are computed as given (their squares stay
+far from overflow and underflow); larger or smaller ones are first scaled by a power of two,
+which is exact, and the results scaled back."""
+
+
+def unit_scale(*arrays: npt.ArrayLike) -> float:
+    """The power of two to divide lengths by so that the largest finite magnitude of
+    ``arrays`` is about 1, or 1.0 when every magnitude lies within ``2**+-SAFE_EXPONENT``."""
+    largest = 0.0
+    for values in arrays:
+        magnitudes = np.abs(np.asarray(values, dtype=np.float64))
+        finite = magnitudes[np.isfinite(magnitudes)]
+        if finite.size:
+            largest = max(largest, float(finite.max()))
+    if largest == 0.0 or math.ldexp(1.0, -SAFE_EXPONENT) <= largest <= math.ldexp(
+        1.0, SAFE_EXPONENT
+    ):
+        return 1.0
+    return math.ldexp(1.0, math.frexp(largest)[1])
+
+
+def _finite_points(values: npt.ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
+    """``values`` as a float array of ``shape``, or a ValueError naming ``name``."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.shape != shape and not (array.size == math.prod(shape) and array.ndim <= 1):
+        raise ValueError(f"{name} must have shape {shape} (metres), got {array.shape}")
+    array = array.reshape(shape)
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite metres, got {array.tolist()!r}")
+    return array
+
+
+def _radius(value: float, name: str) -> float:
+    number = float(value)
+    if not (math.isfinite(number) and number >= 0.0):
+        raise ValueError(f"{name} must be a finite non-negative number of metres, got {value!r}")
+    return number
+
+
 # ---------------------------------------------------------------------------------------------
 # Circle geometry in the sensor plane
 # ---------------------------------------------------------------------------------------------
@@ -154,17 +194,37 @@ def circle_intersections(
     """Intersection points of two circles in the plane, as a ``(k, 2)`` array, k in {0, 1, 2}.
 
     Circles that miss each other by a rounding error (relative 1e-12 of the squared radius)
-    are taken as tangent and give one point. Concentric circles give no point.
+    are taken as tangent and give one point. Concentric circles give no point. Any finite
+    input is answered (lengths beyond ``2**+-SAFE_EXPONENT`` are scaled first).
+
+    Raises:
+        ValueError: for centres that are not finite ``(2,)`` points or radii that are not
+            finite and non-negative.
     """
-    ca = np.asarray(centre_a, dtype=np.float64).reshape(2)
-    cb = np.asarray(centre_b, dtype=np.float64).reshape(2)
+    ca = _finite_points(centre_a, (2,), "centre_a")
+    cb = _finite_points(centre_b, (2,), "centre_b")
+    radius_a = _radius(radius_a, "radius_a")
+    radius_b = _radius(radius_b, "radius_b")
+    scale = unit_scale(ca, cb, radius_a, radius_b)
+    if scale != 1.0:
+        return scale * _circle_intersections(
+            ca / scale, radius_a / scale, cb / scale, radius_b / scale
+        )
+    return _circle_intersections(ca, radius_a, cb, radius_b)
+
+
+def _circle_intersections(
+    ca: FloatArray, radius_a: float, cb: FloatArray, radius_b: float
+) -> FloatArray:
     offset = cb - ca
     separation = math.hypot(offset[0], offset[1])
     if separation == 0.0:
         return np.empty((0, 2))
-    along = (radius_a**2 - radius_b**2 + separation**2) / (2.0 * separation)
-    half_chord_sq = radius_a**2 - along**2
-    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(radius_a**2, radius_b**2, separation**2)
+    # Squares as products, as :func:`trilaterate_path` computes them over arrays.
+    ra_sq, rb_sq = radius_a * radius_a, radius_b * radius_b
+    along = (ra_sq - rb_sq + separation * separation) / (2.0 * separation)
+    half_chord_sq = ra_sq - along * along
+    tolerance = _TANGENCY_RELATIVE_TOLERANCE * max(ra_sq, rb_sq, separation * separation)
     if half_chord_sq < -tolerance:
         return np.empty((0, 2))
     unit = offset / separation
@@ -185,10 +245,16 @@ def radical_axis(
     ``2 (c_b - c_a) . p = r_a^2 - r_b^2 + |c_b|^2 - |c_a|^2``; when the circles meet, this is
     the line through both intersection points (the "line of intersection" of Sec. III.A).
     """
-    ca = np.asarray(centre_a, dtype=np.float64).reshape(2)
-    cb = np.asarray(centre_b, dtype=np.float64).reshape(2)
+    ca = _finite_points(centre_a, (2,), "centre_a")
+    cb = _finite_points(centre_b, (2,), "centre_b")
+    radius_a = _radius(radius_a, "radius_a")
+    radius_b = _radius(radius_b, "radius_b")
+    # The line is unchanged when both sides are divided by a power of two; beyond
+    # 2**+-SAFE_EXPONENT the equation is returned divided so, to stay finite.
+    scale = unit_scale(ca, cb, radius_a, radius_b)
+    ca, cb, radius_a, radius_b = ca / scale, cb / scale, radius_a / scale, radius_b / scale
     normal = 2.0 * (cb - ca)
-    offset = float(radius_a**2 - radius_b**2 + cb @ cb - ca @ ca)
+    offset = float(radius_a * radius_a - radius_b * radius_b + cb @ cb - ca @ ca)
     return normal, offset
 
 
@@ -201,8 +267,18 @@ def linearised_least_squares(centres: npt.ArrayLike, radii: npt.ArrayLike) -> Fl
     consistent and the solution is their radical centre. ``None`` when the centres are
     collinear (rank below 2).
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
-    r = np.asarray(radii, dtype=np.float64).reshape(-1)
+    c = np.asarray(centres, dtype=np.float64)
+    if c.ndim != 2 or c.shape[1] != 2 or len(c) < 2 or not np.all(np.isfinite(c)):
+        raise ValueError(
+            f"centres must be an (n, 2) array of finite metres with n >= 2, got shape {c.shape}"
+        )
+    r = np.asarray(radii, dtype=np.float64)
+    if r.shape != (len(c),) or not np.all(np.isfinite(r)):
+        raise ValueError(f"radii must be {len(c)} finite metres, got shape {r.shape}")
+    scale = unit_scale(c, r)
+    if scale != 1.0:
+        solution = linearised_least_squares(c / scale, r / scale)
+        return None if solution is None else scale * solution
     squared_norms = np.einsum("ij,ij->i", c, c)
     design = -2.0 * (c - c.mean(axis=0))
     rhs = (r**2 - np.mean(r**2)) - (squared_norms - squared_norms.mean())
@@ -217,8 +293,8 @@ def radical_centre(centres: npt.ArrayLike, radii: npt.ArrayLike) -> FloatArray |
 
     ``None`` when the centres are collinear (the axes are parallel).
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(3, 2)
-    return linearised_least_squares(c, np.asarray(radii, dtype=np.float64).reshape(3))
+    c = _finite_points(centres, (3, 2), "centres")
+    return linearised_least_squares(c, _finite_points(radii, (3,), "radii"))
 
 
 def paper_centroid(centres: npt.ArrayLike, radii: npt.ArrayLike) -> tuple[FloatArray | None, bool]:
@@ -233,8 +309,10 @@ def paper_centroid(centres: npt.ArrayLike, radii: npt.ArrayLike) -> tuple[FloatA
         ``(position, used_radical_centre)``; position is ``None`` only for collinear centres
         when the fallback is needed.
     """
-    c = np.asarray(centres, dtype=np.float64).reshape(3, 2)
-    r = np.asarray(radii, dtype=np.float64).reshape(3)
+    c = _finite_points(centres, (3, 2), "centres")
+    r = _finite_points(radii, (3,), "radii")
+    if np.any(r < 0.0):
+        raise ValueError(f"radii must be non-negative metres, got {r.tolist()!r}")
     kept: list[FloatArray] = []
     for i, j in ((0, 1), (1, 2), (0, 2)):
         k = 3 - i - j
@@ -403,6 +481,30 @@ def trilaterate(
     if not collinearity_tolerance >= 0.0:
         raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
 
+    scale = unit_scale(beacon_array, distance_array, height)
+    if scale != 1.0:
+        scaled = trilaterate(
+            beacon_array / scale,
+            distance_array / scale,
+            height / scale,
+            method,
+            refine=refine,
+            height_tolerance_m=height_tolerance_m / scale,
+            collinearity_tolerance=collinearity_tolerance,
+        )
+        if scaled.position is None:
+            return scaled
+        unscaled = scale * np.asarray(scaled.position)
+        return TrilaterationResult(
+            status=OK,
+            pose=Pose(float(unscaled[0]), float(unscaled[1]), 0.0),
+            position=_frozen(unscaled),
+            method=method,
+            has_heading=False,
+            beacon_indices=scaled.beacon_indices,
+            used_radical_centre=scaled.used_radical_centre,
+        )
+
     valid_indices = np.flatnonzero(np.isfinite(distance_array))
     if len(valid_indices) < 3:
         return TrilaterationResult(
@@ -468,9 +570,186 @@ def trilaterate(
     )
 
 
+@dataclass(frozen=True, eq=False)
+class PathFixes:
+    """Outcome of :func:`trilaterate_path`: one fix per row of a range table.
+
+    Attributes:
+        statuses: ``(n,)`` the :func:`trilaterate` status of each row.
+        positions: ``(n, 2)`` estimated ``(x, y)`` in {W}, metres; NaN where not ok.
+        used_radical_centre: ``(n,)`` whether the paper method fell back to the radical centre.
+    """
+
+    statuses: tuple[str, ...]
+    positions: FloatArray
+    used_radical_centre: npt.NDArray[np.bool_]
+
+    @property
+    def ok(self) -> npt.NDArray[np.bool_]:
+        """``(n,)`` whether each row gave a position."""
+        return np.isfinite(self.positions[:, 0])
+
+
+def trilaterate_path(
+    beacons: npt.ArrayLike,
+    distances: npt.ArrayLike,
+    sensor_height: float,
+    method: str = "paper",
+    *,
+    height_tolerance_m: float = DEFAULT_HEIGHT_TOLERANCE_M,
+    collinearity_tolerance: float = DEFAULT_COLLINEARITY_TOLERANCE,
+) -> PathFixes:
+    """:func:`trilaterate` for every row of a range table at once (Sec. III.A).
+
+    The paper method with three beacons runs as arrays over the rows, with the same
+    arithmetic as :func:`circle_intersections` and :func:`paper_centroid`; the rows that need
+    the radical-centre fallback, and every row of other setups (``"least_squares"``, more
+    than three beacons), go through :func:`trilaterate` one by one.
+
+    Args:
+        beacons: ``(b, 3)`` beacon positions ``(x, y, z)`` in {W}, metres.
+        distances: ``(n, b)`` measured slant ranges, metres; NaN (or inf) marks a missing one.
+        sensor_height, method, height_tolerance_m, collinearity_tolerance: as
+            :func:`trilaterate`.
+
+    Returns:
+        A :class:`PathFixes` whose row ``i`` agrees with ``trilaterate(beacons, distances[i],
+        ...)`` in status and position.
+
+    Raises:
+        ValueError: as :func:`trilaterate`, and for a table that is not ``(n, b)``.
+    """
+    beacon_array = _beacon_array(beacons, "beacons")
+    table = np.asarray(distances, dtype=np.float64)
+    if table.ndim != 2 or table.shape[1] != len(beacon_array):
+        raise ValueError(
+            f"distances must have shape (n, {len(beacon_array)}) (rows x beacons), "
+            f"got {table.shape}"
+        )
+    if np.any(table[np.isfinite(table)] < 0.0):
+        raise ValueError("distances must be non-negative metres (NaN marks a missing range)")
+    height = _finite_float(sensor_height, "sensor_height")
+    if method not in TRILATERATION_METHODS:
+        raise ValueError(f"method must be one of {TRILATERATION_METHODS}, got {method!r}")
+    if not height_tolerance_m >= 0.0:
+        raise ValueError(f"height_tolerance_m must be >= 0, got {height_tolerance_m!r}")
+    if not collinearity_tolerance >= 0.0:
+        raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
+    n_rows = len(table)
+    positions = np.full((n_rows, 2), np.nan)
+    statuses = np.full(n_rows, OK, dtype=object)
+    fallback = np.zeros(n_rows, dtype=bool)
+    options = {
+        "height_tolerance_m": height_tolerance_m,
+        "collinearity_tolerance": collinearity_tolerance,
+    }
+    if method != "paper" or len(beacon_array) != 3:
+        one_by_one = np.arange(n_rows)
+    else:
+        valid = np.isfinite(table).all(axis=1)
+        statuses[~valid] = STATUS_TOO_FEW_BEACONS
+        vertical = beacon_array[:, 2] - height
+        with np.errstate(invalid="ignore"):
+            short = (table < np.abs(vertical) - height_tolerance_m).any(axis=1) & valid
+        statuses[short] = STATUS_DISTANCE_BELOW_HEIGHT
+        usable = valid & ~short
+        centres = beacon_array[:, :2]
+        if _are_collinear(centres, collinearity_tolerance):
+            statuses[usable] = STATUS_COLLINEAR_BEACONS
+            return PathFixes(tuple(statuses), positions, fallback)
+        radii = np.sqrt(np.maximum(table[usable] ** 2 - vertical**2, 0.0))
+        centroid, met = _paper_centroids(centres, radii)
+        rows = np.flatnonzero(usable)
+        positions[rows[met]] = centroid[met]
+        centre = _radical_centres(centres, radii[~met]) if not met.all() else None
+        if centre is None:
+            one_by_one = rows[~met]
+        else:
+            positions[rows[~met]] = centre
+            fallback[rows[~met]] = True
+            one_by_one = rows[:0]
+    for row in one_by_one:
+        fix = trilaterate(beacon_array, table[row], height, method, **options)  # type: ignore[arg-type]
+        statuses[row] = fix.status
+        fallback[row] = fix.used_radical_centre
+        if fix.position is not None:
+            positions[row] = fix.position
+    bad = (statuses == OK) & ~np.isfinite(positions).all(axis=1)
+    statuses[bad] = STATUS_NUMERICAL_FAILURE
+    positions[bad] = np.nan
+    return PathFixes(tuple(statuses), positions, fallback)
+
+
+def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | None:
+    """:func:`radical_centre` of one set of three centres for rows of radii ``(m, 3)``.
+
+    The same least-squares problem as :func:`linearised_least_squares`, solved for all rows
+    at once (one right-hand side per row); ``None`` when the centres are collinear.
+    """
+    squared_norms = np.einsum("ij,ij->i", centres, centres)
+    design = -2.0 * (centres - centres.mean(axis=0))
+    radii_sq = radii**2
+    rhs = (radii_sq - np.mean(radii_sq, axis=1, keepdims=True)) - (
+        squared_norms - squared_norms.mean()
+    )
+    solution, _, rank, _ = np.linalg.lstsq(design, rhs.T, rcond=None)
+    if rank < 2:
+        return None
+    return np.asarray(solution.T)
+
+
+def _paper_centroids(
+    centres: FloatArray, radii: FloatArray
+) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
+    """:func:`paper_centroid` over rows of radii ``(m, 3)`` for one set of three centres.
+
+    Returns ``(centroids (m, 2), met (m,))``; ``met`` is False where some pair of circles does
+    not intersect (those rows need the radical-centre fallback; their centroid is garbage).
+    """
+    kept = np.empty((len(radii), 3, 2))
+    met = np.ones(len(radii), dtype=bool)
+    for slot, (i, j) in enumerate(((0, 1), (1, 2), (0, 2))):
+        k = 3 - i - j
+        ca, cb = centres[i], centres[j]
+        offset = cb - ca
+        separation = math.hypot(offset[0], offset[1])
+        if separation == 0.0:
+            met[:] = False
+            continue
+        ra, rb = radii[:, i], radii[:, j]
+        ra_sq, rb_sq = ra * ra, rb * rb
+        along = (ra_sq - rb_sq + separation**2) / (2.0 * separation)
+        half_chord_sq = ra_sq - along * along
+        tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(
+            np.maximum(ra_sq, rb_sq), separation**2
+        )
+        met &= half_chord_sq >= -tolerance
+        unit = offset / separation
+        foot = ca + along[:, None] * unit
+        half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
+        normal = np.array([-unit[1], unit[0]])
+        first = foot + half_chord[:, None] * normal
+        second = foot - half_chord[:, None] * normal
+        miss_first = np.abs(np.hypot(*(first - centres[k]).T) - radii[:, k])
+        miss_second = np.abs(np.hypot(*(second - centres[k]).T) - radii[:, k])
+        kept[:, slot] = np.where((miss_second < miss_first)[:, None], second, first)
+    return np.mean(kept, axis=1), met
+
+
 # ---------------------------------------------------------------------------------------------
 # Auto-calibration (Sec. III.B)
 # ---------------------------------------------------------------------------------------------
+
+
+def _scaled_back(result: CalibrationResult, scale: float) -> CalibrationResult:
+    """A calibration computed on lengths divided by ``scale``, in the caller's units."""
+    return CalibrationResult(
+        status=result.status,
+        position=None if result.position is None else _frozen(scale * result.position),
+        condition=result.condition,
+        triangle_area_m2=result.triangle_area_m2 * scale * scale,
+        message=result.message,
+    )
 
 
 def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> FloatArray:
@@ -537,6 +816,17 @@ def auto_calibrate(
         raise ValueError(f"max_condition must be > 1, got {max_condition!r}")
     if not intersection_tolerance_m >= 0.0:
         raise ValueError(f"intersection_tolerance_m must be >= 0, got {intersection_tolerance_m!r}")
+    scale = unit_scale(points, ranges)
+    if scale != 1.0:
+        return _scaled_back(
+            auto_calibrate(
+                points / scale,
+                ranges / scale,
+                max_condition=max_condition,
+                intersection_tolerance_m=intersection_tolerance_m / scale,
+            ),
+            scale,
+        )
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
@@ -566,11 +856,29 @@ def auto_calibrate(
     along_x = float(e_x @ displacements[1])
     across = displacements[1] - along_x * e_x
     along_y = float(np.linalg.norm(across))
+    if not along_y > 0.0:
+        return CalibrationResult(
+            status=STATUS_COLLINEAR_POSITIONS,
+            condition=condition,
+            triangle_area_m2=area,
+            message="calibration positions are collinear to float precision",
+        )
     e_y = across / along_y
     e_z = np.cross(e_x, e_y)
-    x = (d1**2 - d2**2 + separation**2) / (2.0 * separation)
-    y = (d1**2 - d3**2 + along_x**2 + along_y**2) / (2.0 * along_y) - along_x * x / along_y
-    height_sq = d1**2 - x**2 - y**2
+    # Products, not ``**``: under an extreme (user-allowed) condition they overflow to inf
+    # instead of raising OverflowError, and the check below reports it.
+    x = (d1 * d1 - d2 * d2 + separation * separation) / (2.0 * separation)
+    y = (d1 * d1 - d3 * d3 + along_x * along_x + along_y * along_y) / (
+        2.0 * along_y
+    ) - along_x * x / along_y
+    height_sq = d1 * d1 - x * x - y * y
+    if not math.isfinite(height_sq):
+        return CalibrationResult(
+            status=STATUS_COLLINEAR_POSITIONS,
+            condition=condition,
+            triangle_area_m2=area,
+            message="calibration positions are too nearly collinear to compute with",
+        )
     if height_sq < 0.0:
         # The radical line of the three spheres pierces the plane of the positions at the
         # local (x, y); it lies outside the spheres by this radial gap.

@@ -69,6 +69,21 @@ class RangeMeasurement:
 
 
 @dataclass(frozen=True)
+class RouteGeometry:
+    """The noise-free part of ranging a route (:meth:`BeaconRanger.route_geometry`).
+
+    Attributes:
+        true_distances: ``(n_samples, n_receivers, n_emitters)`` exact 3D distances, metres.
+        heard: same shape; in range and not blocked by a wall.
+        emitter_names: the emitters, in column order.
+    """
+
+    true_distances: FloatArray
+    heard: npt.NDArray[np.bool_]
+    emitter_names: tuple[str, ...]
+
+
+@dataclass(frozen=True)
 class RouteMeasurement:
     """One ranging round at every sample of a route.
 
@@ -205,6 +220,22 @@ class BeaconRanger:
             headings_rad: ``(n,)`` robot headings in {W}, radians (default 0: only matters for
                 receivers off the robot centre).
         """
+        return self.measure_geometry(
+            self.route_geometry(world, xy, emitter_names, headings_rad), world.temperature_c, rng
+        )
+
+    def route_geometry(
+        self,
+        world: WorldLike,
+        xy: npt.ArrayLike,
+        emitter_names: Sequence[str] | None = None,
+        headings_rad: npt.ArrayLike | None = None,
+    ) -> RouteGeometry:
+        """The noise-free part of :meth:`measure_route`: true distances and what is heard.
+
+        A task that ranges the same route among the same emitters again (a new episode, new
+        noise) computes this once and passes it to :meth:`measure_geometry`.
+        """
         positions = _route_positions(xy)
         n_samples = len(positions)
         if headings_rad is None:
@@ -241,7 +272,19 @@ class BeaconRanger:
             n_samples, n_receivers, n_emitters
         )
 
-        true_speed = speed_of_sound_mps(world.temperature_c)
+        distance.flags.writeable = False
+        heard.flags.writeable = False
+        return RouteGeometry(distance, heard, tuple(e.name for e in emitters))
+
+    def measure_geometry(
+        self, geometry: RouteGeometry, temperature_c: float, rng: np.random.Generator | None
+    ) -> RouteMeasurement:
+        """One ranging round at every sample of a route whose geometry is known (see
+        :meth:`route_geometry`), in air at ``temperature_c`` degrees Celsius; the jitter is
+        drawn as :meth:`measure_route` draws it."""
+        distance, heard = geometry.true_distances, geometry.heard
+        n_emitters = len(geometry.emitter_names)
+        true_speed = speed_of_sound_mps(temperature_c)
         tof = distance / true_speed
         if self.noise and self.range_noise_std_m > 0.0:
             if rng is None:
@@ -255,7 +298,7 @@ class BeaconRanger:
             true_distances=distance,
             timestamps_s=np.where(heard, start + tof, start + self.firing_interval_s),
             round_duration_s=n_emitters * self.firing_interval_s,
-            emitter_names=tuple(e.name for e in emitters),
+            emitter_names=geometry.emitter_names,
         )
 
     @staticmethod

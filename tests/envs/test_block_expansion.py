@@ -392,3 +392,31 @@ def test_condition_number_and_dilution_of_precision_match_their_definitions() ->
         h = offsets / np.linalg.norm(offsets, axis=1, keepdims=True)
         expected = math.sqrt(np.trace(np.linalg.inv(h.T @ h)))
         assert result[k] == pytest.approx(expected, rel=1e-9)
+
+
+def test_ranging_along_a_route_reuses_its_geometry_only_for_the_same_beacons() -> None:
+    from sonar_gym.routes import range_along_route
+
+    env = gym.make(ENV_ID)
+    env.reset(seed=0)
+    unwrapped = env.unwrapped
+    episode = unwrapped._require_episode()
+    names = tuple(episode.beacons_m)
+    geometry = unwrapped.ranger.route_geometry(episode.world, episode.path, names)
+    fresh, _ = range_along_route(
+        unwrapped.ranger, episode.world, episode.path, names, np.random.default_rng(3)
+    )
+    reused, durations = range_along_route(
+        unwrapped.ranger, episode.world, episode.path, names, np.random.default_rng(3), geometry
+    )
+    np.testing.assert_array_equal(fresh, reused)
+    np.testing.assert_allclose(durations, len(names) * FIRING_INTERVAL_S)
+    with pytest.raises(ValueError, match="geometry"):
+        range_along_route(
+            unwrapped.ranger,
+            episode.world,
+            episode.path,
+            names[::-1],
+            np.random.default_rng(3),
+            geometry,
+        )

@@ -204,3 +204,19 @@ def test_route_noise_is_seeded_unbiased_and_quantised() -> None:
 def test_bad_routes_raise_naming_the_argument(xy, headings, name: str) -> None:
     with pytest.raises(ValueError, match=name):
         BeaconRanger(noise=False).measure_route(ceiling_room(), xy, None, headings_rad=headings)
+
+
+def test_a_known_route_geometry_ranges_as_the_whole_route_call() -> None:
+    room = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    ranger = BeaconRanger.wu_tsai(range_noise_std_m=0.01, max_range_m=2.9)
+    xy, headings = route_samples()
+    geometry = ranger.route_geometry(room, xy, ["T3", "T1"], headings_rad=headings)
+    for seed in (1, 2):
+        again = ranger.measure_geometry(geometry, room.temperature_c, np.random.default_rng(seed))
+        whole = ranger.measure_route(
+            room, xy, np.random.default_rng(seed), ["T3", "T1"], headings_rad=headings
+        )
+        np.testing.assert_array_equal(again.distances, whole.distances)
+        np.testing.assert_array_equal(again.timestamps_s, whole.timestamps_s)
+    assert geometry.emitter_names == ("T3", "T1")
+    assert not geometry.heard.flags.writeable

@@ -36,16 +36,12 @@ import sonar_gym  # noqa: F401  (registers the ids)
 from sonar_gym.envs.block_expansion import (
     ENV_ID,
     FIRING_INTERVAL_S,
-    LOCALIZATION_PERIOD_S,
     PAPER_PATH,
     PAPER_PATH_X_END_M,
-    PATH_STEP_M,
-    ROBOT_SPEED_MPS,
     SCENARIO_NAME,
     TEMPERATURE_C,
     BlockExpansionEnvConfig,
     make_ranger,
-    measure_path_ranges,
 )
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
@@ -64,6 +60,12 @@ from sonar_gym.localization.roh import (
     distances_to_polyline,
 )
 from sonar_gym.pose import FloatArray
+from sonar_gym.routes import (
+    LOCALIZATION_PERIOD_S,
+    PATH_STEP_M,
+    ROBOT_SPEED_MPS,
+    range_along_route,
+)
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.world import World
 from sonar_gym.train.reproduce.common import FLAG, final_frame_png, parameters_table
@@ -224,9 +226,8 @@ def run_table(setup: Setup, n_runs: int, seed: int) -> list[RowResult]:
     ranger = make_ranger(setup.config, setup.sensor_height_m)
     for run in range(n_runs):
         rng = np.random.default_rng([seed, len(table.areas), run])
-        ranges, _ = measure_path_ranges(
-            ranger, setup.world, setup.path, setup.runner_config(table.distances_mm[0]), rng
-        )
+        names = setup.runner_config(table.distances_mm[0]).beacon_names
+        ranges, _ = range_along_route(ranger, setup.world, setup.path, names, rng)
         for row in rows:
             result = BlockExpansion(setup.runner_config(row.distances_mm)).run(
                 setup.path, distance_table=ranges

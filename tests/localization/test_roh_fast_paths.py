@@ -1,0 +1,241 @@
+"""The array paths of Roh et al.'s method against their one-sample-at-a-time references:
+trilateration over a range table, the three-point extraction over a path, the polyline
+distance and the whole block expansion run."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonar_gym.localization.result import OK
+from sonar_gym.localization.roh import (
+    DEFAULT_SENSOR_HEIGHT_M,
+    PAPER_THREE_AREAS,
+    PAPER_TWO_AREAS,
+    TABLE_I_BEACONS_M,
+    BlockExpansion,
+    BlockExpansionConfig,
+    ThreePointExtractor,
+    auto_calibrate,
+    distances_to_polyline,
+    parabolic_path,
+    path_errors,
+    trilaterate,
+    trilaterate_path,
+)
+from sonar_gym.localization.roh_block_expansion import distances_to_polyline_reference
+
+HEIGHT_M = DEFAULT_SENSOR_HEIGHT_M
+AREA_1 = np.array([TABLE_I_BEACONS_M[name] for name in ("A", "B", "C")])
+
+
+def noisy_table(beacons: np.ndarray, path: np.ndarray, noise_m: float, seed: int) -> np.ndarray:
+    """Slant ranges along a path with Gaussian noise, a few dropouts and a few short ranges."""
+    rng = np.random.default_rng(seed)
+    horizontal = path[:, None, :] - beacons[None, :, :2]
+    table = np.sqrt((horizontal**2).sum(axis=2) + (beacons[:, 2] - HEIGHT_M) ** 2)
+    table = table + rng.normal(0.0, noise_m, table.shape)
+    rows = rng.choice(len(path), 12, replace=False)
+    table[rows[:6], rng.integers(0, beacons.shape[0], 6)] = np.nan
+    table[rows[6:], 0] = 0.05  # shorter than the beacon's height above the sensor
+    return np.abs(table)
+
+
+@pytest.mark.parametrize(
+    ("method", "beacon_names", "noise_m"),
+    [
+        ("paper", "ABC", 0.002),
+        ("paper", "ABC", 0.3),  # many pairs of circles miss: the radical-centre fallback
+        ("least_squares", "ABC", 0.01),
+        ("paper", "ABCD", 0.01),  # four beacons: the best triple, row by row
+    ],
+)
+def test_trilaterate_path_agrees_with_trilaterate_row_by_row(method, beacon_names, noise_m):
+    beacons = np.array([TABLE_I_BEACONS_M[name] for name in beacon_names])
+    path = parabolic_path(x_end_m=1.3)[::3]
+    table = noisy_table(beacons, path, noise_m, seed=4)
+    fixes = trilaterate_path(beacons, table, HEIGHT_M, method)
+    fallbacks = 0
+    for row, ranges in enumerate(table):
+        fix = trilaterate(beacons, ranges, HEIGHT_M, method)
+        assert fixes.statuses[row] == fix.status
+        assert fixes.used_radical_centre[row] == fix.used_radical_centre
+        fallbacks += fix.used_radical_centre
+        if fix.ok:
+            np.testing.assert_allclose(fixes.positions[row], fix.position, rtol=0, atol=1e-12)
+        else:
+            assert np.all(np.isnan(fixes.positions[row]))
+    # With four beacons one dropout still leaves three ranges.
+    failing = {"too_few_beacons"} if len(beacon_names) == 3 else set()
+    assert set(fixes.statuses) >= {OK, "distance_below_height"} | failing
+    if noise_m > 0.1 and method == "paper" and len(beacon_names) == 3:
+        assert fallbacks > 10
+
+
+def test_trilaterate_path_reports_collinear_beacons_and_bad_tables() -> None:
+    collinear = np.array([[0.0, 0.0, 2.0], [1.0, 0.0, 2.0], [2.0, 0.0, 2.0]])
+    fixes = trilaterate_path(collinear, np.full((4, 3), 2.0), HEIGHT_M)
+    assert fixes.statuses == ("collinear_beacons",) * 4
+    assert not fixes.ok.any()
+    with pytest.raises(ValueError, match="distances"):
+        trilaterate_path(AREA_1, np.ones((5, 2)), HEIGHT_M)
+    with pytest.raises(ValueError, match="distances"):
+        trilaterate_path(AREA_1, -np.ones((5, 3)), HEIGHT_M)
+
+
+@pytest.mark.parametrize(
+    "distances",
+    [(0.45, 0.25, 0.05), (0.3, 0.4, 0.7), (0.2, 0.2, 0.2), (0.0, 0.5, 0.1), (0.6, 0.3, 0.31)],
+)
+def test_update_path_saves_what_update_saves_sample_by_sample(distances) -> None:
+    rng = np.random.default_rng(8)
+    path = parabolic_path(x_end_m=0.55) + rng.normal(0.0, 0.003, (1, 2))
+    path = path + rng.normal(0.0, 0.002, path.shape)
+    a, b = TABLE_I_BEACONS_M["B"], TABLE_I_BEACONS_M["C"]
+    one_by_one = ThreePointExtractor(a, b, distances)
+    stop = len(path)
+    for index, position in enumerate(path):
+        one_by_one.update(position, index)
+        if one_by_one.done:
+            stop = index + 1
+            break
+    batch = ThreePointExtractor(a, b, distances)
+    used = batch.update_path(path, np.arange(len(path)))
+    expected, got = one_by_one.result(), batch.result()
+    assert used == stop
+    assert got.status == expected.status
+    assert got.indices == expected.indices
+    np.testing.assert_allclose(got.fractions, expected.fractions, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got.points, expected.points, rtol=0, atol=1e-12)
+
+
+def test_update_path_continues_where_an_earlier_call_stopped() -> None:
+    path = parabolic_path(x_end_m=1.3)
+    a, b = TABLE_I_BEACONS_M["B"], TABLE_I_BEACONS_M["C"]
+    whole = ThreePointExtractor(a, b, (0.45, 0.25, 0.05))
+    whole.update_path(path, np.arange(len(path)))
+    pieces = ThreePointExtractor(a, b, (0.45, 0.25, 0.05))
+    for first in range(0, len(path), 37):
+        piece = path[first : first + 37]
+        pieces.update_path(piece, np.arange(first, first + len(piece)))
+    assert pieces.result().indices == whole.result().indices
+    assert len(whole.result().indices) == 3
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_polyline_distance_is_the_minimum_over_every_segment(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 400))
+    line = np.cumsum(rng.normal(0.0, rng.uniform(0.001, 0.5), (n, 2)), axis=0)
+    if n > 3:
+        line[2] = line[1]  # a zero-length segment
+    points = line[rng.integers(0, n, 200)] + rng.normal(0.0, rng.choice([1e-3, 0.1, 3.0]), (200, 2))
+    np.testing.assert_allclose(
+        distances_to_polyline(points, line),
+        distances_to_polyline_reference(points, line),
+        rtol=1e-12,
+        atol=1e-15,
+    )
+
+
+def reference_run(config: BlockExpansionConfig, path: np.ndarray, table: np.ndarray):
+    """Sec. II walked one fix at a time: trilaterate, extract, calibrate, switch past the line."""
+    names = config.beacon_names
+    known = {name: np.array(config.beacons_m[name]) for name in config.areas[0]}
+    area, fixes, areas, switches, calibrated = 0, [], [], [], {}
+    extractor, points, ranges, calibration = None, [], [], None
+    for index, row in enumerate(table):
+        if extractor is None and area < len(config.areas) - 1:
+            boundary, new = config.boundaries[area], config.new_beacons[area]
+            extractor = ThreePointExtractor(
+                known[boundary[0]], known[boundary[1]], config.calibration_distances_m[area]
+            )
+            opposite = next(n for n in config.areas[area] if n not in boundary)
+            origin = known[boundary[0]][:2]
+            direction = known[boundary[1]][:2] - origin
+
+            def side(xy, origin=origin, direction=direction):
+                offset = xy - origin
+                return np.sign(direction[0] * offset[1] - direction[1] * offset[0])
+
+            inner = side(known[opposite][:2])
+            points, ranges, calibration = [], [], None
+        area_names = config.areas[area]
+        fix = trilaterate(
+            np.array([known[n] for n in area_names]),
+            row[[names.index(n) for n in area_names]],
+            config.sensor_height_m,
+            config.trilateration_method,
+        )
+        fixes.append(fix)
+        areas.append(area)
+        if not fix.ok or extractor is None:
+            continue
+        if calibration is None:
+            for _ in range(extractor.update(fix.position, index)):
+                points.append(fix.position)
+                ranges.append(row[names.index(new)])
+            if extractor.done:
+                calibration = auto_calibrate(np.array(points), np.array(ranges), HEIGHT_M)
+        if calibration is not None and calibration.ok:
+            s = side(fix.position)
+            if s != 0 and s != inner:
+                known[new] = calibration.position
+                calibrated[new] = calibration.position
+                switches.append(index + 1)
+                area, extractor = area + 1, None
+    return fixes, np.array(areas), switches, calibrated
+
+
+@pytest.mark.parametrize(
+    ("areas", "distances", "method"),
+    [
+        (PAPER_TWO_AREAS, ((0.45, 0.25, 0.05),), "paper"),
+        (PAPER_TWO_AREAS, ((0.3, 0.4, 0.7),), "paper"),
+        (PAPER_TWO_AREAS, ((0.02, 0.02, 0.02),), "paper"),
+        (PAPER_THREE_AREAS, ((0.45, 0.25, 0.05), (0.3, 0.4, 0.7)), "paper"),
+        (PAPER_THREE_AREAS, ((0.6, 0.35, 0.1), (0.5, 0.3, 0.05)), "least_squares"),
+    ],
+)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_the_array_run_is_the_fix_by_fix_run(areas, distances, method, seed: int) -> None:
+    config = BlockExpansionConfig(
+        areas=areas,
+        calibration_distances_m=distances,
+        trilateration_method=method,
+        range_noise_std_m=0.002,
+    )
+    path = parabolic_path(x_end_m=1.3 if len(areas) == 2 else 0.55)
+    runner = BlockExpansion(config)
+    table = runner.measure_ranges(path, np.random.default_rng(seed))
+    table[np.random.default_rng(seed).integers(0, len(path), 8), 0] = np.nan
+    result = runner.run(path, distance_table=table)
+    fixes, area_indices, switches, calibrated = reference_run(config, path, table)
+    np.testing.assert_array_equal(result.area_indices, area_indices)
+    assert result.statuses == tuple(fix.status for fix in fixes)
+    expected_xy = np.array([fix.position for fix in fixes if fix.ok])
+    np.testing.assert_allclose(result.estimated_xy, expected_xy, rtol=0, atol=1e-12)
+    assert [c.switch_index for c in result.calibrations if c.switch_index is not None] == switches
+    assert sorted(result.calibrated_beacons_m) >= sorted(calibrated)
+    for name, position in calibrated.items():
+        np.testing.assert_allclose(result.calibrated_beacons_m[name], position, atol=1e-12)
+    for kept, fix in zip(result.localizations, fixes, strict=True):
+        assert (kept.status, kept.message, kept.used_radical_centre) == (
+            fix.status,
+            fix.message,
+            fix.used_radical_centre,
+        )
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_path_errors_sigma_prime_is_the_mean_distance_over_every_segment(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(2, 600))
+    x = np.linspace(-2.0, 3.0, n) + rng.uniform(-1e-3, 1e-3, n) * (n > 2)
+    x = np.sort(x) if seed % 2 else np.sort(x)[::-1]
+    path = np.column_stack([x, np.cumsum(rng.normal(0.0, rng.uniform(0.001, 0.5), n))])
+    noise = [1e-4, 1e-2, 0.3, 5.0][seed % 4]
+    points = path[rng.integers(0, n, 300)] + rng.normal(0.0, noise, (300, 2))
+    _, sigma_prime = path_errors(points, path)
+    reference = float(np.mean(distances_to_polyline_reference(points, path)))
+    assert sigma_prime == pytest.approx(reference, rel=1e-12, abs=1e-15)
