@@ -231,4 +231,3 @@ def _write_run_file(
         "versions": {"ray": ray.__version__, "gymnasium": gym.__version__},
     }
     (run_dir / RUN_FILE).write_text(json.dumps(record, indent=2) + "\n")
-

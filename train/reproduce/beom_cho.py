@@ -141,7 +141,8 @@ UNSTATED_PARAMETERS: tuple[tuple[str, str, str], ...] = (
     ),
     (
         "sonar threshold / beam",
-        "19.2 mm piston, side-lobe nulls filled (S = 0.07), time-varying gain; threshold giving 22 deg on the small beacon",
+        "19.2 mm piston, side-lobe nulls filled (S = 0.07), time-varying gain; "
+        "threshold giving 22 deg on the small beacon",
         "presets.py",
     ),
     ("range noise / timer", "2 mm Gaussian, 32 us counter, threshold delay", "presets.py"),
@@ -972,8 +973,9 @@ def causes_table(repeated: dict[bool, list[PathRun]]) -> Table:
         header_style="bold",
     )
     for header in ("run", "estimator", "stops", "cause", "count"):
-        justify = "right" if header in ("stops", "count") else "left"
-        table.add_column(escape(header), justify=justify)
+        table.add_column(
+            escape(header), justify="right" if header in ("stops", "count") else "left"
+        )
     for slip, runs in repeated.items():
         stops = sum(len(run.truth) for run in runs)
         for estimator in ESTIMATORS:
@@ -1076,7 +1078,7 @@ def _estimate_xy(run: PathRun, estimator: str) -> np.ndarray:
     )
 
 
-STYLES = {
+STYLES: dict[str, dict[str, Any]] = {
     PAPER: {"color": "#d62728", "marker": "x", "linestyle": "none"},
     IMPROVED: {"color": "#1f77b4", "marker": "+", "linestyle": "none", "markersize": 9},
     DEAD_RECKONING: {"color": "#ff7f0e", "marker": ".", "linestyle": "-"},

@@ -117,7 +117,7 @@ def outcome_map(seed: int, spacing_m: float) -> OutcomeMap:
     result = OutcomeMap(xs, ys, {name: [] for name in EXTRACTIONS})
     with task_progress("outcome map", len(xs) * len(ys)) as advance:
         for y in ys:
-            rows = {name: [] for name in EXTRACTIONS}
+            rows: dict[str, list[Any]] = {name: [] for name in EXTRACTIONS}
             for x in xs:
                 pose = Pose(x, y, float(rng.uniform(-math.pi, math.pi)))
                 for name, outcome in cell_outcomes(world, scenario, probe, pose, rng).items():

@@ -96,7 +96,7 @@ class PaperTable:
         errors: dict[str, tuple[float, ...]] = {}
         for key, values in self.rows.items():
             if key in truth:
-                errors[key] = tuple(abs(v - t) for v, t in zip(values, truth[key]))
+                errors[key] = tuple(abs(v - t) for v, t in zip(values, truth[key], strict=True))
             else:
                 errors[key] = values
         return errors
@@ -463,15 +463,20 @@ def plot_setup(out_dir: Path) -> Path:
     a_cm = 100.0 * PAPER_TRANSMITTER_SPACING_M
     transmitters = np.array([[0.0, 0.0], [a_cm, 0.0], [0.0, a_cm]])
     top.plot(*transmitters.T, "^", color="#2ca02c", ms=11, label="transmitters T1, T2, T3")
-    for name, (x, y) in zip(("T1", "T2", "T3"), transmitters):
+    for name, (x, y) in zip(("T1", "T2", "T3"), transmitters, strict=True):
         top.annotate(name, (x, y), textcoords="offset points", xytext=(6, 6))
     colours = ("#1f77b4", "#ff7f0e", "#d62728", "#9467bd")
-    for heading, colour in zip(PAPER_HEADINGS_DEG, colours):
+    for heading, colour in zip(PAPER_HEADINGS_DEG, colours, strict=False):
         pose = Pose(0.0, 0.0, math.radians(heading))
         receivers = 100.0 * np.array([pose.transform_point(xy) for xy in PAPER_RECEIVER_OFFSETS_M])
         top.plot(*receivers.T, "o-", color=colour, label=f"receivers, θ = {heading:g}°")
         tip = 100.0 * pose.transform_point((0.12, 0.0))
-        top.annotate("", tip, (0.0, 0.0), arrowprops={"arrowstyle": "->", "color": colour})
+        top.annotate(
+            "",
+            (float(tip[0]), float(tip[1])),
+            (0.0, 0.0),
+            arrowprops={"arrowstyle": "->", "color": colour},
+        )
     top.set_xlabel("x [cm] (reference frame)")
     top.set_ylabel("y [cm]")
     top.set_title("Top view: a = 20 cm, receivers at (0, ±20) cm on the robot")
@@ -481,7 +486,7 @@ def plot_setup(out_dir: Path) -> Path:
     top.grid(alpha=0.3)
     top.legend(fontsize=7, loc="lower right")
     side.axhline(0.0, color="#2ca02c", lw=3, label="ceiling, transmitters (z = 0)")
-    for paper, colour in zip(PAPER_TABLES, ("#1f77b4", "#d62728")):
+    for paper, colour in zip(PAPER_TABLES, ("#1f77b4", "#d62728"), strict=False):
         side.plot(
             [-20.0, 20.0],
             [paper.z_cm, paper.z_cm],
@@ -516,7 +521,7 @@ def plot_fixes(runs_by_table: dict[str, list[list[Experiment]]], out_dir: Path) 
         run = runs_by_table[paper.name][0]
         position_axis = figure.add_subplot(2, 2, 1 + column)
         heading_axis = figure.add_subplot(2, 2, 3 + column)
-        for index, (experiment, colour) in enumerate(zip(run, colours)):
+        for index, (experiment, colour) in enumerate(zip(run, colours, strict=False)):
             fixes_cm = 100.0 * np.array([[f.x, f.y] for f in experiment.fixes])
             estimate = experiment.estimate
             label = f"θ = {PAPER_HEADINGS_DEG[index]:g}°"
