@@ -88,7 +88,7 @@ def checked_number(
     if is_bool(value) or not isinstance(value, wanted):
         raise error(f"{subject} must be {allowed}; got {shown(value)}")
     try:
-        number: int | float = int(value) if integer else float(value)  # type: ignore[call-overload]
+        number: int | float = int(value) if integer else float(value)  # type: ignore[call-overload, arg-type]
         as_float = float(number)
     except (OverflowError, ValueError) as overflow:
         raise error(f"{subject} must be {allowed}; got {shown(value)}") from overflow
