@@ -151,8 +151,12 @@ def checked_numbers(
     items = checked_sequence(
         subject, value, length=length, min_length=min_length, max_length=max_length, error=error
     )
+
+    def item_subject(i: int) -> str:  # "argument 'x'" -> "argument 'x[0]'"
+        return f"{subject[:-1]}[{i}]'" if subject.endswith("'") else f"{subject}[{i}]"
+
     return tuple(
-        checked_number(f"{subject}[{i}]", item, low=low, high=high, integer=integer, error=error)
+        checked_number(item_subject(i), item, low=low, high=high, integer=integer, error=error)
         for i, item in enumerate(items)
     )
 
