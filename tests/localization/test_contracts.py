@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from hypothesis import event, given
+from hypothesis import event, example, given
 from hypothesis import strategies as st
 
 from sonar_gym.localization.beom_cho import solve_two_circles
@@ -171,7 +171,11 @@ def test_three_circle_solvers_are_finite_or_a_value_error(
     outcome(function, centres, radii)
 
 
-@fuzz_settings(300)
+@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/roh_trilateration.py")
+@fuzz_settings(300, shrink=False)
+@example(  # found by a 3,000-example run: OverflowError squaring the range
+    [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]], [1.0, 1.0, 1e150], 0.0, "paper"
+)
 @given(
     st.lists(point(3), min_size=3, max_size=3),
     st.lists(positive, min_size=3, max_size=3),
