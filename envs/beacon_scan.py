@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -17,7 +16,16 @@ import numpy as np
 
 from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
 from sonar_gym.envs.base import SonarEnv, StepOutcome
-from sonar_gym.envs.config import build_config, check_bool, check_choice, check_number
+from sonar_gym.envs.config import (
+    bool_field,
+    build_config,
+    check_choice,
+    check_number,
+    choice_field,
+    number_field,
+    numbers_field,
+    scenario_field,
+)
 from sonar_gym.localization.beom_cho import (
     ASSIGNMENTS,
     EXTRACTIONS,
@@ -34,6 +42,7 @@ from sonar_gym.sonar.accumulate import ScanMemory
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.sonar.scan import Scan
+from sonar_gym.validation import MIN_DURATION_S, MIN_LENGTH_M
 from sonar_gym.world import World
 
 __all__ = ["BeaconScanConfig", "BeaconScanEnv", "PanCommand", "beacons_visible"]
@@ -71,29 +80,24 @@ class BeaconScanConfig:
     time_budget_s: float = 60.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.scenario, (str, Path)):
-            raise ValueError(
-                f"argument 'scenario' must be a built-in name, a file path or 'random'; got {self.scenario!r}"
-            )
-        if self.temperature_c is not None:
-            check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
-        low, high = _pair("temperature_range_c", self.temperature_range_c)
-        check_number("temperature_range_c[0]", low, low=-20.0, high=50.0)
-        check_number("temperature_range_c[1]", high, low=low, high=50.0)
-        check_bool("allow_calibration", self.allow_calibration)
-        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
-        check_number("failure_penalty", self.failure_penalty, low=0.0, high=1e4)
-        check_number("prior_position_std_m", self.prior_position_std_m, low=0.0, high=2.0)
-        check_number("prior_heading_std_deg", self.prior_heading_std_deg, low=0.0, high=90.0)
-        _check_degree_set("increments_deg", self.increments_deg, allowed=(1, 2, 3, 5, 6, 10))
-        _check_degree_set("sector_widths_deg", self.sector_widths_deg, allowed=None)
+        scenario_field(self, extra=", or 'random'")
+        number_field(self, "temperature_c", low=-20.0, high=50.0, optional=True)
+        low, _ = numbers_field(self, "temperature_range_c", length=2, low=-20.0, high=50.0)
+        check_number("temperature_range_c[1]", self.temperature_range_c[1], low=low, high=50.0)
+        bool_field(self, "allow_calibration")
+        number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
+        number_field(self, "failure_penalty", low=0.0, high=1e4)
+        number_field(self, "prior_position_std_m", low=0.0, high=2.0)
+        number_field(self, "prior_heading_std_deg", low=0.0, high=90.0)
+        _degree_set_field(self, "increments_deg", allowed=(1, 2, 3, 5, 6, 10))
+        _degree_set_field(self, "sector_widths_deg", allowed=None)
         for width in self.sector_widths_deg:
             if width > 360 or any(width % inc for inc in self.increments_deg):
                 raise ValueError(
                     "argument 'sector_widths_deg' must hold widths <= 360 deg that every "
                     f"increment in {self.increments_deg} divides; got {self.sector_widths_deg}"
                 )
-        check_number("n_sector_centres", self.n_sector_centres, low=1, high=360, integer=True)
+        number_field(self, "n_sector_centres", low=1, high=360, integer=True)
         if 360 % self.n_sector_centres or any(
             (360 // self.n_sector_centres) % inc for inc in self.increments_deg
         ):
@@ -101,18 +105,17 @@ class BeaconScanConfig:
                 "argument 'n_sector_centres' must divide 360 into whole-degree steps that every "
                 f"increment divides; got {self.n_sector_centres}"
             )
-        check_number("n_bins", self.n_bins, low=4, high=360, integer=True)
+        number_field(self, "n_bins", low=4, high=360, integer=True)
         if 360 % self.n_bins:
             raise ValueError(f"argument 'n_bins' must divide 360; got {self.n_bins}")
-        check_number("max_steps", self.max_steps, low=1, high=1000, integer=True)
-        check_choice("start_pose", self.start_pose, ("beacons_visible", "any"))
-        check_choice("localization_method", self.localization_method, METHODS)
-        check_choice("pair_assignment", self.pair_assignment, ASSIGNMENTS)
-        check_choice("rcd_extraction", self.rcd_extraction, EXTRACTIONS)
-        if self.prior_gate_m is not None:
-            check_number("prior_gate_m", self.prior_gate_m, low=0.0, low_inclusive=False, high=10.0)
-        check_choice("action_type", self.action_type, ("multi_discrete", "discrete"))
-        check_number("time_budget_s", self.time_budget_s, low=0.0, low_inclusive=False, high=1e5)
+        number_field(self, "max_steps", low=1, high=1000, integer=True)
+        choice_field(self, "start_pose", ("beacons_visible", "any"))
+        choice_field(self, "localization_method", METHODS)
+        choice_field(self, "pair_assignment", ASSIGNMENTS)
+        choice_field(self, "rcd_extraction", EXTRACTIONS)
+        number_field(self, "prior_gate_m", low=MIN_LENGTH_M, high=10.0, optional=True)
+        choice_field(self, "action_type", ("multi_discrete", "discrete"))
+        number_field(self, "time_budget_s", low=MIN_DURATION_S, high=1e5)
 
 
 def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
@@ -123,24 +126,18 @@ def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
     return reduce.reduce(values.reshape(n_bins, len(values) // n_bins), axis=1)
 
 
-def _pair(name: str, value: object) -> tuple[float, float]:
-    if not isinstance(value, (tuple, list)) or len(value) != 2:
-        raise ValueError(f"argument {name!r} must be a pair (low, high); got {value!r}")
-    return float(value[0]), float(value[1])
-
-
-def _check_degree_set(name: str, values: object, allowed: tuple[int, ...] | None) -> None:
-    if (
-        not isinstance(values, (tuple, list))
-        or not values
-        or any(isinstance(v, bool) or not isinstance(v, int) or v <= 0 for v in values)
-        or len(set(values)) != len(values)
-        or (allowed is not None and any(v not in allowed for v in values))
+def _degree_set_field(config: object, name: str, allowed: tuple[int, ...] | None) -> None:
+    """A non-empty set of distinct positive whole degrees (from ``allowed`` if given)."""
+    choices = f" from {allowed}" if allowed else ""
+    message = f"argument {name!r} must be distinct positive whole degrees{choices}"
+    try:
+        values = numbers_field(config, name, low=1, high=360, integer=True, min_length=1)
+    except ValueError as error:
+        raise ValueError(f"{message}; {error}") from error
+    if len(set(values)) != len(values) or (
+        allowed is not None and any(v not in allowed for v in values)
     ):
-        choices = f" from {allowed}" if allowed else ""
-        raise ValueError(
-            f"argument {name!r} must be distinct positive whole degrees{choices}; got {values!r}"
-        )
+        raise ValueError(f"{message}; got {values!r}")
 
 
 @dataclass(frozen=True)

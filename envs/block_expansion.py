@@ -26,7 +26,13 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
-from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.config import (
+    build_config,
+    check_number,
+    choice_field,
+    number_field,
+    numbers_field,
+)
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
@@ -61,6 +67,7 @@ from sonar_gym.routes import (
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
+from sonar_gym.validation import MIN_SCALE
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/BlockExpansion-v0"
@@ -127,28 +134,22 @@ class BlockExpansionEnvConfig:
     trilateration_method: str = "paper"
 
     def __post_init__(self) -> None:
-        check_number("n_areas", self.n_areas, low=2, high=3, integer=True)
-        check_choice("layout", self.layout, ("table_i", "random"))
-        check_choice("path", self.path, ("paper", "random"))
-        check_choice("decisions", self.decisions, ("per_boundary", "all_at_once"))
-        check_choice("ordering", self.ordering, ("free", "decreasing"))
-        value = self.distance_range_m
-        if not isinstance(value, (tuple, list)) or len(value) != 2:
-            raise ValueError(
-                f"argument 'distance_range_m' must be a pair (low, high) of metres; got {value!r}"
-            )
-        low, high = value
+        number_field(self, "n_areas", low=2, high=3, integer=True)
+        choice_field(self, "layout", ("table_i", "random"))
+        choice_field(self, "path", ("paper", "random"))
+        choice_field(self, "decisions", ("per_boundary", "all_at_once"))
+        choice_field(self, "ordering", ("free", "decreasing"))
+        low, high = numbers_field(self, "distance_range_m", length=2)
         check_number("distance_range_m[0]", low, low=0.0, high=2.0)
-        check_number("distance_range_m[1]", high, low=float(low) + 4 * DECREASING_GAP_M, high=3.0)
-        object.__setattr__(self, "distance_range_m", (float(low), float(high)))
-        check_number("range_noise_std_m", self.range_noise_std_m, low=0.0, high=NOISE_SCALE_M)
-        check_number("timer_period_s", self.timer_period_s, low=0.0, high=TIMER_SCALE_S)
-        check_number("max_range_m", self.max_range_m, low=0.5, high=50.0)
-        check_number("beacon_prior_std_m", self.beacon_prior_std_m, low=0.0, high=1.0)
-        check_number("sigma_scale_m", self.sigma_scale_m, low=0.0, low_inclusive=False, high=10.0)
-        check_number("failure_penalty", self.failure_penalty, low=0.0, high=1e4)
-        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
-        check_choice("trilateration_method", self.trilateration_method, TRILATERATION_METHODS)
+        check_number("distance_range_m[1]", high, low=low + 4 * DECREASING_GAP_M, high=3.0)
+        number_field(self, "range_noise_std_m", low=0.0, high=NOISE_SCALE_M)
+        number_field(self, "timer_period_s", low=0.0, high=TIMER_SCALE_S)
+        number_field(self, "max_range_m", low=0.5, high=50.0)
+        number_field(self, "beacon_prior_std_m", low=0.0, high=1.0)
+        number_field(self, "sigma_scale_m", low=MIN_SCALE, high=10.0)
+        number_field(self, "failure_penalty", low=0.0, high=1e4)
+        number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
+        choice_field(self, "trilateration_method", TRILATERATION_METHODS)
 
     @property
     def n_boundaries(self) -> int:

@@ -2,17 +2,34 @@
 
 Every environment takes its ``gym.make`` keyword arguments into a frozen dataclass checked in
 ``__init__``: a misspelt key or a value outside its range fails at once with a message that
-names the argument and what is allowed, instead of being ignored.
+names the argument, the value and what is allowed, instead of being ignored.
+
+The checks are the shared ones of :mod:`sonar_gym.validation` (the scenario loader uses the
+same): numpy scalars are accepted and stored as Python numbers, lists are accepted where
+tuples are (``EnvSpec.to_json`` turns tuples into lists) and stored as tuples, so a config
+always hashes. The ``*_field`` helpers check a field of a frozen dataclass and store the
+converted value back.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 from typing import Any, TypeVar
 
+from sonar_gym.validation import (
+    MIN_SCALE,
+    checked_bool,
+    checked_choice,
+    checked_number,
+    checked_numbers,
+    shown,
+)
+
 ConfigT = TypeVar("ConfigT")
+MAX_SCENARIO_ARGUMENT_CHARS = 4096
+"""Longest ``scenario`` argument accepted (a path longer than this is not a path)."""
 
 
 def build_config(config_type: type[ConfigT], kwargs: Mapping[str, Any], env_name: str) -> ConfigT:
@@ -34,30 +51,102 @@ def check_number(
     high: float | None = None,
     low_inclusive: bool = True,
     integer: bool = False,
+) -> int | float:
+    """Return ``value`` as a Python number if finite and in range; else raise ``ValueError``.
+
+    ``low_inclusive=False`` is read as "at least :data:`~sonar_gym.validation.MIN_SCALE`
+    above ``low``", never as an open bound a denormal could slip through; prefer an explicit
+    physical floor as ``low``.
+    """
+    if not low_inclusive and low is not None:
+        low = low + MIN_SCALE * max(1.0, abs(low))
+    return checked_number(f"argument {name!r}", value, low=low, high=high, integer=integer)
+
+
+def check_choice(name: str, value: object, allowed: Iterable[object]) -> Any:
+    """Return the member of ``allowed`` equal to ``value``; else raise ``ValueError``."""
+    return checked_choice(f"argument {name!r}", value, list(allowed))
+
+
+def check_bool(name: str, value: object) -> bool:
+    """Return a Python or numpy bool as ``bool``; else raise ``ValueError``."""
+    return checked_bool(f"argument {name!r}", value)
+
+
+def _store(config: object, name: str, value: object) -> None:
+    object.__setattr__(config, name, value)
+
+
+def number_field(
+    config: object,
+    name: str,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    integer: bool = False,
+    optional: bool = False,
 ) -> None:
-    """Raise ``ValueError`` unless ``value`` is a finite number in the given range."""
-    kind = "an integer" if integer else "a finite number"
-    valid_type = isinstance(value, int) if integer else isinstance(value, (int, float))
-    if isinstance(value, bool) or not valid_type or not math.isfinite(float(value)):  # type: ignore[arg-type]
-        raise ValueError(f"argument {name!r} must be {kind}; got {value!r}")
-    number = float(value)  # type: ignore[arg-type]
-    too_low = low is not None and (number < low if low_inclusive else number <= low)
-    too_high = high is not None and number > high
-    if too_low or too_high:
-        lower = "-inf" if low is None else f"{low:g}"
-        upper = "inf" if high is None else f"{high:g}"
-        bracket = "[" if low_inclusive else "("
-        raise ValueError(f"argument {name!r} must be in {bracket}{lower}, {upper}]; got {value!r}")
+    """Check the number field ``name`` of a frozen config and store it as a Python number.
+
+    ``optional``: ``None`` is also allowed (and kept).
+    """
+    value = getattr(config, name)
+    if optional and value is None:
+        return
+    _store(config, name, check_number(name, value, low=low, high=high, integer=integer))
 
 
-def check_choice(name: str, value: object, allowed: Iterable[object]) -> None:
-    """Raise ``ValueError`` unless ``value`` is one of ``allowed``."""
-    options = list(allowed)
-    if value not in options:
-        raise ValueError(f"argument {name!r} must be one of {options}; got {value!r}")
+def numbers_field(
+    config: object,
+    name: str,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    integer: bool = False,
+    length: int | None = None,
+    min_length: int = 0,
+    max_length: int | None = None,
+    distinct: bool = False,
+) -> tuple[int | float, ...]:
+    """Check a tuple-of-numbers field (lists accepted), store it as a tuple and return it."""
+    values = checked_numbers(
+        f"argument {name!r}",
+        getattr(config, name),
+        low=low,
+        high=high,
+        integer=integer,
+        length=length,
+        min_length=min_length,
+        max_length=max_length,
+    )
+    if distinct and len(set(values)) != len(values):
+        raise ValueError(f"argument {name!r} must hold distinct values; got {values!r}")
+    _store(config, name, values)
+    return values
 
 
-def check_bool(name: str, value: object) -> None:
-    """Raise ``ValueError`` unless ``value`` is a bool."""
-    if not isinstance(value, bool):
-        raise ValueError(f"argument {name!r} must be True or False; got {value!r}")
+def choice_field(config: object, name: str, allowed: Iterable[object]) -> None:
+    """Check a field against its allowed values and store the plain allowed value."""
+    _store(config, name, check_choice(name, getattr(config, name), allowed))
+
+
+def bool_field(config: object, name: str) -> None:
+    """Check a bool field (numpy bools accepted) and store it as ``bool``."""
+    _store(config, name, check_bool(name, getattr(config, name)))
+
+
+def scenario_field(config: object, name: str = "scenario", extra: str = "") -> None:
+    """Check a scenario argument: a non-empty name or path of at most 4096 characters.
+
+    Whether the name or file exists is the loader's question
+    (:func:`sonar_gym.scenario.load_scenario`), which answers with a ``ScenarioError``.
+    ``extra`` describes further accepted values for the message (e.g. ``", or 'random'"``).
+    """
+    value = getattr(config, name)
+    text = str(value) if isinstance(value, (str, Path)) else None
+    if text is None or not text.strip() or len(text) > MAX_SCENARIO_ARGUMENT_CHARS:
+        raise ValueError(
+            f"argument {name!r} must be a built-in scenario name or a path to a .toml or .json "
+            f"file (a non-empty string of at most {MAX_SCENARIO_ARGUMENT_CHARS} characters)"
+            f"{extra}; got {shown(value)}"
+        )

@@ -12,14 +12,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
-from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.config import (
+    build_config,
+    check_choice,
+    check_number,
+    choice_field,
+    number_field,
+    scenario_field,
+)
 from sonar_gym.localization.kim_fix import fix_covariance, gated_ekf_update, vote_around_estimate
 from sonar_gym.localization.kim_grid import occupancy_grid_of, sweep_end_points
 from sonar_gym.localization.kim import (
@@ -33,6 +39,7 @@ from sonar_gym.pose import Pose, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SweptSonar
+from sonar_gym.validation import MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
 
 POSITION_UNIT_M = 0.1
@@ -83,37 +90,30 @@ class SweepLocalizationConfig:
     n_range_bins: int = 9
 
     def __post_init__(self) -> None:
-        if not isinstance(self.scenario, (str, Path)):
-            raise ValueError(  # noqa: TRY004  (bad arguments raise ValueError here)
-                f"argument 'scenario' must be a built-in name or a file path; got {self.scenario!r}"
-            )
-        check_choice("route", self.route, ("table1", "random"))
-        check_number("route_length_m", self.route_length_m, low=0.5, high=50.0)
-        check_choice("decision_points", self.decision_points, ("spacing", "waypoints"))
-        check_number("decision_spacing_m", self.decision_spacing_m, low=0.05, high=5.0)
-        check_number("sweep_spacing_m", self.sweep_spacing_m, low=0.0, high=1.0)
-        check_number("max_sweeps", self.max_sweeps, low=4, high=12, integer=True)
-        check_choice("sweep_width_deg", self.sweep_width_deg, (90, 180))
-        check_number("sweep_step_deg", self.sweep_step_deg, low=0.5, high=15.0)
-        check_choice("anchor", self.anchor, ("obstacle_point", "cell_center"))
-        check_number("heading_step_deg", self.heading_step_deg, low=0.25, high=5.0)
-        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
-        check_number("max_error_loss", self.max_error_loss, low=0.0, low_inclusive=False, high=1e4)
-        check_number(
-            "encoder_noise_std_m_per_sqrt_m", self.encoder_noise_std_m_per_sqrt_m, low=0.0, high=0.1
-        )
-        check_number("wheel_scale_error", self.wheel_scale_error, low=0.0, high=0.1)
-        check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
-        check_number("initial_position_std_m", self.initial_position_std_m, low=0.0, high=0.5)
-        check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=30.0)
-        check_number("fix_position_std_m", self.fix_position_std_m, low=0.001, high=1.0)
-        check_number("fix_heading_std_deg", self.fix_heading_std_deg, low=0.05, high=45.0)
-        if self.innovation_gate is not None:
-            check_number(
-                "innovation_gate", self.innovation_gate, low=0.0, low_inclusive=False, high=1e6
-            )
-        check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
-        check_number("n_range_bins", self.n_range_bins, low=1, high=64, integer=True)
+        scenario_field(self)
+        choice_field(self, "route", ("table1", "random"))
+        number_field(self, "route_length_m", low=0.5, high=50.0)
+        choice_field(self, "decision_points", ("spacing", "waypoints"))
+        number_field(self, "decision_spacing_m", low=0.05, high=5.0)
+        number_field(self, "sweep_spacing_m", low=0.0, high=1.0)
+        number_field(self, "max_sweeps", low=4, high=12, integer=True)
+        choice_field(self, "sweep_width_deg", (90, 180))
+        number_field(self, "sweep_step_deg", low=0.5, high=15.0)
+        choice_field(self, "anchor", ("obstacle_point", "cell_center"))
+        number_field(self, "heading_step_deg", low=0.25, high=5.0)
+        number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
+        number_field(self, "max_error_loss", low=MIN_SCALE, high=1e4)
+        number_field(self, "encoder_noise_std_m_per_sqrt_m", low=0.0, high=0.1)
+        number_field(self, "wheel_scale_error", low=0.0, high=0.1)
+        number_field(self, "slip_probability_per_m", low=0.0, high=1.0)
+        number_field(self, "initial_position_std_m", low=0.0, high=0.5)
+        number_field(self, "initial_heading_std_deg", low=0.0, high=30.0)
+        number_field(self, "fix_position_std_m", low=0.001, high=1.0)
+        number_field(self, "fix_heading_std_deg", low=0.05, high=45.0)
+        # a squared Mahalanobis distance, so its floor is that of a variance
+        number_field(self, "innovation_gate", low=MIN_VARIANCE, high=1e6, optional=True)
+        number_field(self, "temperature_c", low=-20.0, high=50.0)
+        number_field(self, "n_range_bins", low=1, high=64, integer=True)
 
     @property
     def ekf_variance_per_m(self) -> float:

@@ -23,7 +23,14 @@ import gymnasium as gym
 import numpy as np
 
 from sonar_gym.envs.base import SonarEnv, StepOutcome
-from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.config import (
+    build_config,
+    check_choice,
+    choice_field,
+    number_field,
+    numbers_field,
+    scenario_field,
+)
 from sonar_gym.localization.ekf import ekf_update
 from sonar_gym.localization.wu_tsai_models import (
     RangeErrorModel,
@@ -49,6 +56,7 @@ from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.validation import MIN_DURATION_S, MIN_SCALE, MIN_SPEED_MPS
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/Trilateration-v0"
@@ -63,6 +71,10 @@ TIME_SINCE_FIX_SCALE_S = 10.0
 # --------------------------------------------------------------------------------------------
 # Configuration
 # --------------------------------------------------------------------------------------------
+
+
+MIN_ROUTE_LENGTH_M = 0.01
+"""Shortest route, metres: one centimetre, so every leg stays longer than a denormal."""
 
 
 @dataclass(frozen=True)
@@ -93,59 +105,36 @@ class TrilaterationConfig:
     turn_rate_rad_s: float = 1.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.scenario, (str, Path)):
-            raise ValueError(
-                "argument 'scenario' must be a built-in scenario name or a file path; "
-                f"got {self.scenario!r}"
+        scenario_field(self)
+        try:
+            numbers_field(
+                self, "fix_counts", low=0, high=200, integer=True, min_length=1, distinct=True
             )
-        counts = self.fix_counts
-        if (
-            not isinstance(counts, (tuple, list))
-            or not counts
-            or any(
-                isinstance(n, bool) or not isinstance(n, int) or not 0 <= n <= 200 for n in counts
-            )
-            or len(set(counts)) != len(counts)
-        ):
+        except ValueError as error:
             raise ValueError(
                 "argument 'fix_counts' must be a non-empty sequence of distinct integers in "
-                f"[0, 200] (numbers of repeated fixes); got {counts!r}"
-            )
-        object.__setattr__(self, "fix_counts", tuple(int(n) for n in counts))
-        check_number(
-            "route_length_m", self.route_length_m, low=0.0, low_inclusive=False, high=100.0
-        )
-        check_number("n_decision_points", self.n_decision_points, low=1, high=200, integer=True)
-        check_choice("correction", self.correction, ("replace", "fuse"))
-        check_number("measurement_cost_per_s", self.measurement_cost_per_s, low=0.0, high=100.0)
-        check_number(
-            "position_scale_m", self.position_scale_m, low=0.0, low_inclusive=False, high=10.0
-        )
-        check_number(
-            "heading_scale_deg", self.heading_scale_deg, low=0.0, low_inclusive=False, high=180.0
-        )
-        check_number(
-            "max_error_score", self.max_error_score, low=0.0, low_inclusive=False, high=1e6
-        )
-        check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
-        check_number("counter_rate_hz", self.counter_rate_hz, low=1e3, high=1e9)
-        check_number("range_noise_std_m", self.range_noise_std_m, low=0.0, high=0.5)
-        check_number(
-            "firing_interval_s", self.firing_interval_s, low=0.0, low_inclusive=False, high=10.0
-        )
-        check_number("encoder_std_m_per_sqrt_m", self.encoder_std_m_per_sqrt_m, low=0.0, high=0.5)
-        check_number("wheel_scale_error_std", self.wheel_scale_error_std, low=0.0, high=0.1)
-        check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
-        check_number("slip_fraction_max", self.slip_fraction_max, low=0.0, high=1.0)
-        check_number("initial_position_std_m", self.initial_position_std_m, low=0.0, high=1.0)
-        check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=90.0)
-        check_number("wall_clearance_m", self.wall_clearance_m, low=0.0, high=5.0)
-        check_number(
-            "robot_speed_mps", self.robot_speed_mps, low=0.0, low_inclusive=False, high=10.0
-        )
-        check_number(
-            "turn_rate_rad_s", self.turn_rate_rad_s, low=0.0, low_inclusive=False, high=100.0
-        )
+                f"[0, 200] (numbers of repeated fixes); {error}"
+            ) from error
+        number_field(self, "route_length_m", low=MIN_ROUTE_LENGTH_M, high=100.0)
+        number_field(self, "n_decision_points", low=1, high=200, integer=True)
+        choice_field(self, "correction", ("replace", "fuse"))
+        number_field(self, "measurement_cost_per_s", low=0.0, high=100.0)
+        number_field(self, "position_scale_m", low=MIN_SCALE, high=10.0)
+        number_field(self, "heading_scale_deg", low=MIN_SCALE, high=180.0)
+        number_field(self, "max_error_score", low=MIN_SCALE, high=1e6)
+        number_field(self, "temperature_c", low=-20.0, high=50.0)
+        number_field(self, "counter_rate_hz", low=1e3, high=1e9)
+        number_field(self, "range_noise_std_m", low=0.0, high=0.5)
+        number_field(self, "firing_interval_s", low=MIN_DURATION_S, high=10.0)
+        number_field(self, "encoder_std_m_per_sqrt_m", low=0.0, high=0.5)
+        number_field(self, "wheel_scale_error_std", low=0.0, high=0.1)
+        number_field(self, "slip_probability_per_m", low=0.0, high=1.0)
+        number_field(self, "slip_fraction_max", low=0.0, high=1.0)
+        number_field(self, "initial_position_std_m", low=0.0, high=1.0)
+        number_field(self, "initial_heading_std_deg", low=0.0, high=90.0)
+        number_field(self, "wall_clearance_m", low=0.0, high=5.0)
+        number_field(self, "robot_speed_mps", low=MIN_SPEED_MPS, high=10.0)
+        number_field(self, "turn_rate_rad_s", low=MIN_SPEED_MPS, high=100.0)
 
     @property
     def heading_scale_rad(self) -> float:

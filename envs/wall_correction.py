@@ -34,7 +34,15 @@ from sonar_gym.apcs_route import (
     with_wall_obstacles,
 )
 from sonar_gym.envs.base import SonarEnv, StepOutcome
-from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.envs.config import (
+    build_config,
+    check_choice,
+    check_number,
+    choice_field,
+    number_field,
+    numbers_field,
+    scenario_field,
+)
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.localization.apcs_online import (
     SIDE_NAMES,
@@ -50,6 +58,7 @@ from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
 from sonar_gym.scenario import Scenario, load_scenario
 from sonar_gym.sonar.swept import SideSonars
+from sonar_gym.validation import MIN_LENGTH_M, MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/WallCorrection-v0"
@@ -104,67 +113,48 @@ class WallCorrectionConfig:
     action_type: str = "multi_discrete"
 
     def __post_init__(self) -> None:
-        if not isinstance(self.scenario, (str, Path)):
-            raise ValueError(
-                f"argument 'scenario' must be a built-in scenario name or a file path; got {self.scenario!r}"
-            )
-        check_number("n_legs", self.n_legs, low=1, high=100, integer=True)
-        check_number("route_margin_m", self.route_margin_m, low=0.0, high=100.0)
-        check_number("transition_m", self.transition_m, low=0.0, low_inclusive=False, high=100.0)
-        _check_distinct_numbers("standoffs_m", self.standoffs_m, low=-5.0, high=5.0)
-        _check_distinct_numbers(
-            "sample_spacings_cm", self.sample_spacings_cm, low=1, high=100, integer=True
+        scenario_field(self)
+        number_field(self, "n_legs", low=1, high=100, integer=True)
+        number_field(self, "route_margin_m", low=0.0, high=100.0)
+        number_field(self, "transition_m", low=MIN_LENGTH_M, high=100.0)
+        numbers_field(self, "standoffs_m", low=-5.0, high=5.0, min_length=1, distinct=True)
+        numbers_field(
+            self,
+            "sample_spacings_cm",
+            low=1,
+            high=100,
+            integer=True,
+            min_length=1,
+            distinct=True,
         )
-        check_number("motion_step_cm", self.motion_step_cm, low=1, high=20, integer=True)
+        number_field(self, "motion_step_cm", low=1, high=20, integer=True)
         if any(spacing % self.motion_step_cm for spacing in self.sample_spacings_cm):
             raise ValueError(
                 "argument 'sample_spacings_cm' must hold multiples of motion_step_cm "
                 f"({self.motion_step_cm}); got {self.sample_spacings_cm!r}"
             )
-        check_number(
-            "reaim_interval_m", self.reaim_interval_m, low=0.0, low_inclusive=False, high=100.0
-        )
-        check_number(
-            "n_unmapped_obstacles", self.n_unmapped_obstacles, low=0, high=20, integer=True
-        )
-        _check_range("obstacle_length_range_m", self.obstacle_length_range_m, low=0.05, high=5.0)
-        _check_range("obstacle_depth_range_m", self.obstacle_depth_range_m, low=0.01, high=1.0)
-        check_number(
-            "encoder_noise_m_per_sqrt_m", self.encoder_noise_m_per_sqrt_m, low=0.0, high=0.1
-        )
-        check_number("wheel_scale_error_std", self.wheel_scale_error_std, low=0.0, high=0.05)
-        check_number("slip_probability_per_m", self.slip_probability_per_m, low=0.0, high=1.0)
-        check_number("slip_fraction_max", self.slip_fraction_max, low=0.0, high=1.0)
-        check_number("initial_position_std_m", self.initial_position_std_m, low=0.0, high=1.0)
-        check_number("initial_heading_std_deg", self.initial_heading_std_deg, low=0.0, high=30.0)
-        if self.odometry_variance_per_m is not None:
-            check_number(
-                "odometry_variance_per_m",
-                self.odometry_variance_per_m,
-                low=0.0,
-                low_inclusive=False,
-                high=1.0,
-            )
-        check_number(
-            "range_variance_m2", self.range_variance_m2, low=0.0, low_inclusive=False, high=1.0
-        )
-        check_number(
-            "bearing_std_deg", self.bearing_std_deg, low=0.0, low_inclusive=False, high=45.0
-        )
-        check_choice("measurement_variances", self.measurement_variances, ("fixed", "fit"))
-        check_choice("correction_method", self.correction_method, ("paper", "linear"))
-        check_number(
-            "position_scale_m", self.position_scale_m, low=0.0, low_inclusive=False, high=10.0
-        )
-        check_number(
-            "heading_scale_deg", self.heading_scale_deg, low=0.0, low_inclusive=False, high=180.0
-        )
-        check_number("sensing_cost_per_s", self.sensing_cost_per_s, low=0.0, high=100.0)
-        check_number("collision_penalty", self.collision_penalty, low=0.0, high=1e4)
-        check_number("temperature_c", self.temperature_c, low=-20.0, high=50.0)
-        if self.range_noise_std_m is not None:
-            check_number("range_noise_std_m", self.range_noise_std_m, low=0.0, high=0.1)
-        check_choice("action_type", self.action_type, ("multi_discrete", "discrete"))
+        number_field(self, "reaim_interval_m", low=MIN_LENGTH_M, high=100.0)
+        number_field(self, "n_unmapped_obstacles", low=0, high=20, integer=True)
+        _range_field(self, "obstacle_length_range_m", low=0.05, high=5.0)
+        _range_field(self, "obstacle_depth_range_m", low=0.01, high=1.0)
+        number_field(self, "encoder_noise_m_per_sqrt_m", low=0.0, high=0.1)
+        number_field(self, "wheel_scale_error_std", low=0.0, high=0.05)
+        number_field(self, "slip_probability_per_m", low=0.0, high=1.0)
+        number_field(self, "slip_fraction_max", low=0.0, high=1.0)
+        number_field(self, "initial_position_std_m", low=0.0, high=1.0)
+        number_field(self, "initial_heading_std_deg", low=0.0, high=30.0)
+        number_field(self, "odometry_variance_per_m", low=MIN_VARIANCE, high=1.0, optional=True)
+        number_field(self, "range_variance_m2", low=MIN_VARIANCE, high=1.0)
+        number_field(self, "bearing_std_deg", low=MIN_SCALE, high=45.0)
+        choice_field(self, "measurement_variances", ("fixed", "fit"))
+        choice_field(self, "correction_method", ("paper", "linear"))
+        number_field(self, "position_scale_m", low=MIN_SCALE, high=10.0)
+        number_field(self, "heading_scale_deg", low=MIN_SCALE, high=180.0)
+        number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
+        number_field(self, "collision_penalty", low=0.0, high=1e4)
+        number_field(self, "temperature_c", low=-20.0, high=50.0)
+        number_field(self, "range_noise_std_m", low=0.0, high=0.1, optional=True)
+        choice_field(self, "action_type", ("multi_discrete", "discrete"))
 
     @property
     def motion_step_m(self) -> float:
@@ -183,22 +173,10 @@ class WallCorrectionConfig:
         return self.encoder_noise_m_per_sqrt_m**2 + self.wheel_scale_error_std**2
 
 
-def _check_distinct_numbers(
-    name: str, values: object, *, low: float, high: float, integer: bool = False
-) -> None:
-    if not isinstance(values, (tuple, list)) or not values:
-        raise ValueError(f"argument {name!r} must be a non-empty tuple of numbers; got {values!r}")
-    for index, value in enumerate(values):
-        check_number(f"{name}[{index}]", value, low=low, high=high, integer=integer)
-    if len(set(values)) != len(values):
-        raise ValueError(f"argument {name!r} must hold distinct values; got {values!r}")
-
-
-def _check_range(name: str, value: object, *, low: float, high: float) -> None:
-    if not isinstance(value, (tuple, list)) or len(value) != 2:
-        raise ValueError(f"argument {name!r} must be a pair (low, high); got {value!r}")
-    check_number(f"{name}[0]", value[0], low=low, high=high)
-    check_number(f"{name}[1]", value[1], low=float(value[0]), high=high)
+def _range_field(config: object, name: str, *, low: float, high: float) -> None:
+    """A pair (low, high) with ``low <= high``, both within ``[low, high]``."""
+    first, _ = numbers_field(config, name, length=2, low=low, high=high)
+    check_number(f"{name}[1]", getattr(config, name)[1], low=first, high=high)
 
 
 # --------------------------------------------------------------------------------------------
@@ -497,6 +475,12 @@ class WallCorrectionEnv(SonarEnv):
         world = World(mapped, temperature_c=self.config.temperature_c)
         radius = mapped.robot.radius + STANDOFF_CLEARANCE_M
         xs = np.arange(self.route_start_x, self.leg_starts_x[-1] + 1e-9, 0.05)
+        ends = (self.route_start_x, float(self.leg_starts_x[-1]))
+        if not all(world.is_free((x, self.centre_line_y), radius) for x in ends):
+            raise ValueError(
+                f"argument 'route_margin_m' puts the route's ends within {STANDOFF_CLEARANCE_M:g} m "
+                f"of a mapped surface of {self.scenario.name!r}; got {self.config.route_margin_m!r}"
+            )
         for offset in self.config.standoffs_m:
             y = self.centre_line_y + offset
             if not all(world.is_free((x, y), radius) for x in xs):

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sonar_gym.scenario import Box, Cylinder, RobotSpec, Room, Scenario
+from sonar_gym.validation import MIN_LENGTH_M, checked_number, checked_numbers, checked_sequence
 from sonar_gym.world import NoFreePoseError, World
 
 SMALL_BEACON_RADIUS_M = 0.0382 / 2.0
@@ -33,6 +34,10 @@ SMALL_BEACON_RADIUS_M = 0.0382 / 2.0
 LARGE_BEACON_RADIUS_M = 0.14 / 2.0
 """Beom & Cho Table I, r_L."""
 
+MAX_ROOM_SIDE_M = 100.0
+"""Largest room side and sensor range accepted, metres."""
+MAX_COUNT = 10**6
+"""Largest count argument (boxes, cylinders, samples, tries) accepted."""
 _WALL_GAP_M = 0.02
 _OBSTACLE_GAP_M = 0.05
 _BEACON_CLEARANCE_M = 0.15
@@ -362,67 +367,57 @@ def _validate(
     beacon_tries_per_room: int,
     max_rooms: int,
 ) -> None:
+    """Check the arguments with the shared validator (:mod:`sonar_gym.validation`)."""
     if not isinstance(rng, np.random.Generator):
         raise ValueError(
             f"argument 'rng' must be a numpy.random.Generator; got {type(rng).__name__}"
         )
     try:
-        sizes = np.asarray(size_range, dtype=np.float64)
-    except (TypeError, ValueError):
-        sizes = np.full((1,), np.nan)
-    if (
-        sizes.shape != (2, 2)
-        or not np.all(np.isfinite(sizes))
-        or np.any(sizes[:, 0] > sizes[:, 1])
-        or np.any(sizes < 2.0)
-    ):
+        sizes = [
+            checked_numbers(f"size_range[{i}]", pair, length=2, low=2.0, high=MAX_ROOM_SIDE_M)
+            for i, pair in enumerate(checked_sequence("size_range", size_range, length=2))
+        ]
+    except ValueError as error:
+        raise ValueError(
+            "argument 'size_range' must be ((w_min, w_max), (h_min, h_max)) in metres with "
+            f"2.0 <= min <= max <= {MAX_ROOM_SIDE_M:g}; {error}"
+        ) from error
+    if any(low > high for low, high in sizes):
         raise ValueError(
             "argument 'size_range' must be ((w_min, w_max), (h_min, h_max)) in metres with "
             f"2.0 <= min <= max; got {size_range!r}"
         )
     for arg, pair in (("n_boxes", n_boxes), ("n_clutter_cylinders", n_clutter_cylinders)):
-        if (
-            not isinstance(pair, (tuple, list))
-            or len(pair) != 2
-            or not all(isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in pair)
-            or not 0 <= pair[0] <= pair[1]
-        ):
-            raise ValueError(
-                f"argument '{arg}' must be a pair of integers 0 <= low <= high; got {pair!r}"
-            )
-    try:
-        low, high = (float(v) for v in clutter_radius_range_m)
-    except (TypeError, ValueError):
-        low = high = math.nan
-    if not 0.0 < low <= high <= 0.5:
-        raise ValueError(
-            "argument 'clutter_radius_range_m' must be (low, high) in metres with "
-            "0 < low <= high <= 0.5; "
-            f"got {clutter_radius_range_m!r}"
+        low_count, _ = checked_numbers(
+            f"argument '{arg}'", pair, length=2, low=0, high=MAX_COUNT, integer=True
         )
-    if not math.isfinite(beacon_separation_min_m) or beacon_separation_min_m < 0.0:
-        raise ValueError(
-            "argument 'beacon_separation_min_m' must be a finite number >= 0 (metres); "
-            f"got {beacon_separation_min_m!r}"
-        )
-    if not (
-        math.isfinite(sensor_min_range_m)
-        and math.isfinite(sensor_max_range_m)
-        and 0.0 <= sensor_min_range_m < sensor_max_range_m
-    ):
-        raise ValueError(
-            "arguments 'sensor_min_range_m' and 'sensor_max_range_m' must satisfy "
-            "0 <= min < max (metres); "
-            f"got {sensor_min_range_m!r}, {sensor_max_range_m!r}"
-        )
-    if not 0.0 <= visibility_min_fraction <= 1.0:
-        raise ValueError(
-            f"argument 'visibility_min_fraction' must be in [0, 1]; got {visibility_min_fraction!r}"
-        )
+        checked_number(f"argument '{arg}[1]'", pair[1], low=low_count, integer=True)
+    low_radius, _ = checked_numbers(
+        "argument 'clutter_radius_range_m'",
+        clutter_radius_range_m,
+        length=2,
+        low=MIN_LENGTH_M,
+        high=0.5,
+    )
+    checked_number(
+        "argument 'clutter_radius_range_m[1]'", clutter_radius_range_m[1], low=low_radius
+    )
+    checked_number(
+        "argument 'beacon_separation_min_m'", beacon_separation_min_m, low=0.0, high=MAX_ROOM_SIDE_M
+    )
+    low_range = checked_number(
+        "argument 'sensor_min_range_m'", sensor_min_range_m, low=0.0, high=MAX_ROOM_SIDE_M
+    )
+    checked_number(
+        f"argument 'sensor_max_range_m' (above sensor_min_range_m = {low_range:g})",
+        sensor_max_range_m,
+        low=low_range + MIN_LENGTH_M,
+        high=MAX_ROOM_SIDE_M,
+    )
+    checked_number("argument 'visibility_min_fraction'", visibility_min_fraction, low=0.0, high=1.0)
     for arg, value in (
         ("n_visibility_samples", n_visibility_samples),
         ("beacon_tries_per_room", beacon_tries_per_room),
         ("max_rooms", max_rooms),
     ):
-        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-            raise ValueError(f"argument '{arg}' must be a positive integer; got {value!r}")
+        checked_number(f"argument '{arg}'", value, low=1, high=MAX_COUNT, integer=True)

@@ -28,11 +28,43 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from sonar_gym.scenario_checks import geometry_problem
+from sonar_gym.validation import checked_number, is_bool, shown
+
 BUILTIN_DIR = Path(__file__).with_name("scenarios")
 CYLINDER_ROLES = ("small_beacon", "large_beacon", "clutter")
 SENSOR_PRESETS = ("polaroid-6500", "srf04", "ma40b8")
 Vec2 = tuple[float, float]
 Vec3 = tuple[float, float, float]
+
+
+MAX_COORDINATE_M = 1000.0
+"""Largest magnitude of any coordinate, metres (pymunk loses precision far beyond)."""
+MIN_SIZE_M = 1e-3
+"""Least box side, cylinder radius and wall length, metres."""
+MAX_SIZE_M = 1000.0
+"""Largest box side, metres."""
+MAX_RADIUS_M = 100.0
+"""Largest cylinder radius, metres."""
+ROBOT_RADIUS_RANGE_M = (0.01, 5.0)
+"""Allowed robot footprint radius, metres (also bounds each sensor-offset coordinate)."""
+WHEEL_BASE_RANGE_M = (0.01, 10.0)
+"""Allowed distance between the drive wheels, metres."""
+MAX_HEIGHT_M = 100.0
+"""Largest sensor height above the floor, metres."""
+REFLECTOR_DISTANCE_RANGE_M = (0.05, 2.0)
+"""Allowed calibration-reflector distance, metres: a reflector on the robot, in the near field
+of no transducer and far from the 12-bit counter's overflow (Beom & Cho: 0.515 m)."""
+MAX_ITEMS = 10_000
+"""Most walls, boxes, cylinders or emitters in one scenario."""
+MAX_TEXT_CHARS = 100_000
+"""Longest ``meta`` text and emitter name, characters."""
+MAX_PATH_CHARS = 4096
+"""Longest scenario name or path, characters."""
+MAX_FILE_BYTES = 10_000_000
+"""Largest scenario file read, bytes."""
 
 
 class ScenarioError(ValueError):
@@ -69,7 +101,10 @@ class Wall:
 
 @dataclass(frozen=True)
 class Box:
-    """A rectangular obstacle (a table, a cabinet): centre, size (w, h) in metres, angle in degrees."""
+    """A rectangular obstacle (a table, a cabinet).
+
+    Centre and size ``(w, h)`` in metres ({W}), angle in degrees.
+    """
 
     center: Vec2
     size: Vec2
@@ -138,7 +173,10 @@ class Reflector:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A complete world description. Build it with :func:`load_scenario` or :func:`scenario_from_dict`."""
+    """A complete world description.
+
+    Build it with :func:`load_scenario` or :func:`scenario_from_dict`.
+    """
 
     name: str
     room: Room | None = None
@@ -211,27 +249,51 @@ def load_scenario(name_or_path: str | Path) -> Scenario:
     """Load a built-in scenario by name, or any ``.toml`` / ``.json`` file by path.
 
     Raises:
-        ScenarioError: the name is unknown (the message lists the built-ins), or the file is
-            malformed (the message names the file, the field and what is allowed).
+        ScenarioError: the name is unknown (the message lists the built-ins), the path is not
+            a readable file, or the file is malformed (the message names the file, the field
+            and what is allowed).
     """
+    text = str(name_or_path) if isinstance(name_or_path, (str, Path)) else None
+    if text is None or not text.strip() or len(text) > MAX_PATH_CHARS:
+        raise ScenarioError(
+            "a scenario must be a built-in name or a path to a .toml or .json file (a non-empty "
+            f"string of at most {MAX_PATH_CHARS} characters); got {shown(name_or_path)}"
+        )
     path = Path(name_or_path)
-    if path.suffix.lower() not in (".toml", ".json") and not path.exists():
-        candidate = BUILTIN_DIR / f"{name_or_path}.toml"
-        if not candidate.exists():
-            raise ScenarioError(
-                f"unknown scenario {str(name_or_path)!r}; built-in scenarios are "
-                f"{builtin_names()}, or give a path to a .toml or .json file"
-            )
-        path = candidate
-    if not path.exists():
-        raise ScenarioError(f"scenario file {str(path)!r} does not exist")
     try:
-        if path.suffix.lower() == ".json":
-            data = json.loads(path.read_text(encoding="utf-8"))
-        else:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as error:
-        raise ScenarioError(f"{path}: not valid {path.suffix[1:].upper()}: {error}") from error
+        if path.suffix.lower() not in (".toml", ".json") and not path.exists():
+            candidate = BUILTIN_DIR / f"{name_or_path}.toml"
+            if not candidate.is_file():
+                raise ScenarioError(
+                    f"unknown scenario {shown(text)}; built-in scenarios are "
+                    f"{builtin_names()}, or give a path to a .toml or .json file"
+                )
+            path = candidate
+        if not path.exists():
+            raise ScenarioError(f"scenario file {shown(str(path))} does not exist")
+        if not path.is_file():
+            raise ScenarioError(
+                f"scenario path {shown(str(path))} is not a file; give a .toml or .json file"
+            )
+        if path.stat().st_size > MAX_FILE_BYTES:
+            raise ScenarioError(
+                f"scenario file {shown(str(path))} is larger than {MAX_FILE_BYTES} bytes"
+            )
+        raw = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise ScenarioError(
+            f"scenario {shown(text)} cannot be read: {error.strerror or error}"
+        ) from error
+    except UnicodeDecodeError as error:
+        kind = "JSON" if path.suffix.lower() == ".json" else "TOML"
+        raise ScenarioError(f"{path}: not valid {kind}: not UTF-8 text: {error}") from error
+    kind = "JSON" if path.suffix.lower() == ".json" else "TOML"
+    try:
+        data = json.loads(raw) if kind == "JSON" else tomllib.loads(raw)
+    except RecursionError as error:
+        raise ScenarioError(f"{path}: not valid {kind}: nested too deeply") from error
+    except ValueError as error:  # TOMLDecodeError, JSONDecodeError, int digit limit
+        raise ScenarioError(f"{path}: not valid {kind}: {error}") from error
     return scenario_from_dict(data, source=str(path), default_name=path.stem)
 
 
@@ -272,8 +334,12 @@ def scenario_from_dict(
     for i, item in enumerate(reader.array(data, "walls", {"a", "b", "mapped"}, ("a", "b"))):
         where = f"walls[{i}]"
         a, b = reader.vec2(f"{where}.a", item["a"]), reader.vec2(f"{where}.b", item["b"])
-        if math.dist(a, b) <= 1e-9:
-            raise reader.error(where, "a wall of non-zero length (a != b)", f"a={a}, b={b}")
+        if math.dist(a, b) < MIN_SIZE_M:
+            raise reader.error(
+                where,
+                f"a wall of non-zero length, at least {MIN_SIZE_M:g} m (a != b)",
+                f"a={a}, b={b}",
+            )
         walls.append(Wall(a, b, reader.boolean(f"{where}.mapped", item.get("mapped", True))))
 
     boxes = []
@@ -281,14 +347,12 @@ def scenario_from_dict(
         reader.array(data, "boxes", {"center", "size", "angle_deg", "mapped"}, ("center", "size"))
     ):
         where = f"boxes[{i}]"
-        size = reader.vec2(f"{where}.size", item["size"])
-        if min(size) <= 0:
-            raise reader.error(f"{where}.size", "two positive lengths in metres", size)
+        size = reader.vec2(f"{where}.size", item["size"], MIN_SIZE_M, MAX_SIZE_M)
         boxes.append(
             Box(
                 reader.vec2(f"{where}.center", item["center"]),
                 size,
-                reader.number(f"{where}.angle_deg", item.get("angle_deg", 0.0)),
+                reader.number(f"{where}.angle_deg", item.get("angle_deg", 0.0), -360.0, 360.0),
                 reader.boolean(f"{where}.mapped", item.get("mapped", True)),
             )
         )
@@ -300,7 +364,7 @@ def scenario_from_dict(
         )
     ):
         where = f"cylinders[{i}]"
-        radius = reader.positive(f"{where}.radius", item["radius"])
+        radius = reader.number(f"{where}.radius", item["radius"], MIN_SIZE_M, MAX_RADIUS_M)
         role = item.get("role", "clutter")
         if role not in CYLINDER_ROLES:
             raise reader.error(f"{where}.role", f"one of {list(CYLINDER_ROLES)}", role)
@@ -321,9 +385,10 @@ def scenario_from_dict(
         reader.array(data, "emitters", {"name", "position"}, ("name", "position"))
     ):
         where = f"emitters[{i}]"
-        if not isinstance(item["name"], str) or not item["name"]:
-            raise reader.error(f"{where}.name", "a non-empty string", item["name"])
-        emitters.append(Emitter(item["name"], reader.vec3(f"{where}.position", item["position"])))
+        name = reader.text(f"{where}.name", item["name"])
+        if not name:
+            raise reader.error(f"{where}.name", "a non-empty string", name)
+        emitters.append(Emitter(name, reader.vec3(f"{where}.position", item["position"])))
     names = [e.name for e in emitters]
     if len(set(names)) != len(names):
         raise reader.error("emitters", "unique names", names)
@@ -333,15 +398,25 @@ def scenario_from_dict(
     )
     defaults = RobotSpec()
     robot = RobotSpec(
-        radius=reader.positive("robot.radius", robot_data.get("radius", defaults.radius)),
-        sensor_offset=reader.vec2(
-            "robot.sensor_offset", robot_data.get("sensor_offset", defaults.sensor_offset)
+        radius=reader.number(
+            "robot.radius", robot_data.get("radius", defaults.radius), *ROBOT_RADIUS_RANGE_M
         ),
-        wheel_base=reader.positive(
-            "robot.wheel_base", robot_data.get("wheel_base", defaults.wheel_base)
+        sensor_offset=reader.vec2(
+            "robot.sensor_offset",
+            robot_data.get("sensor_offset", defaults.sensor_offset),
+            -ROBOT_RADIUS_RANGE_M[1],
+            ROBOT_RADIUS_RANGE_M[1],
+        ),
+        wheel_base=reader.number(
+            "robot.wheel_base",
+            robot_data.get("wheel_base", defaults.wheel_base),
+            *WHEEL_BASE_RANGE_M,
         ),
         sensor_height=reader.number(
-            "robot.sensor_height", robot_data.get("sensor_height", defaults.sensor_height)
+            "robot.sensor_height",
+            robot_data.get("sensor_height", defaults.sensor_height),
+            0.0,
+            MAX_HEIGHT_M,
         ),
     )
     sensor_data = reader.table(data, "sensor", {"preset"})
@@ -350,18 +425,19 @@ def scenario_from_dict(
         raise reader.error("sensor.preset", f"one of {list(SENSOR_PRESETS)}", preset)
     reflector_data = reader.table(data, "reflector", {"distance"})
     reflector = Reflector(
-        reader.positive("reflector.distance", reflector_data.get("distance", Reflector().distance))
+        reader.number(
+            "reflector.distance",
+            reflector_data.get("distance", Reflector().distance),
+            *REFLECTOR_DISTANCE_RANGE_M,
+        )
     )
 
     if room is None and not walls and not boxes and not cylinders and not emitters:
         raise reader.error(
             "<top level>", "at least one of room, walls, boxes, cylinders, emitters", "nothing"
         )
-    name = meta.get("name", default_name)
-    if not isinstance(name, str):
-        raise reader.error("meta.name", "a string", name)
-    return Scenario(
-        name=name,
+    scenario = Scenario(
+        name=reader.text("meta.name", meta.get("name", default_name)),
         room=room,
         walls=tuple(walls),
         boxes=tuple(boxes),
@@ -370,25 +446,36 @@ def scenario_from_dict(
         robot=robot,
         sensor=SensorSpec(preset),
         reflector=reflector,
-        description=str(meta.get("description", "")),
-        source=str(meta.get("source", source)),
+        description=reader.text("meta.description", meta.get("description", "")),
+        source=reader.text("meta.source", meta.get("source", source)),
     )
+    problem = geometry_problem(scenario)
+    if problem is not None:
+        raise reader.error(*problem)
+    return scenario
 
 
 class _Reader:
-    """Field readers that raise :class:`ScenarioError` naming the source file and the field."""
+    """Field readers that raise :class:`ScenarioError` naming the source file and the field.
+
+    Numbers go through :func:`sonar_gym.validation.checked_number`, the validator of the
+    ``gym.make`` arguments too.
+    """
 
     def __init__(self, source: str) -> None:
         self.source = source
 
     def error(self, field_name: str, allowed: str, got: object) -> ScenarioError:
-        return ScenarioError(f"{self.source}: field '{field_name}' must be {allowed}; got {got!r}")
+        return ScenarioError(
+            f"{self.source}: field '{field_name}' must be {allowed}; got {shown(got)}"
+        )
 
     def no_unknown_keys(self, where: str, table: Mapping[str, Any], allowed: set[str]) -> None:
-        unknown = sorted(set(table) - allowed)
+        unknown = sorted(set(table) - allowed, key=str)
         if unknown:
             raise ScenarioError(
-                f"{self.source}: unknown key(s) {unknown} in '{where}'; allowed keys are {sorted(allowed)}"
+                f"{self.source}: unknown key(s) {shown(unknown)} in '{where}'; "
+                f"allowed keys are {sorted(allowed)}"
             )
 
     def table(
@@ -408,8 +495,10 @@ class _Reader:
         self, data: Mapping[str, Any], key: str, allowed: set[str], required: Sequence[str]
     ) -> list[Mapping[str, Any]]:
         value = data.get(key, [])
-        if not isinstance(value, list):
+        if not isinstance(value, (list, tuple)):
             raise self.error(key, "an array of tables ([[...]] in TOML)", value)
+        if len(value) > MAX_ITEMS:
+            raise self.error(key, f"at most {MAX_ITEMS} items", f"{len(value)} items")
         for i, item in enumerate(value):
             if not isinstance(item, Mapping):
                 raise self.error(f"{key}[{i}]", "a table", item)
@@ -417,38 +506,53 @@ class _Reader:
             for name in required:
                 if name not in item:
                     raise self.error(f"{key}[{i}].{name}", "present", "missing")
-        return value
+        return list(value)
 
-    def number(self, where: str, value: object) -> float:
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, (int, float))
-            or not math.isfinite(value)
-        ):
-            raise self.error(where, "a finite number", value)
-        return float(value)
-
-    def positive(self, where: str, value: object) -> float:
-        number = self.number(where, value)
-        if number <= 0:
-            raise self.error(where, "a positive number (metres)", value)
-        return number
+    def number(
+        self,
+        where: str,
+        value: object,
+        low: float = -MAX_COORDINATE_M,
+        high: float = MAX_COORDINATE_M,
+    ) -> float:
+        subject = f"{self.source}: field '{where}'"
+        return float(checked_number(subject, value, low=low, high=high, error=ScenarioError))
 
     def boolean(self, where: str, value: object) -> bool:
-        if not isinstance(value, bool):
+        if not is_bool(value):
             raise self.error(where, "true or false", value)
+        return bool(value)
+
+    def text(self, where: str, value: object) -> str:
+        if not isinstance(value, str) or len(value) > MAX_TEXT_CHARS:
+            raise self.error(where, f"a string of at most {MAX_TEXT_CHARS} characters", value)
         return value
 
-    def vec2(self, where: str, value: object) -> Vec2:
-        if not isinstance(value, (list, tuple)) or len(value) != 2:
-            raise self.error(where, "a pair [x, y] of numbers in metres", value)
-        return (self.number(where, value[0]), self.number(where, value[1]))
+    def vector(
+        self,
+        where: str,
+        value: object,
+        names: str,
+        low: float = -MAX_COORDINATE_M,
+        high: float = MAX_COORDINATE_M,
+    ) -> tuple[float, ...]:
+        """A list ``[x, y]`` or ``[x, y, z]`` (``names`` gives the letters) of numbers, metres."""
+        if isinstance(value, np.ndarray):
+            value = value.tolist()
+        if not isinstance(value, (list, tuple)) or len(value) != len(names):
+            listed = ", ".join(names)
+            kind = "pair" if len(names) == 2 else "triple"
+            raise self.error(where, f"a {kind} [{listed}] of numbers in metres", value)
+        return tuple(self.number(f"{where}[{i}]", v, low, high) for i, v in enumerate(value))
+
+    def vec2(
+        self,
+        where: str,
+        value: object,
+        low: float = -MAX_COORDINATE_M,
+        high: float = MAX_COORDINATE_M,
+    ) -> Vec2:
+        return self.vector(where, value, "xy", low, high)  # type: ignore[return-value]
 
     def vec3(self, where: str, value: object) -> Vec3:
-        if not isinstance(value, (list, tuple)) or len(value) != 3:
-            raise self.error(where, "a triple [x, y, z] of numbers in metres", value)
-        return (
-            self.number(where, value[0]),
-            self.number(where, value[1]),
-            self.number(where, value[2]),
-        )
+        return self.vector(where, value, "xyz")  # type: ignore[return-value]

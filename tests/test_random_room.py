@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 import math
 from dataclasses import replace
 
@@ -137,3 +139,30 @@ def test_rng_must_be_a_generator() -> None:
 def test_impossible_requests_fail_clearly() -> None:
     with pytest.raises(RuntimeError, match="random_scenario"):
         random_scenario(np.random.default_rng(0), beacon_separation_min_m=20.0, max_rooms=2)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "argument"),
+    [
+        ({"clutter_radius_range_m": (5e-324, 0.05)}, "clutter_radius_range_m[0]"),
+        ({"clutter_radius_range_m": (-0.0, 0.05)}, "clutter_radius_range_m[0]"),
+        ({"beacon_separation_min_m": 10**400}, "beacon_separation_min_m"),
+        ({"visibility_min_fraction": float("nan")}, "visibility_min_fraction"),
+        ({"sensor_max_range_m": 10**400}, "sensor_max_range_m"),
+        ({"n_boxes": (1, 2.0)}, "n_boxes[1]"),
+    ],
+)
+def test_denormal_overflowing_and_non_integer_arguments_name_themselves(
+    kwargs: dict, argument: str
+) -> None:
+    with pytest.raises(ValueError, match=re.escape(argument)):
+        random_scenario(np.random.default_rng(0), **kwargs)
+
+
+def test_numpy_integers_and_lists_are_accepted() -> None:
+    scenario = random_scenario(
+        np.random.default_rng(0),
+        size_range=[[4.0, 5.0], [4.0, 5.0]],
+        n_boxes=(np.int64(1), np.int64(2)),
+    )
+    assert scenario.has_beacons()

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import json
 import math
+import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from sonar_gym.scenario import (
@@ -286,3 +288,139 @@ def test_scenarios_are_hashable_values() -> None:
     b = load_scenario("kim_arena")
     assert a == b and hash(a) == hash(b)
     assert isinstance(a, Scenario)
+
+
+# -- limits and geometry checked at load -------------------------------------------------------
+
+BEACON_ROOM = """
+[room]
+min = [-3.0, -2.0]
+max = [3.0, 2.0]
+
+[[cylinders]]
+center = [2.0, 0.5]
+radius = 0.02
+role = "small_beacon"
+
+[[cylinders]]
+center = [-1.0, -1.0]
+radius = 0.07
+role = "large_beacon"
+"""
+
+
+def with_small_beacon_at(x: float, y: float, extra: str = "") -> str:
+    return BEACON_ROOM.replace("center = [2.0, 0.5]", f"center = [{x}, {y}]") + extra
+
+
+def test_beacon_room_fixture_loads() -> None:
+    assert scenario_from_dict(tomllib.loads(BEACON_ROOM)).has_beacons()
+
+
+def test_huge_integer_names_the_file_and_field(tmp_path: Path) -> None:
+    text = MINIMAL.replace("max = [1.0, 1.0]", f"max = [1{'0' * 400}, 1.0]")
+    assert_error_names(tmp_path, text, "room.max[0]", "[-1000, 1000]")
+
+
+def test_huge_integer_in_json_names_the_file(tmp_path: Path) -> None:
+    path = write(tmp_path, '{"room": {"min": [0, 0], "max": [1, 1' + "0" * 5000 + "]}}", "w.json")
+    with pytest.raises(ScenarioError, match="not valid JSON"):
+        load_scenario(path)
+
+
+@pytest.mark.parametrize("depth", [500, 50_000])
+@pytest.mark.parametrize("suffix", [".toml", ".json"])
+def test_deeply_nested_arrays_are_a_scenario_error(tmp_path: Path, suffix: str, depth: int) -> None:
+    nested = "[" * depth + "]" * depth
+    text = (
+        f"[robot]\nradius = {nested}\n"
+        if suffix == ".toml"
+        else '{"robot": {"radius": ' + nested + "}}"
+    )
+    path = write(tmp_path, text, "deep" + suffix)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert str(path) in str(info.value)
+    assert "robot.radius" in str(info.value) or "nested too deeply" in str(info.value)
+
+
+def test_enormous_box_is_refused_at_load(tmp_path: Path) -> None:
+    text = MINIMAL + "[[boxes]]\ncenter = [0.0, 0.0]\nsize = [1e300, 0.5]\n"
+    assert_error_names(tmp_path, text, "boxes[0].size[0]", "1000")
+
+
+@pytest.mark.parametrize("distance", ["1e-300", "1e6", "0.0"])
+def test_reflector_distance_must_be_physical(tmp_path: Path, distance: str) -> None:
+    assert_error_names(tmp_path, MINIMAL + f"[reflector]\ndistance = {distance}\n", "reflector")
+
+
+@pytest.mark.parametrize("key", ["description", "source", "name"])
+def test_meta_text_must_be_a_string(tmp_path: Path, key: str) -> None:
+    assert_error_names(tmp_path, MINIMAL + f"[meta]\n{key} = 3\n", f"meta.{key}", "string")
+
+
+def test_coincident_emitters_are_refused(tmp_path: Path) -> None:
+    emitter = '[[emitters]]\nname = "{}"\nposition = [0.5, 0.5, 2.0]\n'
+    text = MINIMAL + emitter.format("A") + emitter.format("B")
+    assert_error_names(tmp_path, text, "emitters", "apart")
+
+
+def test_emitter_outside_the_room_is_refused(tmp_path: Path) -> None:
+    text = MINIMAL + '[[emitters]]\nname = "A"\nposition = [5.0, 0.0, 2.0]\n'
+    assert_error_names(tmp_path, text, "emitters[0].position")
+
+
+def test_beacon_outside_the_room_is_refused(tmp_path: Path) -> None:
+    assert_error_names(tmp_path, with_small_beacon_at(3.5, 0.0), "cylinders[0].center", "room")
+
+
+def test_beacon_touching_the_room_wall_is_refused(tmp_path: Path) -> None:
+    assert_error_names(tmp_path, with_small_beacon_at(2.98, 0.0), "cylinders[0]")
+
+
+def test_beacon_inside_a_box_is_refused(tmp_path: Path) -> None:
+    box = "\n[[boxes]]\ncenter = [2.0, 0.5]\nsize = [0.4, 0.4]\n"
+    assert_error_names(tmp_path, with_small_beacon_at(2.0, 0.5, box), "cylinders[0]", "box")
+
+
+def test_coincident_beacons_are_refused(tmp_path: Path) -> None:
+    assert_error_names(tmp_path, with_small_beacon_at(-1.0, -1.0), "cylinders[0]", "overlaps")
+
+
+def test_walled_in_beacon_is_refused(tmp_path: Path) -> None:
+    ring = "".join(
+        f"\n[[walls]]\na = [{a[0]}, {a[1]}]\nb = [{b[0]}, {b[1]}]\n"
+        for a, b in [
+            ((1.8, 0.3), (2.2, 0.3)),
+            ((2.2, 0.3), (2.2, 0.7)),
+            ((2.2, 0.7), (1.8, 0.7)),
+            ((1.8, 0.7), (1.8, 0.3)),
+        ]
+    )
+    assert_error_names(tmp_path, with_small_beacon_at(2.0, 0.5, ring), "walled in")
+
+
+def test_beacon_behind_an_open_wall_still_loads() -> None:
+    wall = "\n[[walls]]\na = [1.8, 0.3]\nb = [2.2, 0.3]\n"
+    assert scenario_from_dict(tomllib.loads(with_small_beacon_at(2.0, 0.5, wall))).has_beacons()
+
+
+@pytest.mark.parametrize("name", ["", "   ", "x" * 5000])
+def test_empty_or_overlong_scenario_name_is_a_scenario_error(name: str) -> None:
+    with pytest.raises(ScenarioError, match="non-empty string"):
+        load_scenario(name)
+
+
+def test_directory_is_a_scenario_error(tmp_path: Path) -> None:
+    with pytest.raises(ScenarioError, match="not a file"):
+        load_scenario(tmp_path)
+    with pytest.raises(ScenarioError, match="not a file"):
+        load_scenario(str(tmp_path))
+
+
+def test_numpy_numbers_in_a_dict_are_accepted_as_python_floats() -> None:
+    data = {"room": {"min": [np.float32(-1.0), np.int64(-1)], "max": np.array([1.0, 1.0])}}
+    room = scenario_from_dict(data).room
+    assert room is not None
+    assert room.min == (-1.0, -1.0) and room.max == (1.0, 1.0)
+    assert all(type(v) is float for v in (*room.min, *room.max))
