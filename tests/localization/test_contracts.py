@@ -78,7 +78,6 @@ def outcome(function: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
 # -- Beom & Cho --------------------------------------------------------------------------------
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/beom_cho.py")
 @fuzz_settings(300, shrink=False)
 @given(point(), positive, point(), positive, finite)
 def test_solve_two_circles_gives_a_status_or_a_value_error(
@@ -106,7 +105,6 @@ def test_solve_two_circles_refuses_non_finite_input(argument: str, bad: float) -
 # -- Wu & Tsai ---------------------------------------------------------------------------------
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/wu_tsai.py")
 @fuzz_settings(300, shrink=False)
 @given(st.lists(positive, min_size=3, max_size=3), positive, st.sampled_from([-1, 1]))
 def test_receiver_position_is_finite_or_a_value_error(
@@ -142,7 +140,6 @@ def test_circle_intersections_are_finite_or_a_value_error(
         assert result.ndim == 2 and result.shape[1] == 2 and result.shape[0] in (0, 1, 2)
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/roh_trilateration.py")
 @fuzz_settings(300, shrink=False)
 @given(
     st.sampled_from([circle_intersections, radical_axis]),
