@@ -391,10 +391,10 @@ class WallStream:
 
     def accept(
         self,
-        sensor_xy: npt.ArrayLike,
+        sensor_xy: Sequence[float],
         heading_rad: float,
         range_m: float,
-        erp: tuple[npt.ArrayLike, float] | None,
+        erp: tuple[Sequence[float], float] | None,
     ) -> list[ClosedGroup]:
         """Store one reading and its ERP ``(point, direction)`` (from :meth:`pending_erps`).
 
@@ -402,12 +402,12 @@ class WallStream:
             The verdicts of the groups this reading closed.
         """
         # Plain floats: this runs once per reading, where numpy's per-call cost dominates.
-        sensor_x, sensor_y = sensor_xy  # type: ignore[misc]
+        sensor_x, sensor_y = sensor_xy
         direction = heading_rad + BEAM_OFFSET_RAD[self.side]
         self._previous = ((float(sensor_x), float(sensor_y)), direction, float(range_m))
         if erp is None:
             return []
-        (point_x, point_y), phi = erp  # type: ignore[misc]
+        (point_x, point_y), phi = erp
         point = (float(point_x), float(point_y))
         closed: list[ClosedGroup] = []
         if self._group_points:
@@ -436,9 +436,10 @@ class WallStream:
         """
         position = _finite_array(sensor_xy, "sensor_xy", (2,))
         points, phis, valid = self.pending_erps(position[None, :], [heading_rad], [range_m])
-        erp = (points[0].copy(), float(phis[0])) if valid[0] else None
-        closed = self.accept(position, float(heading_rad), float(range_m), erp)
-        return (None if erp is None else erp[0]), closed
+        erp_point = points[0].copy() if valid[0] else None
+        erp = None if erp_point is None else (erp_point.tolist(), float(phis[0]))
+        closed = self.accept(position.tolist(), float(heading_rad), float(range_m), erp)
+        return erp_point, closed
 
     def flush(self) -> list[ClosedGroup]:
         """End the stream (the sensor stops): close the open group and forget the last reading."""
