@@ -70,6 +70,26 @@ class WallDetection:
         return self.match.matched
 
 
+@dataclass(frozen=True)
+class LegCommand:
+    """What to do on one leg: which sonars, the sampling spacing and the lateral stand-off.
+
+    Attributes:
+        side: ``"none"``, ``"left"``, ``"right"`` or ``"both"``.
+        spacing_cm: travel between two samples, centimetres.
+        standoff_m: offset of the leg from the route's centre line, metres (positive: left).
+    """
+
+    side: str
+    spacing_cm: int
+    standoff_m: float
+
+    @property
+    def active_sides(self) -> tuple[str, ...]:
+        """The side sonars that run: ``()``, ``("left",)``, ``("right",)`` or both."""
+        return {"none": (), "left": ("left",), "right": ("right",), "both": SIDE_NAMES}[self.side]
+
+
 @dataclass
 class LegSummary:
     """What happened during one leg, per side (``left``, ``right``)."""
@@ -137,6 +157,10 @@ class APCSRoute:
         motion_rng, sensor_rng: the random streams of the motion and of the readings.
         timing: optional dict to which the wall-clock seconds of ``"sensing"`` and
             ``"localization"`` are added.
+
+    Attributes besides the arguments: ``trace`` (:class:`EpisodeTrace`), ``leg`` (legs
+    done), ``last_leg`` and ``totals`` (:class:`LegSummary` of the last leg and of all),
+    ``collisions`` (legs with a contact), ``sensing_time_s``.
     """
 
     def __init__(
@@ -158,6 +182,9 @@ class APCSRoute:
         self.timing = {} if timing is None else timing
         self.trace = EpisodeTrace()
         self.leg = 0
+        self.last_leg = LegSummary()
+        self.totals = LegSummary()
+        self.collisions = 0
         self.steps_since_sample = 0
         self.sensing_time_s = 0.0
         self._record(
@@ -178,6 +205,13 @@ class APCSRoute:
     def true_pose(self) -> Pose:
         """The robot's true pose ({W})."""
         return self.world.robot_pose
+
+    def end_leg(self, summary: LegSummary) -> None:
+        """Book a finished leg: it becomes ``last_leg`` and adds to ``totals``."""
+        self.leg += 1
+        self.last_leg = summary
+        self.totals.add(summary)
+        self.collisions += int(summary.collided)
 
     def flush(self, side: str, summary: LegSummary) -> None:
         """Stop ``side``'s sonar: its open group is closed and handled (Fig. 2)."""
@@ -369,6 +403,79 @@ class APCSRoute:
         self.trace.odometry_path.extend(np.array(odometry, dtype=np.float64))
 
 
+def check_route_clearance(
+    scenario: Scenario,
+    x_range_m: tuple[float, float],
+    centre_line_y: float,
+    standoffs_m: Sequence[float],
+    clearance_m: float,
+    temperature_c: float = 20.0,
+    route_margin_m: float | None = None,
+) -> None:
+    """Raise ValueError unless every stand-off line of a route along ``+x`` clears the map.
+
+    The route's two ends on the centre line must clear every *mapped* surface of ``scenario``
+    by ``clearance_m`` (else the message blames ``route_margin_m``, the margin that placed
+    them); then, for each of ``standoffs_m`` (metres from ``y = centre_line_y``), the robot's
+    disc grown by ``clearance_m`` must be free of the mapped surfaces every 5 cm over
+    ``x_range_m`` (metres in {W}); the route's start on the centre line must be free.
+    """
+    mapped = dataclasses.replace(
+        scenario,
+        walls=tuple(w for w in scenario.walls if w.mapped),
+        boxes=tuple(b for b in scenario.boxes if b.mapped),
+        cylinders=tuple(c for c in scenario.cylinders if c.mapped),
+    )
+    world = World(mapped, temperature_c=temperature_c)
+    radius = mapped.robot.radius + clearance_m
+    xs = np.arange(x_range_m[0], x_range_m[1] + 1e-9, 0.05)
+    if not all(world.is_free((x, centre_line_y), radius) for x in x_range_m):
+        raise ValueError(
+            f"argument 'route_margin_m' puts the route's ends within {clearance_m:g} m of a "
+            f"mapped surface of {scenario.name!r}; got {route_margin_m!r}"
+        )
+    for offset in standoffs_m:
+        y = centre_line_y + offset
+        if not all(world.is_free((x, y), radius) for x in xs):
+            raise ValueError(
+                f"argument 'standoffs_m': {offset:g} m brings the robot within "
+                f"{clearance_m:g} m of a mapped surface of {scenario.name!r}; "
+                f"got {tuple(standoffs_m)!r}"
+            )
+    if not world.is_free((x_range_m[0], centre_line_y)):
+        raise ValueError(f"scenario {scenario.name!r}: the route's start is not free")
+
+
+def render_route(
+    route: APCSRoute, title: str, extra: dict[str, float], width_px: int = 900
+) -> np.ndarray:
+    """Top-down RGB image of ``route``'s world with its ERPs and its odometry (grey), true
+    (green) and estimated (magenta) paths."""
+    from sonar_gym.render import render_topdown, world_to_pixel
+
+    scenario, trace = route.world.scenario, route.trace
+    image = render_topdown(
+        scenario,
+        true_pose=route.true_pose,
+        estimated_pose=route.tracker.estimate,
+        scan_points=np.array([(x, y) for x, y, _ in trace.erps]).reshape(-1, 2),
+        width_px=width_px,
+        title=title,
+        extra=extra,
+    )
+    height, width = image.shape[:2]
+    for path, colour in (
+        (trace.odometry_path, (150, 150, 150)),
+        (trace.true_path, (20, 120, 20)),
+        (trace.estimated_path, (216, 27, 156)),
+    ):
+        for x, y in np.array(path)[:, :2]:
+            row, col = world_to_pixel(scenario, (x, y), width_px, height)
+            if 0 <= row < height - 1 and 0 <= col < width - 1:
+                image[row : row + 2, col : col + 2] = colour
+    return image
+
+
 def with_wall_obstacles(
     scenario: Scenario,
     rng: np.random.Generator,
@@ -415,7 +522,10 @@ __all__ = [
     "REAIM_TOLERANCE_RAD",
     "APCSRoute",
     "EpisodeTrace",
+    "LegCommand",
     "LegSummary",
     "WallDetection",
+    "check_route_clearance",
+    "render_route",
     "with_wall_obstacles",
 ]

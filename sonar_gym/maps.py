@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -82,6 +83,35 @@ def facing_wall_stretch(
     return longest_run(wall_ids.tolist()) * spacing_m, median
 
 
+def map_ahead_features(
+    wall_map: Sequence[WallVector],
+    leg_starts_x: Sequence[float] | npt.NDArray[np.floating[Any]],
+    leg_length_m: float,
+    centre_line_y: float,
+    spacing_m: float,
+    max_range_m: float,
+) -> npt.NDArray[np.float64]:
+    """``(n_legs, 4)``: per leg of a route along ``+x``, per side, how well a mapped wall faces it.
+
+    Along leg ``i``'s centre line (``x`` from ``leg_starts_x[i]`` to ``leg_starts_x[i + 1]``,
+    ``leg_length_m`` long, at ``y = centre_line_y``; metres in {W}), every ``spacing_m`` the
+    nearest map vector facing the route on each side (left: ``+y``, right: ``-y``) is looked
+    up (:func:`facing_wall_stretch`). Columns: left continuity, left distance, right
+    continuity, right distance; continuity is the longest run of one vector over the leg's
+    length, the distance its median over ``max_range_m``, each clipped to 1.
+    """
+    n_legs = len(leg_starts_x) - 1
+    features = np.zeros((n_legs, 4))
+    for leg in range(n_legs):
+        xs = np.arange(leg_starts_x[leg], leg_starts_x[leg + 1], spacing_m)
+        origins = np.column_stack([xs, np.full_like(xs, centre_line_y)])
+        for side_index, sign in enumerate((1.0, -1.0)):
+            longest_m, median_m = facing_wall_stretch(wall_map, origins, (0.0, sign), spacing_m)
+            features[leg, 2 * side_index] = min(longest_m / leg_length_m, 1.0)
+            features[leg, 2 * side_index + 1] = min(median_m / max_range_m, 1.0)
+    return features
+
+
 def longest_run(ids: Sequence[int]) -> int:
     """Length of the longest run of one non-negative id (negative ids break runs)."""
     longest = current = 0
@@ -93,9 +123,6 @@ def longest_run(ids: Sequence[int]) -> int:
         previous = wall_id
         longest = max(longest, current)
     return longest
-
-
-__all__ = ["facing_wall_stretch", "longest_run", "map_wall_vectors"]
 
 
 # --- beacon maps (Roh et al.) ---------------------------------------------------------------

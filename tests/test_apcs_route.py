@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import dataclasses
+import tomllib
 
 import numpy as np
 import pytest
 
+from sonar_gym.apcs_route import LegCommand, check_route_clearance
+from sonar_gym.maps import map_ahead_features, map_wall_vectors
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
-from sonar_gym.scenario import load_scenario
+from sonar_gym.scenario import Scenario, load_scenario, scenario_from_dict
 from sonar_gym.sonar.presets import preset
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.straight_drive import drive_straight_run, turn_run
@@ -101,3 +104,51 @@ def test_no_poses_give_no_samples() -> None:
     world = World(load_scenario("apcs_corridor"))
     readings = SideSonars.apcs().sample_along(world, [], np.random.default_rng(0))
     assert readings.left_m.shape == readings.right_m.shape == (0,)
+
+
+def _straight_corridor(half_width_m: float, boxes: str = "") -> Scenario:
+    return scenario_from_dict(
+        tomllib.loads(
+            f"[room]\nmin = [0.0, {-half_width_m}]\nmax = [10.0, {half_width_m}]\n\n{boxes}"
+            "[robot]\nradius = 0.2\nwheel_base = 0.3\n"
+        ),
+        default_name="straight_corridor",
+    )
+
+
+def test_a_straight_corridor_faces_every_leg_with_one_wall_each_side() -> None:
+    scenario = _straight_corridor(1.0)
+    legs = np.array([1.0, 3.0, 5.0])
+    features = map_ahead_features(map_wall_vectors(scenario), legs, 2.0, 0.25, 0.02, 5.0)
+    assert features.shape == (2, 4)
+    # one wall runs along each whole leg: full continuity; the walls are 0.75 and 1.25 m away
+    np.testing.assert_allclose(features[:, [0, 2]], 1.0, atol=0.011)
+    np.testing.assert_allclose(features[:, 1], 0.75 / 5.0)
+    np.testing.assert_allclose(features[:, 3], 1.25 / 5.0)
+
+
+def test_route_clearance_names_the_stand_off_that_meets_a_mapped_box() -> None:
+    box = "[[boxes]]\ncenter = [5.0, 0.8]\nsize = [0.4, 0.4]\nmapped = true\n\n"
+    check_route_clearance(_straight_corridor(1.0), (0.5, 9.5), 0.0, (-0.4, 0.0, 0.4), 0.05)
+    with pytest.raises(ValueError, match=r"'standoffs_m': 0.4 m"):
+        check_route_clearance(_straight_corridor(1.0, box), (0.5, 9.5), 0.0, (-0.4, 0.0, 0.4), 0.05)
+    unmapped = box.replace("mapped = true", "mapped = false")
+    check_route_clearance(_straight_corridor(1.0, unmapped), (0.5, 9.5), 0.0, (0.4,), 0.05)
+
+
+def test_apcs_side_sonars_take_the_given_timing_jitter_and_keep_the_rest_of_the_preset() -> None:
+    ma40b8 = preset("ma40b8")
+    sonars = SideSonars.apcs(range_noise_std_m=0.002, lateral_offset_m=0.1)
+    assert sonars.transducer.range_noise_std_m == 0.002
+    assert dataclasses.replace(sonars.transducer, range_noise_std_m=ma40b8.range_noise_std_m) == (
+        ma40b8
+    )
+    assert sonars.lateral_offset_m == 0.1
+    assert SideSonars.apcs().transducer == ma40b8
+
+
+def test_a_leg_command_runs_the_sonars_it_names() -> None:
+    assert LegCommand("none", 3, 0.0).active_sides == ()
+    assert LegCommand("left", 3, 0.0).active_sides == ("left",)
+    assert LegCommand("right", 6, 0.2).active_sides == ("right",)
+    assert LegCommand("both", 9, -0.2).active_sides == ("left", "right")

@@ -334,8 +334,8 @@ class WallStream:
     def __init__(self, side: str, params: APCSParameters = DEFAULT_PARAMETERS) -> None:
         self.side = _check_side(side)
         self.params = params
-        self._previous: tuple[FloatArray, float, float] | None = None
-        self._group_points: list[FloatArray] = []
+        self._previous: tuple[tuple[float, float], float, float] | None = None
+        self._group_points: list[tuple[float, float]] = []
         self._group_directions: list[float] = []
 
     @property
@@ -391,25 +391,29 @@ class WallStream:
 
     def accept(
         self,
-        sensor_xy: FloatArray,
+        sensor_xy: Sequence[float],
         heading_rad: float,
         range_m: float,
-        erp: tuple[FloatArray, float] | None,
+        erp: tuple[Sequence[float], float] | None,
     ) -> list[ClosedGroup]:
         """Store one reading and its ERP ``(point, direction)`` (from :meth:`pending_erps`).
 
         Returns:
             The verdicts of the groups this reading closed.
         """
+        # Plain floats: this runs once per reading, where numpy's per-call cost dominates.
+        sensor_x, sensor_y = sensor_xy
         direction = heading_rad + BEAM_OFFSET_RAD[self.side]
-        self._previous = (np.asarray(sensor_xy, dtype=np.float64), direction, float(range_m))
+        self._previous = ((float(sensor_x), float(sensor_y)), direction, float(range_m))
         if erp is None:
             return []
-        point, phi = erp
+        (point_x, point_y), phi = erp
+        point = (float(point_x), float(point_y))
         closed: list[ClosedGroup] = []
         if self._group_points:
-            step = point - self._group_points[-1]
-            if float(step @ step) > self.params.grouping_distance_squared_m2:
+            last_x, last_y = self._group_points[-1]
+            step_x, step_y = point[0] - last_x, point[1] - last_y
+            if step_x * step_x + step_y * step_y > self.params.grouping_distance_squared_m2:
                 closed.append(self._close())
         self._group_points.append(point)
         self._group_directions.append(float(phi))
@@ -432,9 +436,10 @@ class WallStream:
         """
         position = _finite_array(sensor_xy, "sensor_xy", (2,))
         points, phis, valid = self.pending_erps(position[None, :], [heading_rad], [range_m])
-        erp = (points[0].copy(), float(phis[0])) if valid[0] else None
-        closed = self.accept(position, float(heading_rad), float(range_m), erp)
-        return (None if erp is None else erp[0]), closed
+        erp_point = points[0].copy() if valid[0] else None
+        erp = None if erp_point is None else (erp_point.tolist(), float(phis[0]))
+        closed = self.accept(position.tolist(), float(heading_rad), float(range_m), erp)
+        return erp_point, closed
 
     def flush(self) -> list[ClosedGroup]:
         """End the stream (the sensor stops): close the open group and forget the last reading."""
@@ -451,8 +456,9 @@ class WallStream:
         cos_turn, sin_turn = math.cos(turn), math.sin(turn)
         rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
 
-        def moved(point: FloatArray) -> FloatArray:
-            return after.position + rotation @ (point - before.position)
+        def moved(point: tuple[float, float]) -> tuple[float, float]:
+            x, y = after.position + rotation @ (np.asarray(point) - before.position)
+            return float(x), float(y)
 
         if self._previous is not None:
             position, direction, range_m = self._previous
@@ -626,38 +632,44 @@ class APCSTracker:
         limit = len(left)
         # Events in time order: (sample, side). Pending ERPs are valid until a correction.
         events = [(m, side) for m in range(len(samples)) for side in sides]
+        sample_list: list[int] = samples.tolist()
+        range_lists = {side: ranges[side].tolist() for side in sides}
         event = 0
-        while event < len(events) and samples[events[event][0]] < limit:
+        while event < len(events) and sample_list[events[event][0]] < limit:
             first_sample = events[event][0]
             pending = {}
             rows = poses[samples[first_sample:] + 1]
             for side in sides:
                 sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
-                pending[side] = (
-                    sensor_xy,
-                    *self.streams[side].pending_erps(
-                        sensor_xy, rows[:, 2], ranges[side][first_sample:]
-                    ),
+                points, phis, valid = self.streams[side].pending_erps(
+                    sensor_xy, rows[:, 2], ranges[side][first_sample:]
                 )
+                pending[side] = (
+                    sensor_xy.tolist(),
+                    points.tolist(),
+                    phis.tolist(),
+                    valid.tolist(),
+                )
+            headings = rows[:, 2].tolist()
             corrected = False
-            while event < len(events) and not corrected and samples[events[event][0]] < limit:
+            while event < len(events) and not corrected and sample_list[events[event][0]] < limit:
                 m, side = events[event]
                 event += 1
                 sensor_xy, points, phis, valid = pending[side]
                 row = m - first_sample
-                erp = (points[row].copy(), float(phis[row])) if valid[row] else None
+                erp = (points[row], phis[row]) if valid[row] else None
                 if erp is not None:
-                    result.erps.append((float(erp[0][0]), float(erp[0][1]), side))
-                pose_row = poses[samples[m] + 1]
+                    result.erps.append((erp[0][0], erp[0][1], side))
                 groups = self.streams[side].accept(
-                    sensor_xy[row], float(pose_row[2]), float(ranges[side][m]), erp
+                    sensor_xy[row], headings[row], range_lists[side][m], erp
                 )
                 if groups:
-                    self.estimate = Pose(*pose_row)
-                    self.covariance = covariances[samples[m] + 1]
-                    corrected = self.handle_groups(side, groups, int(samples[m]), result)
+                    command = sample_list[m]
+                    self.estimate = Pose(*poses[command + 1])
+                    self.covariance = covariances[command + 1]
+                    corrected = self.handle_groups(side, groups, command, result)
             if corrected:
-                command = int(samples[events[event - 1][0]])
+                command = sample_list[events[event - 1][0]]
                 later_stops = [stop for stop in stops if stop > command]
                 if later_stops:
                     limit = min(limit, later_stops[0])

@@ -100,6 +100,7 @@ class WallVector:
         object.__setattr__(self, "_length", length)
         object.__setattr__(self, "_unit", unit)
         object.__setattr__(self, "_offset", -(unit[1] * start[0] - unit[0] * start[1]))
+        object.__setattr__(self, "_angle", math.atan2(end[1] - start[1], end[0] - start[0]))
 
     @property
     def start_point(self) -> FloatArray:
@@ -119,7 +120,7 @@ class WallVector:
     @property
     def direction_angle(self) -> float:
         """Angle of ``start -> end`` in {W}, radians in (-pi, pi]."""
-        return math.atan2(self.end[1] - self.start[1], self.end[0] - self.start[0])
+        return self._angle  # type: ignore[attr-defined, no-any-return]
 
     @property
     def unit_direction(self) -> FloatArray:
@@ -804,10 +805,17 @@ def check_wall(
     from that line.
     """
     orientation_error = angle_difference(detected.direction_angle, map_wall.direction_angle)
-    start_parameter = map_wall.projection_parameter(detected.start)
-    end_parameter = map_wall.projection_parameter(detected.end)
-    d1 = map_wall.signed_distance(detected.start)
-    d2 = map_wall.signed_distance(detected.end)
+    # WallVector.projection_parameter and signed_distance on its validated float end points,
+    # inlined: this runs for every map wall against every detected wall.
+    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
+    wall_x, wall_y = map_wall.start
+    a, b, c = map_wall.line_coefficients
+    ux, uy = map_wall._unit  # type: ignore[attr-defined]
+    length = map_wall.length
+    start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
+    end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
+    d1 = a * start_x + b * start_y + c
+    d2 = a * end_x + b * end_y + c
     distance_squared = d1 * d1 + d2 * d2
     slack = 1e-12
     inside = all(-slack <= t <= 1.0 + slack for t in (start_parameter, end_parameter))

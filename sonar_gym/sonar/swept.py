@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -137,9 +137,13 @@ class SideSonars(PulseEchoSonar):
             )
 
     @classmethod
-    def apcs(cls, **options: object) -> SideSonars:
-        """The MA40B8 side sonars of APCS."""
-        return cls(transducer_preset("ma40b8"), **options)  # type: ignore[arg-type]
+    def apcs(cls, range_noise_std_m: float | None = None, **options: object) -> SideSonars:
+        """The MA40B8 side sonars of APCS, with the timing jitter set to ``range_noise_std_m``
+        (as range, metres) instead of the preset's when given."""
+        transducer = transducer_preset("ma40b8")
+        if range_noise_std_m is not None:
+            transducer = replace(transducer, range_noise_std_m=float(range_noise_std_m))
+        return cls(transducer, **options)  # type: ignore[arg-type]
 
     def _echoes(self, world: WorldLike, pose: Pose) -> FirstEchoes:
         """First echoes of the left then the right sensor at ``pose``."""
