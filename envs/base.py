@@ -85,6 +85,7 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 4}
+    observation_space: gym.spaces.Box  # every task observes a flat float32 vector
     required_info_keys: ClassVar[tuple[str, ...]] = ()
     max_decisions: int | None = None
     config: Any

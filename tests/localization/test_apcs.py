@@ -98,7 +98,9 @@ def straight_drive(
 def literal_eq4_erps(positions: np.ndarray, ranges: np.ndarray) -> np.ndarray:
     """R2 of each pair with eq. (4) exactly as printed: sqrt((y2 - x2)^2 + (x2 - x1)^2)."""
     erps = []
-    for (x1, y1), (x2, y2), r1, r2 in zip(positions[:-1], positions[1:], ranges[:-1], ranges[1:]):
+    for (x1, y1), (x2, y2), r1, r2 in zip(
+        positions[:-1], positions[1:], ranges[:-1], ranges[1:], strict=True
+    ):
         length = math.sqrt((y2 - y1) ** 2 + (x2 - x1) ** 2)
         alpha = math.atan2((x2 - x1) / length, (y2 - y1) / length)
         printed_root = math.sqrt((y2 - x2) ** 2 + (x2 - x1) ** 2)
@@ -554,7 +556,7 @@ def test_section_6_unmapped_wall_b_is_detected_and_rejected() -> None:
     # 50 ERPs before B (6 groups of 8, 2 left over), 19 on B (8 + 8, 3 left over), 29 after
     # B (8 + 8 + 8 + 5): 6 + 2 + 4 wall vectors.
     assert len(walls) == 12 and sum(on_b) == 2
-    for wall, result, is_b in zip(walls, results, on_b):
+    for wall, result, is_b in zip(walls, results, on_b, strict=True):
         if is_b:
             assert result.status == NO_MATCH
             assert result.rejections == {0: REJECT_DISTANCE, 1: REJECT_ORIENTATION}
