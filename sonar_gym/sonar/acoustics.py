@@ -333,11 +333,18 @@ class PistonBeam:
             return np.where(cos_off_axis > 0.0, values, 0.0)
         return values
 
+    def two_way_in_front(self, cos_off_axis: FloatArray) -> FloatArray:
+        """:meth:`two_way_from_cos` for cosines known to be positive (in front of the transducer);
+        elsewhere the result is meaningless."""
+        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
+        index = scaled.astype(np.intp)
+        return self._values.take(index) + (scaled - index) * self._slopes.take(index)
+
     def two_way(self, theta_rad: npt.ArrayLike) -> FloatArray:
         """The pattern of this beam at off-axis angles in radians."""
         return self.two_way_from_cos(np.cos(np.asarray(theta_rad, dtype=np.float64)))
 
-    def main_lobe_cos_limits(self, levels: FloatArray) -> FloatArray:
+    def main_lobe_cos_limits(self, levels: FloatArray, reachable: bool = False) -> FloatArray:
         """``cos`` of the off-axis angle where the falling pattern drops to each level.
 
         The falling part is the main lobe, and without side lobes but with leakage the whole
@@ -346,14 +353,17 @@ class PistonBeam:
         must be positive; a level above 1 (an echo too weak even on the axis) gets the limit 2,
         which no cosine reaches; a level below the pattern at 90 deg gets the smallest positive
         cosine (the whole front half-space hears the echo, nothing behind it does).
+        ``reachable=True`` promises that no level exceeds 1 (echoes loud enough on the axis),
+        which spares the clipping.
         """
         rising = self._main_lobe_rising
-        reachable = np.minimum(levels, 1.0)
-        cell = (len(rising) - 1) - rising.searchsorted(reachable, side="left")
-        s_limit = (cell + (self._values.take(cell) - reachable) / self._falls.take(cell)) * (
+        clipped = levels if reachable else np.minimum(levels, 1.0)
+        cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
+        s_limit = (cell + (self._values.take(cell) - clipped) / self._falls.take(cell)) * (
             1.0 / _TABLE_STEPS_PER_UNIT
         )
-        return np.where(levels > 1.0, 2.0, np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE))
+        limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
+        return limits if reachable else np.where(levels > 1.0, 2.0, limits)
 
 
 _SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))

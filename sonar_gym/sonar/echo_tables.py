@@ -58,6 +58,13 @@ class EchoTables:
         twin: ``(W,)`` the other vertex at the same point (a T-junction), else the vertex
             itself; ``twin_comes_first``: whether that twin has the lower index.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
+        others_pass: all-True ``(C + V,)``.
+        has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
+            T-junction test whatever its concavity).
+        not_encloses: ``(S,)`` the complement of ``encloses``.
+        rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
+            slices of the product of ``position_and_occlusion_map`` with ``(px, py, 1)`` that
+            hold each quantity.
     """
 
     position_map: FloatArray
@@ -78,17 +85,31 @@ class EchoTables:
     twin: np.ndarray
     twin_comes_first: np.ndarray
     kinds_template: np.ndarray
+    others_pass: np.ndarray
+    has_t_junctions: bool
+    not_encloses: np.ndarray
+    rel_rows: slice
+    along_rows: slice
+    distance_rows: slice
+    wedge_a_rows: slice
+    wedge_b_rows: slice
+    occlusion_rows: slice
 
 
 _CACHE: weakref.WeakKeyDictionary[StaticGeometry, EchoTables] = weakref.WeakKeyDictionary()
+_LAST: list[tuple[weakref.ref[StaticGeometry], EchoTables]] = []
+"""The last geometry asked for and its tables (spares the weak dictionary's lookup)."""
 
 
 def echo_tables(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> EchoTables:
     """The (cached) tables of ``geometry``; ``plane``, ``cylinder``, ``edge`` are the kind codes."""
+    if _LAST and _LAST[0][0]() is geometry:
+        return _LAST[0][1]
     cached = _CACHE.get(geometry)
     if cached is None:
         cached = _build(geometry, plane, cylinder, edge)
         _CACHE[geometry] = cached
+    _LAST[:] = [(weakref.ref(geometry), cached)]
     return cached
 
 
@@ -163,6 +184,8 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     if n_wedges:  # (argmax refuses an empty axis)
         twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
+    n_rel = 3 * n_candidates
+    n_position_rows = len(position_map)
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
@@ -190,6 +213,15 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
                 np.full(n_vertices, edge, dtype=np.int8),
             ]
         ),
+        others_pass=np.ones(n_circles + n_vertices, dtype=bool),
+        has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
+        not_encloses=~encloses,
+        rel_rows=slice(0, n_rel),
+        along_rows=slice(n_rel, n_rel + n_segments),
+        distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),
+        wedge_a_rows=slice(n_rel + 2 * n_segments, n_rel + 2 * n_segments + n_wedges),
+        wedge_b_rows=slice(n_rel + 2 * n_segments + n_wedges, n_position_rows),
+        occlusion_rows=slice(n_position_rows, None),
     )
 
 

@@ -98,6 +98,10 @@ class EchoKind(IntEnum):
     EDGE = 3
 
 
+_PLANE, _CYLINDER, _EDGE = int(EchoKind.PLANE), int(EchoKind.CYLINDER), int(EchoKind.EDGE)
+_LN10 = math.log(10.0)
+
+
 def plane_echo_amplitude(range_m: npt.ArrayLike) -> FloatArray:
     """On-axis echo of a plane at normal incidence, ``1 / (2 r)`` (r in metres)."""
     return 0.5 / np.asarray(range_m, dtype=np.float64)
@@ -143,6 +147,8 @@ class EchoCandidates:
         amplitudes: ``(K,)`` on-axis echo amplitudes including air absorption and the
             receiver's gain, if any (1/m, the units of the threshold).
         kinds: ``(K,)`` :class:`EchoKind` codes (computed on first use).
+        threshold: the detection threshold they were searched with (1/m): every amplitude
+            reaches it.
     """
 
     position: FloatArray
@@ -152,6 +158,7 @@ class EchoCandidates:
     _primitive_indices: np.ndarray = field(repr=False)
     _concave: np.ndarray = field(repr=False)
     _tables: EchoTables = field(repr=False)
+    threshold: float = 0.0
 
     def __len__(self) -> int:
         return len(self.path_lengths)
@@ -203,20 +210,15 @@ def echo_candidates(
         receiver_gain: the receiver's time-varying gain, applied to every amplitude before the
             threshold test (None: a constant gain of 1).
     """
-    tables = echo_tables(geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    tables = echo_tables(geometry, _PLANE, _CYLINDER, _EDGE)
     px, py = float(position[0]), float(position[1])
-    n_segments, n_wedges = tables.n_segments, tables.n_wedges
+    n_segments = tables.n_segments
     n_specular = n_segments + tables.n_circles
-    n_candidates = n_specular + tables.n_vertices
-    wedge_end = n_specular + n_wedges
+    wedge_end = n_specular + tables.n_wedges
 
     mapped = tables.position_and_occlusion_map @ np.array((px, py, 1.0))
-    occlusion_matrix = mapped[tables.n_position_rows :].reshape(-1, 3)
-    rel = mapped[: 3 * n_candidates].reshape(n_candidates, 3)  # (rel_x, rel_y, 1) per candidate
-    along = mapped[3 * n_candidates : 3 * n_candidates + n_segments]
-    signed_distance = mapped[3 * n_candidates + n_segments : 3 * n_candidates + 2 * n_segments]
-    wedge_tests = mapped[3 * n_candidates + 2 * n_segments : tables.n_position_rows]
-    concave = (wedge_tests[:n_wedges] > 0.0) & (wedge_tests[n_wedges:] > 0.0)
+    rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
+    concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
     # Ranges: planes and vertices are |rel|; a cylinder is its centre distance minus its radius.
     # (Whole-array arithmetic with per-table padded constants rather than in-place updates of
@@ -230,34 +232,43 @@ def echo_candidates(
 
     safe = np.maximum(ranges, 1e-9)
     inverse_square_law = 0.5 / safe  # planes and corners
-    cylinder_ranges = safe[n_segments:n_specular]
-    edges = edge_echo_amplitude(safe[n_specular:], wavenumber, edge_law)
+    vertex_ranges = safe[n_specular:]
+    if edge_law == "weak":
+        edges = EDGE_ECHO_STRENGTH_M / (vertex_ranges * vertex_ranges)
+    else:
+        edges = edge_echo_amplitude(vertex_ranges, wavenumber, edge_law)
     amplitudes = np.concatenate(
         (
             inverse_square_law[:n_segments],
             inverse_square_law[n_segments:n_specular]
-            * np.sqrt(tables.radius / (cylinder_ranges + tables.radius)),
-            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[:n_wedges]),
-            edges[n_wedges:],
+            * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
+            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
+            edges[tables.n_wedges :],
         )
     )
     if absorption_db_per_m > 0.0:
         # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-        amplitudes = amplitudes * np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+        amplitudes = amplitudes * np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
     if receiver_gain is not None:
         amplitudes = amplitudes * receiver_gain.gain(safe)
 
-    facing = tables.solid_side * signed_distance <= 0.0  # not on a segment's solid side
-    # A T-junction yields one echo: from its concave side if it has one, else from its first vertex.
-    twin_concave = concave.take(tables.twin)
-    kind_tests = np.concatenate(
-        (
-            (along > 0.0) & (along < 1.0) & facing,
-            tables.circles_pass,
-            ~np.where(twin_concave == concave, tables.twin_comes_first, twin_concave),
-            tables.edges_pass,
+    facing = tables.solid_side * mapped[tables.distance_rows] <= 0.0  # not on the solid side
+    along = mapped[tables.along_rows]
+    segment_tests = (along > 0.0) & (along < 1.0) & facing
+    if tables.has_t_junctions:
+        # A T-junction yields one echo: from its concave side if it has one, else from its
+        # first vertex.
+        twin_concave = concave.take(tables.twin)
+        kind_tests = np.concatenate(
+            (
+                segment_tests,
+                tables.circles_pass,
+                ~np.where(twin_concave == concave, tables.twin_comes_first, twin_concave),
+                tables.edges_pass,
+            )
         )
-    )
+    else:  # every vertex is its own twin: all circles and vertices pass
+        kind_tests = np.concatenate((segment_tests, tables.others_pass))
     valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold) & kind_tests
 
     keep = valid.nonzero()[0]
@@ -268,21 +279,27 @@ def echo_candidates(
                 np.hypot(rel[keep, 0] + (px - fx), rel[keep, 1] + (py - fy)) >= footprint_radius_m
             )
             keep = keep[outside]
-    occluders = facing & ~tables.encloses
-    kept_rel = rel.take(keep, axis=0)
     keep = keep[
-        _unoccluded(tables, occlusion_matrix, kept_rel, ranges[keep], centre_distance, occluders)
+        _unoccluded(
+            tables,
+            mapped[tables.occlusion_rows].reshape(-1, 3),
+            rel.take(keep, axis=0),
+            ranges.take(keep),
+            centre_distance,
+            facing & tables.not_encloses,
+        )
     ]
-    keep = keep[ranges[keep].argsort(kind="stable")]
-    path_lengths = ranges[keep]
+    keep = keep[ranges.take(keep).argsort(kind="stable")]
+    path_lengths = ranges.take(keep)
     return EchoCandidates(
-        position=np.array([px, py]),
+        position=np.array((px, py)),
         directions=rel.take(keep, axis=0)[:, :2] / path_lengths[:, None],
         path_lengths=path_lengths,
-        amplitudes=amplitudes[keep],
+        amplitudes=amplitudes.take(keep),
         _primitive_indices=keep,
         _concave=concave,
         _tables=tables,
+        threshold=max(detection_threshold, 0.0),
     )
 
 
