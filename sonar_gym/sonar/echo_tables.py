@@ -23,6 +23,8 @@ import numpy as np
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
 
+PATH_END_TOLERANCE = 1e-9
+"""Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
 LOOP_TOLERANCE_M = 1e-9
 """End points closer than this are the same point (closing polygons, pairing T-junctions)."""
 
@@ -59,6 +61,10 @@ class EchoTables:
             itself; ``twin_comes_first``: whether that twin has the lower index.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
         others_pass: all-True ``(C + V,)``.
+        ratio_centres, ratio_half_widths: ``(2 S + C, 1)`` the middle and half width of the
+            interval each occlusion ratio must fall in to block (``u`` of every segment, ``u*``
+            of every circle: ``[0, 1 - tol]``; ``v`` of every segment: ``[0, 1]``).
+        radius_sq_column: ``(C, 1)`` the squared radii.
         has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
             T-junction test whatever its concavity).
         not_encloses: ``(S,)`` the complement of ``encloses``.
@@ -86,6 +92,9 @@ class EchoTables:
     twin_comes_first: np.ndarray
     kinds_template: np.ndarray
     others_pass: np.ndarray
+    ratio_centres: FloatArray
+    ratio_half_widths: FloatArray
+    radius_sq_column: FloatArray
     has_t_junctions: bool
     not_encloses: np.ndarray
     rel_rows: slice
@@ -185,6 +194,11 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     n_rel = 3 * n_candidates
+    # The same constants as _UV_CENTRE and _UV_HALF_WIDTH of the occlusion test.
+    path_centre = (1.0 - PATH_END_TOLERANCE) / 2.0
+    ratio_centres = np.concatenate(
+        [np.full(n_segments + n_circles, path_centre), np.full(n_segments, 0.5)]
+    )[:, None]
     n_position_rows = len(position_map)
     return EchoTables(
         position_map=position_map,
@@ -214,6 +228,9 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
             ]
         ),
         others_pass=np.ones(n_circles + n_vertices, dtype=bool),
+        ratio_centres=ratio_centres,
+        ratio_half_widths=ratio_centres.copy(),
+        radius_sq_column=(geometry.circles[:, 2] ** 2)[:, None],
         has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
         not_encloses=~encloses,
         rel_rows=slice(0, n_rel),

@@ -75,7 +75,7 @@ import numpy.typing as npt
 
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
-from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, EchoTables, echo_tables
 from sonar_gym.sonar.receiver import TimeVaryingGain
 
 EDGE_DIFFRACTION_COEFFICIENT = (4.0 / 3.0) * math.sin(2.0 * math.pi / 3.0) / 1.5
@@ -85,8 +85,6 @@ exterior angle 270 deg (``n = 3/2``) seen along its bisector:
 EDGE_ECHO_STRENGTH_M = 2.0e-5
 """Strength ``s`` (metres) of the default edge echo ``s / r^2`` (chosen, see the module docs)."""
 EDGE_LAWS = ("weak", "gtd")
-PATH_END_TOLERANCE = 1e-9
-"""Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
 
 
 class EchoKind(IntEnum):
@@ -329,10 +327,12 @@ def _unoccluded(
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
         occluders: ``(S,)`` which segments may occlude.
     """
-    n_segments = tables.n_segments
+    n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
         return np.zeros(0, dtype=bool)
     products = matrix @ rel.T  # (3 S + C, K)
+    if n_segments and n_circles:
+        return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
     blocked = np.zeros(len(rel), dtype=bool)
     if n_segments:
         # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
@@ -344,7 +344,7 @@ def _unoccluded(
             )
         inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
         blocked = np.logical_or.reduce(inside[0] & inside[1], axis=0)
-    if tables.n_circles:
+    if n_circles:
         dots = products[3 * n_segments :]
         nearest = dots / (ranges * ranges)
         on_path = np.abs(nearest - _UV_CENTRE[0, 0]) <= _UV_HALF_WIDTH[0, 0]
@@ -353,3 +353,43 @@ def _unoccluded(
             on_path & (gap_sq < tables.radius_sq[:, None]), axis=0
         )
     return ~blocked
+
+
+def _unoccluded_by_both(
+    tables: EchoTables,
+    products: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """:func:`_unoccluded` with segments and circles in one set of arrays (same arithmetic).
+
+    The ratios ``u``, ``u*`` and ``v`` share one interval test, and each blocking pair of
+    conditions (``u`` and ``v`` for a segment, ``u*`` and the gap for a circle) sits in the
+    top and bottom halves of one boolean array, so one ``&`` and one reduction cover both.
+    """
+    n_segments, n_circles = tables.n_segments, tables.n_circles
+    n_paths = len(ranges)
+    ratios = np.empty((2 * n_segments + n_circles, n_paths))  # u, then u*, then v
+    tests = np.empty((2 * (n_segments + n_circles), n_paths), dtype=bool)
+    dots = products[3 * n_segments :]
+    # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
+    crossing_denominator = products[:n_segments] * occluders[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(
+            products[n_segments : 2 * n_segments], crossing_denominator, out=ratios[:n_segments]
+        )
+        np.divide(dots, ranges * ranges, out=ratios[n_segments : n_segments + n_circles])
+        np.divide(
+            products[2 * n_segments : 3 * n_segments],
+            crossing_denominator,
+            out=ratios[n_segments + n_circles :],
+        )
+    np.less_equal(
+        np.abs(ratios - tables.ratio_centres), tables.ratio_half_widths, out=tests[: len(ratios)]
+    )
+    nearest = ratios[n_segments : n_segments + n_circles]
+    gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
+    np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
+    half = n_segments + n_circles
+    return ~(tests[:half] & tests[half:]).any(axis=0)
