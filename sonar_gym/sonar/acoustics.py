@@ -281,10 +281,6 @@ class PistonBeam:
     _main_lobe_rising: FloatArray = field(repr=False)
     _reaches_back: bool = field(repr=False)
     side_lobe_leakage: float = 0.0
-    _falls: FloatArray = field(init=False, repr=False)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "_falls", -self._slopes)  # the drop per cell, >= 0 on the lobe
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
@@ -359,7 +355,9 @@ class PistonBeam:
         rising = self._main_lobe_rising
         clipped = levels if reachable else np.minimum(levels, 1.0)
         cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
-        s_limit = (cell + (self._values.take(cell) - clipped) / self._falls.take(cell)) * (
+        # (level - value) / slope: the fraction of the cell at which the falling pattern reaches
+        # the level (read with the pattern's own table: one table less in the cache).
+        s_limit = (cell + (clipped - self._values.take(cell)) / self._slopes.take(cell)) * (
             1.0 / _TABLE_STEPS_PER_UNIT
         )
         limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)

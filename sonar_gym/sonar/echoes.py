@@ -255,13 +255,13 @@ def echo_candidates(
     segment_tests = (along > 0.0) & (along < 1.0) & facing
     if tables.has_t_junctions:
         # A T-junction yields one echo: from its concave side if it has one, else from its
-        # first vertex.
+        # first vertex (where the twins differ, the concave one passes).
         twin_concave = concave.take(tables.twin)
         kind_tests = np.concatenate(
             (
                 segment_tests,
                 tables.circles_pass,
-                ~np.where(twin_concave == concave, tables.twin_comes_first, twin_concave),
+                np.where(twin_concave == concave, tables.twin_comes_last, concave),
                 tables.edges_pass,
             )
         )
