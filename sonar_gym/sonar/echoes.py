@@ -333,13 +333,30 @@ def _unoccluded(
     products = matrix @ rel.T  # (3 S + C, K)
     if n_segments and n_circles:
         return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
-    blocked = np.zeros(len(rel), dtype=bool)
+    return _unoccluded_kind_by_kind(tables, products, ranges, centre_distance, occluders)
+
+
+def _unoccluded_kind_by_kind(
+    tables: EchoTables,
+    products: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """:func:`_unoccluded` from ``products = matrix @ rel.T``, segments then circles.
+
+    The plain form of the test, for geometries with one kind of primitive (and the reference
+    that :func:`_unoccluded_by_both` is checked against).
+    """
+    n_segments, n_circles = tables.n_segments, tables.n_circles
+    n_paths = len(ranges)
+    blocked = np.zeros(n_paths, dtype=bool)
     if n_segments:
         # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
         crossing_denominator = products[:n_segments] * occluders[:, None]
         with np.errstate(divide="ignore", invalid="ignore"):
             uv = (
-                products[n_segments : 3 * n_segments].reshape(2, n_segments, len(rel))
+                products[n_segments : 3 * n_segments].reshape(2, n_segments, n_paths)
                 / crossing_denominator
             )
         inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
@@ -392,4 +409,5 @@ def _unoccluded_by_both(
     gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
     np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
     half = n_segments + n_circles
-    return ~(tests[:half] & tests[half:]).any(axis=0)
+    blocked = np.logical_or.reduce(tests[:half] & tests[half:], axis=0)
+    return ~blocked
