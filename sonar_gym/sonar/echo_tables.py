@@ -58,8 +58,8 @@ class EchoTables:
             chains (see :func:`convex_loops`).
         encloses: ``(S,)`` whether the segment belongs to an enclosure (the room).
         twin: ``(W,)`` the other vertex at the same point (a T-junction), else the vertex
-            itself; ``twin_comes_last``: whether that twin has the higher index (or is the
-            vertex itself).
+            itself; ``twin_comes_first``: whether that twin has the lower index, and
+            ``twin_comes_last`` its complement.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
         others_pass: all-True ``(C + V,)``.
         ratio_centres, ratio_half_widths: ``(2 S + C, 1)`` the middle and half width of the
@@ -90,6 +90,7 @@ class EchoTables:
     solid_side: FloatArray
     encloses: np.ndarray
     twin: np.ndarray
+    twin_comes_first: np.ndarray
     twin_comes_last: np.ndarray
     kinds_template: np.ndarray
     others_pass: np.ndarray
@@ -220,6 +221,7 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         solid_side=solid_side,
         encloses=encloses,
         twin=twin,
+        twin_comes_first=twin < np.arange(n_wedges),
         twin_comes_last=twin >= np.arange(n_wedges),
         kinds_template=np.concatenate(
             [
