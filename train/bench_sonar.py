@@ -12,13 +12,16 @@ taken per round, so a busy machine slows both alike.
 Also timed: a 60-ping sector pan, a Kim sweep (19 pings), an APCS side-sonar sample and a
 Wu & Tsai ranging round.
 
-Run: ``python train/bench_sonar.py [--rounds N] [--poses P] [--seed S]``.
-``pan_throughput()`` gives the same numbers as rows for ``train benchmark``.
+Run: ``python train/bench_sonar.py [--rounds N] [--poses P] [--seed S] [--phases]``.
+``pan_throughput()`` gives the same numbers as rows for ``train benchmark``. ``--phases``
+also splits the full pan into its phases (:func:`phase_times`): the echo search of the
+sensor position, the readout of the 360 pings from its candidates, and the rest.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import gc
 import math
 import sys
@@ -134,6 +137,44 @@ def measure(rounds: int = 15, n_poses: int = 20, seed: int = 0) -> dict[str, flo
     return result
 
 
+def phase_times(rounds: int = 15, n_poses: int = 20, seed: int = 0) -> dict[str, float]:
+    """Where a full pan's time goes: per-call medians in seconds, interleaved as in :func:`measure`.
+
+    ``pan_s`` is the whole pan (a new sensor position each call, as in :func:`measure`);
+    ``search_s`` the echo search of that position alone; ``readout_s`` the 360 pings from
+    candidates the sonar remembers (beam pattern, detection, crossing delay, noise, counter);
+    ``rest_s`` what the pan adds to the two (pan angles, sensor position, the memory's
+    bookkeeping, the :class:`~sonar_gym.sonar.scan.Scan`, and caches the pan finds cold).
+    """
+    rng = np.random.default_rng(seed)
+    lab = World(load_scenario("beom_cho_lab"))
+    sonar = RotatingSonar.preset("polaroid-6500")
+    poses = [lab.sample_free_pose(rng, clearance=0.05) for _ in range(n_poses)]
+    sensors = [np.array(pose.transform_point(lab.scenario.robot.sensor_offset)) for pose in poses]
+    angles = np.arange(*FULL_PAN[:2], FULL_PAN[2])
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
+    samples: dict[str, list[float]] = {"pan_s": [], "search_s": [], "readout_s": []}
+    for pose in poses:  # warm caches
+        sonar.pan(lab, pose, *FULL_PAN, rng)
+    gc.collect()
+    gc.disable()
+    try:
+        for _ in range(rounds):
+            for pose, sensor in zip(poses, sensors, strict=True):
+                pan = functools.partial(sonar.pan, lab, pose, *FULL_PAN, rng)
+                search = functools.partial(sonar._search_candidates, lab, pose, sensor)
+                readout = functools.partial(sonar.ping, lab, pose, sensor, directions, rng)
+                samples["pan_s"].append(_seconds(pan))
+                samples["search_s"].append(_seconds(search))
+                samples["readout_s"].append(_seconds(readout))
+            gc.collect()
+    finally:
+        gc.enable()
+    result = {name: float(np.median(values)) for name, values in samples.items()}
+    result["rest_s"] = result["pan_s"] - result["search_s"] - result["readout_s"]
+    return result
+
+
 def pan_throughput() -> list[dict[str, Any]]:
     """Rows for ``train benchmark``: pans and pings per second of the sonar configurations.
 
@@ -171,6 +212,9 @@ def main(argv: list[str] | None = None) -> int:
         "--poses", type=int, default=20, help="random free poses per round (default 20)"
     )
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument(
+        "--phases", action="store_true", help="also split the full pan into its phases"
+    )
     args = parser.parse_args(argv)
     if args.rounds < 1 or args.poses < 1:
         parser.error("--rounds and --poses must be at least 1")
@@ -190,6 +234,16 @@ def main(argv: list[str] | None = None) -> int:
         f"  ratio pan / pymunk (target <= {TARGET_RATIO})       "
         f"{t['pan_over_pymunk']:9.3f} {t['pan_over_pymunk_min']:9.3f}"
     )
+    if args.phases:
+        phases = phase_times(args.rounds, args.poses, args.seed)
+        print("Full pan by phase: microseconds per call (median)")
+        for label, key in (
+            ("whole pan", "pan_s"),
+            ("echo search of the position", "search_s"),
+            ("readout of 360 pings (candidates known)", "readout_s"),
+            ("rest (pan minus the two)", "rest_s"),
+        ):
+            print(f"  {label:42s} {phases[key] * 1e6:9.1f}")
     return 0 if t["pan_over_pymunk"] <= TARGET_RATIO else 1
 
 

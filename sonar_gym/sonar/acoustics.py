@@ -278,15 +278,17 @@ class PistonBeam:
 
     wavenumber_ka: float
     side_lobes: bool
-    _values: FloatArray = field(repr=False)
-    _slopes: FloatArray = field(repr=False)
+    _cells: FloatArray = field(repr=False)
     _main_lobe_rising: FloatArray = field(repr=False)
     _reaches_back: bool = field(repr=False)
     side_lobe_leakage: float = 0.0
-    _falls: FloatArray = field(init=False, repr=False)
+    _values: FloatArray = field(init=False, repr=False)
+    _slopes: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "_falls", -self._slopes)  # the drop per cell, >= 0 on the lobe
+        # (value, slope) of a cell side by side: a lookup reads one cache line, not two.
+        object.__setattr__(self, "_values", self._cells[:, 0])
+        object.__setattr__(self, "_slopes", self._cells[:, 1])
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
@@ -316,8 +318,7 @@ class PistonBeam:
         return PistonBeam(
             float(wavenumber_ka),
             bool(side_lobes),
-            values[:-1].copy(),
-            np.diff(values),
+            np.column_stack([values[:-1], np.diff(values)]),
             values[last_monotone::-1].copy(),
             bool(values[_TABLE_STEPS_PER_UNIT] != 0.0),
             leakage,
@@ -329,17 +330,25 @@ class PistonBeam:
         # cost several times more than the operation.
         scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
         index = scaled.astype(np.intp)
-        fraction = scaled - index
-        values = self._values.take(index) + fraction * self._slopes.take(index)
+        cells = self._cells.take(index.ravel(), axis=0)
+        values = (cells[:, 0] + (scaled - index).ravel() * cells[:, 1]).reshape(index.shape)
         if self._reaches_back:  # the pattern jumps to 0 at 90 deg
             return np.where(cos_off_axis > 0.0, values, 0.0)
         return values
+
+    def two_way_in_front(self, cos_off_axis: FloatArray) -> FloatArray:
+        """:meth:`two_way_from_cos` for cosines known to be positive (in front of the transducer);
+        elsewhere the result is meaningless."""
+        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
+        index = scaled.astype(np.intp)
+        cells = self._cells.take(index, axis=0)
+        return cells[:, 0] + (scaled - index) * cells[:, 1]
 
     def two_way(self, theta_rad: npt.ArrayLike) -> FloatArray:
         """The pattern of this beam at off-axis angles in radians."""
         return self.two_way_from_cos(np.cos(np.asarray(theta_rad, dtype=np.float64)))
 
-    def main_lobe_cos_limits(self, levels: FloatArray) -> FloatArray:
+    def main_lobe_cos_limits(self, levels: FloatArray, reachable: bool = False) -> FloatArray:
         """``cos`` of the off-axis angle where the falling pattern drops to each level.
 
         The falling part is the main lobe, and without side lobes but with leakage the whole
@@ -348,14 +357,18 @@ class PistonBeam:
         must be positive; a level above 1 (an echo too weak even on the axis) gets the limit 2,
         which no cosine reaches; a level below the pattern at 90 deg gets the smallest positive
         cosine (the whole front half-space hears the echo, nothing behind it does).
+        ``reachable=True`` promises that no level exceeds 1 (echoes loud enough on the axis),
+        which spares the clipping.
         """
         rising = self._main_lobe_rising
-        reachable = np.minimum(levels, 1.0)
-        cell = (len(rising) - 1) - rising.searchsorted(reachable, side="left")
-        s_limit = (cell + (self._values.take(cell) - reachable) / self._falls.take(cell)) * (
-            1.0 / _TABLE_STEPS_PER_UNIT
-        )
-        return np.where(levels > 1.0, 2.0, np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE))
+        clipped = levels if reachable else np.minimum(levels, 1.0)
+        cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
+        # (level - value) / slope: the fraction of the cell at which the falling pattern reaches
+        # the level (read with the pattern's own table: one table less in the cache).
+        cells = self._cells.take(cell, axis=0)
+        s_limit = (cell + (clipped - cells[:, 0]) / cells[:, 1]) * (1.0 / _TABLE_STEPS_PER_UNIT)
+        limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
+        return limits if reachable else np.where(levels > 1.0, 2.0, limits)
 
 
 _SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))

@@ -23,6 +23,8 @@ import numpy as np
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
 
+PATH_END_TOLERANCE = 1e-9
+"""Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
 LOOP_TOLERANCE_M = 1e-9
 """End points closer than this are the same point (closing polygons, pairing T-junctions)."""
 
@@ -56,8 +58,20 @@ class EchoTables:
             chains (see :func:`convex_loops`).
         encloses: ``(S,)`` whether the segment belongs to an enclosure (the room).
         twin: ``(W,)`` the other vertex at the same point (a T-junction), else the vertex
-            itself; ``twin_comes_first``: whether that twin has the lower index.
+            itself; ``twin_comes_first``: whether that twin has the lower index, and
+            ``twin_comes_last`` its complement.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
+        others_pass: all-True ``(C + V,)``.
+        ratio_centres, ratio_half_widths: ``(2 S + C, 1)`` the middle and half width of the
+            interval each occlusion ratio must fall in to block (``u`` of every segment, ``u*``
+            of every circle: ``[0, 1 - tol]``; ``v`` of every segment: ``[0, 1]``).
+        radius_sq_column: ``(C, 1)`` the squared radii.
+        has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
+            T-junction test whatever its concavity).
+        not_encloses: ``(S,)`` the complement of ``encloses``.
+        rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
+            slices of the product of ``position_and_occlusion_map`` with ``(px, py, 1)`` that
+            hold each quantity.
     """
 
     position_map: FloatArray
@@ -77,18 +91,36 @@ class EchoTables:
     encloses: np.ndarray
     twin: np.ndarray
     twin_comes_first: np.ndarray
+    twin_comes_last: np.ndarray
     kinds_template: np.ndarray
+    others_pass: np.ndarray
+    ratio_centres: FloatArray
+    ratio_half_widths: FloatArray
+    radius_sq_column: FloatArray
+    has_t_junctions: bool
+    not_encloses: np.ndarray
+    rel_rows: slice
+    along_rows: slice
+    distance_rows: slice
+    wedge_a_rows: slice
+    wedge_b_rows: slice
+    occlusion_rows: slice
 
 
 _CACHE: weakref.WeakKeyDictionary[StaticGeometry, EchoTables] = weakref.WeakKeyDictionary()
+_LAST: list[tuple[weakref.ref[StaticGeometry], EchoTables]] = []
+"""The last geometry asked for and its tables (spares the weak dictionary's lookup)."""
 
 
 def echo_tables(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> EchoTables:
     """The (cached) tables of ``geometry``; ``plane``, ``cylinder``, ``edge`` are the kind codes."""
+    if _LAST and _LAST[0][0]() is geometry:
+        return _LAST[0][1]
     cached = _CACHE.get(geometry)
     if cached is None:
         cached = _build(geometry, plane, cylinder, edge)
         _CACHE[geometry] = cached
+    _LAST[:] = [(weakref.ref(geometry), cached)]
     return cached
 
 
@@ -163,6 +195,13 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     if n_wedges:  # (argmax refuses an empty axis)
         twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
+    n_rel = 3 * n_candidates
+    # The same constants as _UV_CENTRE and _UV_HALF_WIDTH of the occlusion test.
+    path_centre = (1.0 - PATH_END_TOLERANCE) / 2.0
+    ratio_centres = np.concatenate(
+        [np.full(n_segments + n_circles, path_centre), np.full(n_segments, 0.5)]
+    )[:, None]
+    n_position_rows = len(position_map)
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
@@ -183,6 +222,7 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         encloses=encloses,
         twin=twin,
         twin_comes_first=twin < np.arange(n_wedges),
+        twin_comes_last=twin >= np.arange(n_wedges),
         kinds_template=np.concatenate(
             [
                 np.full(n_segments, plane, dtype=np.int8),
@@ -190,6 +230,18 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
                 np.full(n_vertices, edge, dtype=np.int8),
             ]
         ),
+        others_pass=np.ones(n_circles + n_vertices, dtype=bool),
+        ratio_centres=ratio_centres,
+        ratio_half_widths=ratio_centres.copy(),
+        radius_sq_column=(geometry.circles[:, 2] ** 2)[:, None],
+        has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
+        not_encloses=~encloses,
+        rel_rows=slice(0, n_rel),
+        along_rows=slice(n_rel, n_rel + n_segments),
+        distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),
+        wedge_a_rows=slice(n_rel + 2 * n_segments, n_rel + 2 * n_segments + n_wedges),
+        wedge_b_rows=slice(n_rel + 2 * n_segments + n_wedges, n_position_rows),
+        occlusion_rows=slice(n_position_rows, None),
     )
 
 

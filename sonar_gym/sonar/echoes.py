@@ -75,7 +75,7 @@ import numpy.typing as npt
 
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
-from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, EchoTables, echo_tables
 from sonar_gym.sonar.receiver import TimeVaryingGain
 
 EDGE_DIFFRACTION_COEFFICIENT = (4.0 / 3.0) * math.sin(2.0 * math.pi / 3.0) / 1.5
@@ -85,8 +85,6 @@ exterior angle 270 deg (``n = 3/2``) seen along its bisector:
 EDGE_ECHO_STRENGTH_M = 2.0e-5
 """Strength ``s`` (metres) of the default edge echo ``s / r^2`` (chosen, see the module docs)."""
 EDGE_LAWS = ("weak", "gtd")
-PATH_END_TOLERANCE = 1e-9
-"""Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
 
 
 class EchoKind(IntEnum):
@@ -96,6 +94,10 @@ class EchoKind(IntEnum):
     CYLINDER = 1
     CORNER = 2
     EDGE = 3
+
+
+_PLANE, _CYLINDER, _EDGE = int(EchoKind.PLANE), int(EchoKind.CYLINDER), int(EchoKind.EDGE)
+_LN10 = math.log(10.0)
 
 
 def plane_echo_amplitude(range_m: npt.ArrayLike) -> FloatArray:
@@ -143,6 +145,8 @@ class EchoCandidates:
         amplitudes: ``(K,)`` on-axis echo amplitudes including air absorption and the
             receiver's gain, if any (1/m, the units of the threshold).
         kinds: ``(K,)`` :class:`EchoKind` codes (computed on first use).
+        threshold: the detection threshold they were searched with (1/m): every amplitude
+            reaches it.
     """
 
     position: FloatArray
@@ -152,6 +156,7 @@ class EchoCandidates:
     _primitive_indices: np.ndarray = field(repr=False)
     _concave: np.ndarray = field(repr=False)
     _tables: EchoTables = field(repr=False)
+    threshold: float = 0.0
 
     def __len__(self) -> int:
         return len(self.path_lengths)
@@ -203,20 +208,15 @@ def echo_candidates(
         receiver_gain: the receiver's time-varying gain, applied to every amplitude before the
             threshold test (None: a constant gain of 1).
     """
-    tables = echo_tables(geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    tables = echo_tables(geometry, _PLANE, _CYLINDER, _EDGE)
     px, py = float(position[0]), float(position[1])
-    n_segments, n_wedges = tables.n_segments, tables.n_wedges
+    n_segments = tables.n_segments
     n_specular = n_segments + tables.n_circles
-    n_candidates = n_specular + tables.n_vertices
-    wedge_end = n_specular + n_wedges
+    wedge_end = n_specular + tables.n_wedges
 
     mapped = tables.position_and_occlusion_map @ np.array((px, py, 1.0))
-    occlusion_matrix = mapped[tables.n_position_rows :].reshape(-1, 3)
-    rel = mapped[: 3 * n_candidates].reshape(n_candidates, 3)  # (rel_x, rel_y, 1) per candidate
-    along = mapped[3 * n_candidates : 3 * n_candidates + n_segments]
-    signed_distance = mapped[3 * n_candidates + n_segments : 3 * n_candidates + 2 * n_segments]
-    wedge_tests = mapped[3 * n_candidates + 2 * n_segments : tables.n_position_rows]
-    concave = (wedge_tests[:n_wedges] > 0.0) & (wedge_tests[n_wedges:] > 0.0)
+    rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
+    concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
     # Ranges: planes and vertices are |rel|; a cylinder is its centre distance minus its radius.
     # (Whole-array arithmetic with per-table padded constants rather than in-place updates of
@@ -230,34 +230,43 @@ def echo_candidates(
 
     safe = np.maximum(ranges, 1e-9)
     inverse_square_law = 0.5 / safe  # planes and corners
-    cylinder_ranges = safe[n_segments:n_specular]
-    edges = edge_echo_amplitude(safe[n_specular:], wavenumber, edge_law)
+    vertex_ranges = safe[n_specular:]
+    if edge_law == "weak":
+        edges = EDGE_ECHO_STRENGTH_M / (vertex_ranges * vertex_ranges)
+    else:
+        edges = edge_echo_amplitude(vertex_ranges, wavenumber, edge_law)
     amplitudes = np.concatenate(
         (
             inverse_square_law[:n_segments],
             inverse_square_law[n_segments:n_specular]
-            * np.sqrt(tables.radius / (cylinder_ranges + tables.radius)),
-            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[:n_wedges]),
-            edges[n_wedges:],
+            * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
+            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
+            edges[tables.n_wedges :],
         )
     )
     if absorption_db_per_m > 0.0:
         # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-        amplitudes = amplitudes * np.exp((-absorption_db_per_m * math.log(10.0) / 10.0) * safe)
+        amplitudes = amplitudes * np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
     if receiver_gain is not None:
         amplitudes = amplitudes * receiver_gain.gain(safe)
 
-    facing = tables.solid_side * signed_distance <= 0.0  # not on a segment's solid side
-    # A T-junction yields one echo: from its concave side if it has one, else from its first vertex.
-    twin_concave = concave.take(tables.twin)
-    kind_tests = np.concatenate(
-        (
-            (along > 0.0) & (along < 1.0) & facing,
-            tables.circles_pass,
-            ~np.where(twin_concave == concave, tables.twin_comes_first, twin_concave),
-            tables.edges_pass,
+    facing = tables.solid_side * mapped[tables.distance_rows] <= 0.0  # not on the solid side
+    along = mapped[tables.along_rows]
+    segment_tests = (along > 0.0) & (along < 1.0) & facing
+    if tables.has_t_junctions:
+        # A T-junction yields one echo: from its concave side if it has one, else from its
+        # first vertex (where the twins differ, the concave one passes).
+        twin_concave = concave.take(tables.twin)
+        kind_tests = np.concatenate(
+            (
+                segment_tests,
+                tables.circles_pass,
+                np.where(twin_concave == concave, tables.twin_comes_last, concave),
+                tables.edges_pass,
+            )
         )
-    )
+    else:  # every vertex is its own twin: all circles and vertices pass
+        kind_tests = np.concatenate((segment_tests, tables.others_pass))
     valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold) & kind_tests
 
     keep = valid.nonzero()[0]
@@ -268,21 +277,27 @@ def echo_candidates(
                 np.hypot(rel[keep, 0] + (px - fx), rel[keep, 1] + (py - fy)) >= footprint_radius_m
             )
             keep = keep[outside]
-    occluders = facing & ~tables.encloses
-    kept_rel = rel.take(keep, axis=0)
     keep = keep[
-        _unoccluded(tables, occlusion_matrix, kept_rel, ranges[keep], centre_distance, occluders)
+        _unoccluded(
+            tables,
+            mapped[tables.occlusion_rows].reshape(-1, 3),
+            rel.take(keep, axis=0),
+            ranges.take(keep),
+            centre_distance,
+            facing & tables.not_encloses,
+        )
     ]
-    keep = keep[ranges[keep].argsort(kind="stable")]
-    path_lengths = ranges[keep]
+    keep = keep[ranges.take(keep).argsort(kind="stable")]
+    path_lengths = ranges.take(keep)
     return EchoCandidates(
-        position=np.array([px, py]),
+        position=np.array((px, py)),
         directions=rel.take(keep, axis=0)[:, :2] / path_lengths[:, None],
         path_lengths=path_lengths,
-        amplitudes=amplitudes[keep],
+        amplitudes=amplitudes.take(keep),
         _primitive_indices=keep,
         _concave=concave,
         _tables=tables,
+        threshold=max(detection_threshold, 0.0),
     )
 
 
@@ -312,22 +327,41 @@ def _unoccluded(
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
         occluders: ``(S,)`` which segments may occlude.
     """
-    n_segments = tables.n_segments
+    n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
         return np.zeros(0, dtype=bool)
     products = matrix @ rel.T  # (3 S + C, K)
-    blocked = np.zeros(len(rel), dtype=bool)
+    if n_segments and n_circles:
+        return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
+    return _unoccluded_kind_by_kind(tables, products, ranges, centre_distance, occluders)
+
+
+def _unoccluded_kind_by_kind(
+    tables: EchoTables,
+    products: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """:func:`_unoccluded` from ``products = matrix @ rel.T``, segments then circles.
+
+    The plain form of the test, for geometries with one kind of primitive (and the reference
+    that :func:`_unoccluded_by_both` is checked against).
+    """
+    n_segments, n_circles = tables.n_segments, tables.n_circles
+    n_paths = len(ranges)
+    blocked = np.zeros(n_paths, dtype=bool)
     if n_segments:
         # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
         crossing_denominator = products[:n_segments] * occluders[:, None]
         with np.errstate(divide="ignore", invalid="ignore"):
             uv = (
-                products[n_segments : 3 * n_segments].reshape(2, n_segments, len(rel))
+                products[n_segments : 3 * n_segments].reshape(2, n_segments, n_paths)
                 / crossing_denominator
             )
         inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
         blocked = np.logical_or.reduce(inside[0] & inside[1], axis=0)
-    if tables.n_circles:
+    if n_circles:
         dots = products[3 * n_segments :]
         nearest = dots / (ranges * ranges)
         on_path = np.abs(nearest - _UV_CENTRE[0, 0]) <= _UV_HALF_WIDTH[0, 0]
@@ -335,4 +369,45 @@ def _unoccluded(
         blocked = blocked | np.logical_or.reduce(
             on_path & (gap_sq < tables.radius_sq[:, None]), axis=0
         )
+    return ~blocked
+
+
+def _unoccluded_by_both(
+    tables: EchoTables,
+    products: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """:func:`_unoccluded` with segments and circles in one set of arrays (same arithmetic).
+
+    The ratios ``u``, ``u*`` and ``v`` share one interval test, and each blocking pair of
+    conditions (``u`` and ``v`` for a segment, ``u*`` and the gap for a circle) sits in the
+    top and bottom halves of one boolean array, so one ``&`` and one reduction cover both.
+    """
+    n_segments, n_circles = tables.n_segments, tables.n_circles
+    n_paths = len(ranges)
+    ratios = np.empty((2 * n_segments + n_circles, n_paths))  # u, then u*, then v
+    tests = np.empty((2 * (n_segments + n_circles), n_paths), dtype=bool)
+    dots = products[3 * n_segments :]
+    # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
+    crossing_denominator = products[:n_segments] * occluders[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        np.divide(
+            products[n_segments : 2 * n_segments], crossing_denominator, out=ratios[:n_segments]
+        )
+        np.divide(dots, ranges * ranges, out=ratios[n_segments : n_segments + n_circles])
+        np.divide(
+            products[2 * n_segments : 3 * n_segments],
+            crossing_denominator,
+            out=ratios[n_segments + n_circles :],
+        )
+    np.less_equal(
+        np.abs(ratios - tables.ratio_centres), tables.ratio_half_widths, out=tests[: len(ratios)]
+    )
+    nearest = ratios[n_segments : n_segments + n_circles]
+    gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
+    np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
+    half = n_segments + n_circles
+    blocked = np.logical_or.reduce(tests[:half] & tests[half:], axis=0)
     return ~blocked

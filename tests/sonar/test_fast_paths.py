@@ -1,0 +1,179 @@
+"""The pan's fast paths against the plain forms they replace: the same numbers, bit for bit.
+
+* the fused main-lobe readout (:func:`~sonar_gym.sonar.pulse_echo._main_lobe_readings`)
+  against :func:`~sonar_gym.sonar.pulse_echo.first_echoes` then
+  :func:`~sonar_gym.sonar.pulse_echo.echo_readings`, noise included (same generator state);
+* the occlusion test of segments and circles in one set of arrays against the test kind by
+  kind;
+* the beam pattern for cosines in front of the transducer, and the main-lobe limits of levels
+  known to be reachable, against the checked and clipped forms.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+from sonar_gym.pose import Pose
+from sonar_gym.scenario import load_scenario
+from sonar_gym.sonar import echoes as echo_module
+from sonar_gym.sonar import pulse_echo
+from sonar_gym.sonar.acoustics import PistonBeam, speed_of_sound_mps
+from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.echoes import EchoKind
+from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, Readout
+from sonar_gym.sonar.rotating import RotatingSonar, _pan_grid
+from sonar_gym.world import World
+from tests.sonar.worlds import cluttered_room, free_positions
+
+SCENARIOS = ("beom_cho_lab", "kim_arena", "apcs_corridor")
+READOUTS = (
+    Readout(),
+    Readout(range_noise=False),
+    Readout(crossing_delay=False, quantisation=False),
+    IDEAL_READOUT,
+)
+
+
+def _world(name: str) -> World:
+    return World(load_scenario(name), temperature_c=24.0)
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+@pytest.mark.parametrize("preset", ["polaroid-6500", "srf04", "ma40b8"])
+def test_fused_main_lobe_readout_reads_what_first_echoes_then_readings_read(
+    scenario: str, preset: str
+) -> None:
+    world = _world(scenario)
+    rng = np.random.default_rng(7)
+    _, directions = _pan_grid(-math.pi, math.pi, math.radians(1.0))
+    compared = detected = 0
+    for readout in READOUTS:
+        sonar = RotatingSonar.preset(preset, readout=readout)
+        transducer = sonar.transducer
+        assert not transducer.side_lobes  # the fused path is the path of every preset
+        true_speed = speed_of_sound_mps(world.temperature_c)
+        beam = PistonBeam.for_ka(
+            transducer.wavenumber_ka(true_speed), False, transducer.side_lobe_leakage
+        )
+        for _ in range(8):
+            pose = world.sample_free_pose(rng, clearance=0.05)
+            candidates = sonar.candidates(world, pose, pose.position)
+            seed = int(rng.integers(1 << 30))
+            fused = pulse_echo._main_lobe_readings(
+                candidates,
+                directions,
+                beam,
+                transducer,
+                true_speed,
+                sonar.assumed_speed_of_sound_mps,
+                readout,
+                np.random.default_rng(seed),
+                pose.theta,
+            )
+            echoes = pulse_echo.first_echoes(
+                candidates, directions, beam, transducer.detection_threshold, pose.theta
+            )
+            plain = pulse_echo.echo_readings(
+                echoes,
+                transducer,
+                true_speed,
+                sonar.assumed_speed_of_sound_mps,
+                readout,
+                np.random.default_rng(seed),
+            )
+            np.testing.assert_array_equal(fused[0], plain[0])  # NaN where both drop out
+            np.testing.assert_array_equal(fused[1], plain[1])
+            compared += 1
+            detected += int(np.isfinite(plain[0]).sum())
+    assert compared == 32 and detected > 0
+
+
+def test_a_sonar_with_side_lobes_still_reads_through_first_echoes() -> None:
+    world, pose = _world("beom_cho_lab"), Pose(2.0, 2.0, 0.4)
+    sonar = RotatingSonar(
+        dataclasses.replace(RotatingSonar.preset("srf04").transducer, side_lobes=True)
+    )
+    _, directions = _pan_grid(-math.pi, math.pi, math.radians(1.0))
+    ranges, amplitudes = sonar.ping(
+        world, pose, pose.position, directions, np.random.default_rng(3)
+    )
+    plain = sonar.readings(
+        world,
+        sonar.first_echoes_at(world, pose, pose.position, directions),
+        np.random.default_rng(3),
+    )
+    np.testing.assert_array_equal(ranges, plain[0])
+    np.testing.assert_array_equal(amplitudes, plain[1])
+
+
+def _occlusion_inputs(
+    world: Any, position: tuple[float, float], rng: np.random.Generator
+) -> tuple[EchoTables, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Products, ranges, centre distances and occluders at ``position`` for paths to every
+    candidate echo point and to random points (some through walls, some into cylinders)."""
+    tables = echo_tables(world.geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    mapped = tables.position_and_occlusion_map @ np.array((position[0], position[1], 1.0))
+    to_candidates = mapped[tables.rel_rows].reshape(-1, 3)
+    angles = rng.uniform(-math.pi, math.pi, 200)
+    lengths = rng.uniform(0.05, 6.0, 200)
+    to_random = np.column_stack([lengths * np.cos(angles), lengths * np.sin(angles), np.ones(200)])
+    rel = np.concatenate([to_candidates, to_random])
+    matrix = mapped[tables.occlusion_rows].reshape(-1, 3)
+    centres = world.geometry.circles[:, :2]
+    centre_distance = np.hypot(centres[:, 0] - position[0], centres[:, 1] - position[1])
+    occluders = rng.random(tables.n_segments) < 0.7
+    return tables, matrix @ rel.T, np.hypot(rel[:, 0], rel[:, 1]), centre_distance, occluders
+
+
+@pytest.mark.parametrize("world_name", ["beom_cho_lab", "kim_arena", "cluttered_room"])
+def test_joint_occlusion_test_blocks_what_the_kind_by_kind_test_blocks(world_name: str) -> None:
+    rng = np.random.default_rng(11)
+    world: Any
+    if world_name == "cluttered_room":
+        world = cluttered_room()
+        positions = free_positions(world, rng, 10)
+    else:
+        world = World(load_scenario(world_name))
+        poses = [world.sample_free_pose(rng, clearance=0.05) for _ in range(10)]
+        positions = [(pose.x, pose.y) for pose in poses]
+    assert world.geometry.n_segments and world.geometry.n_circles  # both kinds: the joint test
+    blocked = clear = 0
+    for position in positions:
+        tables, products, ranges, centre_distance, occluders = _occlusion_inputs(
+            world, position, rng
+        )
+        joint = echo_module._unoccluded_by_both(
+            tables,
+            products,
+            ranges,
+            centre_distance,
+            occluders,
+        )
+        plain = echo_module._unoccluded_kind_by_kind(
+            tables,
+            products,
+            ranges,
+            centre_distance,
+            occluders,
+        )
+        np.testing.assert_array_equal(joint, plain)
+        blocked += int((~plain).sum())
+        clear += int(plain.sum())
+    assert blocked > 0 and clear > 0
+
+
+@pytest.mark.parametrize("leakage", [0.0, 0.07])
+def test_pattern_in_front_and_reachable_limits_equal_the_checked_forms(leakage: float) -> None:
+    beam = PistonBeam.for_ka(17.6, False, leakage)
+    rng = np.random.default_rng(2)
+    cosines = np.concatenate([rng.uniform(1e-12, 1.0, 5000), [1.0, 0.5, 1e-300]])
+    np.testing.assert_array_equal(beam.two_way_in_front(cosines), beam.two_way_from_cos(cosines))
+    levels = np.concatenate([10.0 ** rng.uniform(-6.0, 0.0, 5000), [1.0, 1e-9]])
+    np.testing.assert_array_equal(
+        beam.main_lobe_cos_limits(levels, reachable=True), beam.main_lobe_cos_limits(levels)
+    )
