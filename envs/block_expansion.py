@@ -36,7 +36,7 @@ from sonar_gym.localization.roh import (
     BlockExpansion,
     BlockExpansionConfig,
     BlockExpansionResult,
-    path_errors,
+    TruePath,
 )
 from sonar_gym.maps import (
     CALIBRATED,
@@ -353,7 +353,11 @@ class BlockExpansionEnv(SonarEnv):
         self._slot_names = (*self._areas[0], *new_beacons_of_areas(self._areas))
         self._new_beacons = self._slot_names[3:]
         self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
+        self._paper_path = dataclasses.replace(
+            PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas]
+        )
         self._paper_path_samples: dict[PathParameters, FloatArray] = {}
+        self._true_path: tuple[PathParameters, TruePath] | None = None
         self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
@@ -370,10 +374,6 @@ class BlockExpansionEnv(SonarEnv):
         }
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
         self._episode: _Episode | None = None
-
-    @property
-    def _paper_path(self) -> PathParameters:
-        return dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[self.config.n_areas])
 
     @property
     def areas(self) -> tuple[tuple[str, str, str], ...]:
@@ -597,7 +597,13 @@ class BlockExpansionEnv(SonarEnv):
         if not np.any(before):
             capped = self.config.failure_penalty * self.config.sigma_scale_m
             return capped, capped
-        return path_errors(result.estimated_xy[before], episode.path)
+        return self._scored_path(episode).errors(result.estimated_xy[before])
+
+    def _scored_path(self, episode: _Episode) -> TruePath:
+        """The episode's true path prepared for scoring, kept while the path stays the same."""
+        if self._true_path is None or self._true_path[0] != episode.path_parameters:
+            self._true_path = (episode.path_parameters, TruePath(episode.path))
+        return self._true_path[1]
 
     def _loss(self, result: BlockExpansionResult, sigma_prime_m: float) -> float:
         """The episode's loss (see Rewards), without the sensing cost."""
