@@ -888,7 +888,7 @@ class BlockExpansion:
         boundary_count = len(config.areas) - 1
         n_points = len(positions)
         progress: list[_BoundaryProgress] = []
-        statuses = np.full(n_points, OK, dtype=object)
+        statuses = [OK] * n_points
         fixes_xy = np.full((n_points, 2), np.nan)
         used_radical_centre = np.zeros(n_points, dtype=bool)
         area_indices = np.empty(n_points, dtype=np.int64)
