@@ -25,6 +25,12 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.block_expansion_view import render_drive
+from sonar_gym.calibration_distances import (
+    DECREASING_GAP_M,
+    distances_to_fractions,
+    fractions_to_distances,
+)
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
 from sonar_gym.geometry import StaticGeometry
@@ -45,18 +51,16 @@ from sonar_gym.maps import (
     PRIOR_ONLY,
     SURVEYED,
     UNUSED,
-    jittered_beacons,
     new_beacons_of_areas,
     to_map_frame,
 )
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray
 from sonar_gym.routes import (
     CURVATURE_SCALE_PER_M,
     PAPER_ROUTE,
     ParabolicRoute,
-    random_parabolic_route,
+    draw_beacons_and_route,
     range_along_route,
-    route_suits_areas,
 )
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
@@ -77,10 +81,6 @@ beacons takes the paper's 40 ms localization period."""
 PAPER_PATH_X_END_M = {2: 1.3, 3: 0.55}
 """x where the paper-like parabola (:func:`parabolic_path` defaults) ends: inside Area 2 of the
 two-area run (Sec. IV.B), inside Area 3 of the three-area run (Sec. IV.D)."""
-
-DECREASING_GAP_M = 0.01
-"""With ``ordering="decreasing"`` consecutive d's differ by at least this much, metres, so each
-one is crossed after the previous one was saved (two and a half path steps)."""
 
 MAX_BEACON_SLOTS = 5
 LAYOUT_JITTER_XY_M = 0.25
@@ -416,8 +416,10 @@ class BlockExpansionEnv(SonarEnv):
                 f"action must have shape {self.action_space.shape}; got {values.shape}"
             )
         fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
+        distance_range_m, ordering = self.config.distance_range_m, self.config.ordering
         return tuple(
-            self._fractions_to_distances(fractions[i : i + 3]) for i in range(0, len(fractions), 3)
+            fractions_to_distances(fractions[i : i + 3], distance_range_m, ordering)
+            for i in range(0, len(fractions), 3)
         )
 
     def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
@@ -433,39 +435,33 @@ class BlockExpansionEnv(SonarEnv):
                 f"distances_m must hold {self.action_space.shape[0]} finite metres "
                 f"(d1, d2, d3 per boundary); got {distances_m!r}"
             )
+        distance_range_m, ordering = self.config.distance_range_m, self.config.ordering
         fractions = np.concatenate(
-            [self._distances_to_fractions(values[i : i + 3]) for i in range(0, len(values), 3)]
+            [
+                distances_to_fractions(values[i : i + 3], distance_range_m, ordering)
+                for i in range(0, len(values), 3)
+            ]
         )
         return (2.0 * fractions - 1.0).astype(np.float32)
-
-    def _fractions_to_distances(self, u: FloatArray) -> tuple[float, float, float]:
-        low, high = self.config.distance_range_m
-        if self.config.ordering == "free":
-            d = low + u * (high - low)
-            return float(d[0]), float(d[1]), float(d[2])
-        gap = DECREASING_GAP_M
-        d1 = low + 2 * gap + u[0] * (high - low - 2 * gap)
-        d2 = low + gap + u[1] * (d1 - low - 2 * gap)
-        d3 = low + u[2] * (d2 - low - gap)
-        return float(d1), float(d2), float(d3)
-
-    def _distances_to_fractions(self, d: FloatArray) -> FloatArray:
-        low, high = self.config.distance_range_m
-        if self.config.ordering == "free":
-            return np.clip((d - low) / (high - low), 0.0, 1.0)
-        gap = DECREASING_GAP_M
-        u1 = _unit_fraction(d[0] - low - 2 * gap, high - low - 2 * gap)
-        d1 = low + 2 * gap + u1 * (high - low - 2 * gap)
-        u2 = _unit_fraction(d[1] - low - gap, d1 - low - 2 * gap)
-        d2 = low + gap + u2 * (d1 - low - 2 * gap)
-        u3 = _unit_fraction(d[2] - low, d2 - low - gap)
-        return np.array([u1, u2, u3])
 
     # --- episode ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        beacons_m, path_parameters = self._draw_layout_and_path(rng)
+        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
+        beacons_m, path_parameters, samples = draw_beacons_and_route(
+            rng,
+            table_i,
+            self._paper_path,
+            self._areas,
+            self._base_scenario.bounds,
+            jitter_m=(LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M) if config.layout == "random" else None,
+            route_x_end_m=PAPER_PATH_X_END_M[config.n_areas] if config.path == "random" else None,
+            curvature_range_per_m=RANDOM_CURVATURE_PER_M,
+            min_beacon_height_m=self.sensor_height_m + MIN_BEACON_CLEARANCE_M,
+            end_margin_m=BOUNDARY_END_MARGIN_M,
+            max_tries=MAX_LAYOUT_TRIES,
+        )
         prior_m = {
             name: np.array(beacons_m[name])
             + (rng.normal(0.0, config.beacon_prior_std_m, 3) if name in self._new_beacons else 0.0)
@@ -475,7 +471,7 @@ class BlockExpansionEnv(SonarEnv):
         scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
         # Only the beacons move between episodes: the room's geometry is built once.
         world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
-        path = self._sampled_path(path_parameters)
+        path = samples if samples is not None else self._sampled_path(path_parameters)
         with self._timed("sensing"):
             key = (path_parameters, tuple(beacons_m.items()))
             if self._route_geometry is None or self._route_geometry[0] != key:
@@ -507,39 +503,6 @@ class BlockExpansionEnv(SonarEnv):
             samples.flags.writeable = False
             self._paper_path_samples[parameters] = samples
         return self._paper_path_samples[parameters]
-
-    def _draw_layout_and_path(
-        self, rng: np.random.Generator
-    ) -> tuple[dict[str, tuple[float, float, float]], PathParameters]:
-        """Beacons and path of an episode; random ones are redrawn until they are valid."""
-        config = self.config
-        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
-        paper_path = self._paper_path
-        if config.layout == "table_i" and config.path == "paper":
-            return table_i, paper_path
-        for _ in range(MAX_LAYOUT_TRIES):
-            beacons = (
-                table_i
-                if config.layout == "table_i"
-                else jittered_beacons(table_i, rng, LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M)
-            )
-            path = (
-                paper_path
-                if config.path == "paper"
-                else random_parabolic_route(
-                    rng, PAPER_PATH_X_END_M[config.n_areas], RANDOM_CURVATURE_PER_M
-                )
-            )
-            if route_suits_areas(
-                path.sample(),
-                beacons,
-                self._areas,
-                self._base_scenario.bounds,
-                self.sensor_height_m + MIN_BEACON_CLEARANCE_M,
-                BOUNDARY_END_MARGIN_M,
-            ):
-                return beacons, path
-        return table_i, paper_path
 
     def _runner_config(
         self,
@@ -715,39 +678,24 @@ class BlockExpansionEnv(SonarEnv):
 
     # --- rendering ----------------------------------------------------------------------------
     def _render_frame(self) -> np.ndarray:
-        from sonar_gym.render import render_topdown
-
         episode = self._require_episode()
         result = episode.result
         shown = max(episode.evaluated_until, 1)
-        index = shown - 1
-        path = episode.path
-        direction = path[min(index + 1, len(path) - 1)] - path[max(index - 1, 0)]
-        heading = math.atan2(direction[1], direction[0])
-        true_pose = Pose(float(episode.path[index, 0]), float(episode.path[index, 1]), heading)
-        estimated_pose = None
-        fixes = None
-        if result is not None:
-            kept = result.estimated_indices < shown
-            fixes = result.estimated_xy[kept]
-            if len(fixes):
-                estimated_pose = Pose(float(fixes[-1, 0]), float(fixes[-1, 1]), heading)
-        extra = [
-            f"d (mm): {[[round(d * 1000) for d in t] for t in episode.chosen]}",
-            f"status: {episode.status}",
-        ]
-        if result is not None:
-            calibrated = self._calibrated_positions(episode)
-            for name, position in calibrated.items():
-                error = float(np.linalg.norm(position - np.asarray(episode.beacons_m[name])))
-                extra.append(f"{name} calibrated, error {error * 1000:.0f} mm")
-        return render_topdown(
+        fixes = None if result is None else result.estimated_xy[result.estimated_indices < shown]
+        errors_m = {
+            name: float(np.linalg.norm(position - np.asarray(episode.beacons_m[name])))
+            for name, position in self._calibrated_positions(episode).items()
+        }
+        title = f"BlockExpansion  {self.config.n_areas} areas"
+        return render_drive(
             episode.scenario,
-            true_pose=true_pose,
-            estimated_pose=estimated_pose,
-            scan_points=fixes,
-            title=f"BlockExpansion  {self.config.n_areas} areas",
-            extra=extra,
+            episode.path,
+            shown,
+            fixes,
+            episode.chosen,
+            episode.status,
+            errors_m,
+            title,
         )
 
     def _require_episode(self) -> _Episode:
@@ -757,13 +705,6 @@ class BlockExpansionEnv(SonarEnv):
 
 
 # --- helpers -----------------------------------------------------------------------------------
-
-
-def _unit_fraction(numerator: float, denominator: float) -> float:
-    """``numerator / denominator`` clipped to [0, 1]; 0 for an empty interval."""
-    if denominator <= 0.0:
-        return 0.0
-    return float(np.clip(numerator / denominator, 0.0, 1.0))
 
 
 def _final_status(result: BlockExpansionResult) -> str:
