@@ -1,23 +1,15 @@
 """``SonarGym/BlockExpansion-v0``: choose the calibration distances of Roh et al.'s block expansion.
 
 Roh et al., *Development of new block expansion algorithm for indoor mobile robot
-localization*: a robot drives a curved path across two or three triangular areas of ultrasonic
-beacons (Table I). It trilaterates with the three beacons of its area (Sec. III.A); before each
-area boundary it saves three of its own positions at the user's distances d1, d2, d3 from the
-boundary (Sec. III.C), auto-calibrates the next area's beacon from the ranges measured there
-(Sec. III.B) and switches to it past the boundary (Sec. II, Fig. 3). The three saved positions
-lie on a short stretch of a gently curved path, so the calibration is badly conditioned; which
-d's keep it in check is the free choice the paper leaves to its user (Sec. IV.E). Here an agent
-makes that choice. The method itself runs unchanged:
-:class:`sonar_gym.localization.roh.BlockExpansion`, fed a distance table (path samples x
-beacons) that the one-way ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger`
-measures along the whole path at reset (:func:`sonar_gym.routes.range_along_route`).
+localization* (see the env's Description). The method runs unchanged
+(:class:`sonar_gym.localization.roh.BlockExpansion`) on a distance table that the one-way
+ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger` measures along the whole path at
+reset (:func:`sonar_gym.routes.range_along_route`); the agent chooses the d's.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,7 +25,6 @@ from sonar_gym.calibration_distances import (
 )
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
-from sonar_gym.geometry import StaticGeometry
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,
@@ -44,27 +35,32 @@ from sonar_gym.localization.roh import (
     BlockExpansionResult,
     TruePath,
 )
+from sonar_gym.localization.roh_outcomes import (
+    calibrated_positions,
+    calibration_features,
+    calibration_summaries,
+    final_status,
+)
 from sonar_gym.maps import (
     CALIBRATED,
     MAP_FRAME_CENTRE_M,
     MAP_FRAME_HALF_SPAN_M,
     PRIOR_ONLY,
     SURVEYED,
-    UNUSED,
+    beacon_slot_features,
     new_beacons_of_areas,
-    to_map_frame,
 )
 from sonar_gym.pose import FloatArray
 from sonar_gym.routes import (
-    CURVATURE_SCALE_PER_M,
     PAPER_ROUTE,
     ParabolicRoute,
     draw_beacons_and_route,
     range_along_route,
+    route_features,
 )
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
-from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
+from sonar_gym.sonar.ranging import BeaconRanger, RangingWorld, RouteGeometry
 from sonar_gym.world import World
 
 ENV_ID = "SonarGym/BlockExpansion-v0"
@@ -98,13 +94,10 @@ BOUNDARY_END_MARGIN_M = 0.1
 # Normalisation of the observation (positions use the beacon map's frame, sonar_gym.maps).
 FRAME_CENTRE_M = MAP_FRAME_CENTRE_M
 FRAME_HALF_SPAN_M = MAP_FRAME_HALF_SPAN_M
-CONDITION_LOG_SCALE = 4.0
-TRIANGLE_AREA_SCALE_M2 = 0.1
 NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
 
 STATUS_RUNNING = "running"
-STATUS_LOCALIZATION_FAILED = "localization_failed"
 
 
 @dataclass(frozen=True)
@@ -174,21 +167,11 @@ def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> Beac
     )
 
 
-@dataclass(frozen=True)
-class _RangingWorld:
-    """What the ranging sensor reads of a world (:class:`~sonar_gym.sonar.pulse_echo.WorldLike`):
-    the room's static geometry, shared by every episode, with the episode's beacons."""
-
-    geometry: StaticGeometry
-    temperature_c: float
-    scenario: Scenario
-
-
 @dataclass
 class _Episode:
     """Everything one episode holds; pickles with the env."""
 
-    world: _RangingWorld
+    world: RangingWorld
     scenario: Scenario
     beacons_m: dict[str, tuple[float, float, float]]
     prior_m: dict[str, FloatArray]
@@ -356,8 +339,11 @@ class BlockExpansionEnv(SonarEnv):
         self._paper_path = dataclasses.replace(
             PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas]
         )
-        self._paper_path_samples: dict[PathParameters, FloatArray] = {}
+        # The paper path's samples, shared by its episodes (read-only).
+        self._paper_path_samples = self._paper_path.sample()
+        self._paper_path_samples.flags.writeable = False
         self._true_path: tuple[PathParameters, TruePath] | None = None
+        self._features_of_route: tuple[PathParameters, FloatArray] | None = None
         self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
@@ -416,11 +402,7 @@ class BlockExpansionEnv(SonarEnv):
                 f"action must have shape {self.action_space.shape}; got {values.shape}"
             )
         fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
-        distance_range_m, ordering = self.config.distance_range_m, self.config.ordering
-        return tuple(
-            fractions_to_distances(fractions[i : i + 3], distance_range_m, ordering)
-            for i in range(0, len(fractions), 3)
-        )
+        return fractions_to_distances(fractions, self.config.distance_range_m, self.config.ordering)
 
     def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
         """The action for d's in metres (3 per boundary the action covers).
@@ -435,12 +417,8 @@ class BlockExpansionEnv(SonarEnv):
                 f"distances_m must hold {self.action_space.shape[0]} finite metres "
                 f"(d1, d2, d3 per boundary); got {distances_m!r}"
             )
-        distance_range_m, ordering = self.config.distance_range_m, self.config.ordering
-        fractions = np.concatenate(
-            [
-                distances_to_fractions(values[i : i + 3], distance_range_m, ordering)
-                for i in range(0, len(values), 3)
-            ]
+        fractions = distances_to_fractions(
+            values, self.config.distance_range_m, self.config.ordering
         )
         return (2.0 * fractions - 1.0).astype(np.float32)
 
@@ -470,8 +448,8 @@ class BlockExpansionEnv(SonarEnv):
         emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
         scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
         # Only the beacons move between episodes: the room's geometry is built once.
-        world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
-        path = samples if samples is not None else self._sampled_path(path_parameters)
+        world = RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+        path = samples if samples is not None else self._paper_path_samples
         with self._timed("sensing"):
             key = (path_parameters, tuple(beacons_m.items()))
             if self._route_geometry is None or self._route_geometry[0] != key:
@@ -493,16 +471,6 @@ class BlockExpansionEnv(SonarEnv):
             round_durations_s=durations_s,
         )
         return self._info(position_error_m=0.0)
-
-    def _sampled_path(self, parameters: PathParameters) -> FloatArray:
-        """The path's samples; the paper path's are computed once per env (read-only)."""
-        if parameters != self._paper_path:
-            return parameters.sample()
-        if parameters not in self._paper_path_samples:
-            samples = parameters.sample()
-            samples.flags.writeable = False
-            self._paper_path_samples[parameters] = samples
-        return self._paper_path_samples[parameters]
 
     def _runner_config(
         self,
@@ -546,7 +514,7 @@ class BlockExpansionEnv(SonarEnv):
             errors = self._errors(result, episode.evaluated_until)
             return StepOutcome(reward, info=self._info(position_error_m=errors[1], errors=errors))
         episode.done = True
-        episode.status = _final_status(result)
+        episode.status = final_status(result)
         errors = self._errors(result, len(episode.path))
         reward -= self._loss(result, errors[1])
         return StepOutcome(
@@ -588,27 +556,17 @@ class BlockExpansionEnv(SonarEnv):
         layout = self.observation_layout
         observation = np.zeros(self.observation_space.shape, dtype=np.float64)
         calibrated = self._calibrated_positions(episode)
-        slots = np.zeros((MAX_BEACON_SLOTS, 4))
-        slots[:, 3] = UNUSED
+        slots: list[tuple[npt.ArrayLike, float]] = []
         for index, name in enumerate(self._slot_names):
             if index < 3:
-                position, status = np.asarray(episode.beacons_m[name]), SURVEYED
+                slots.append((episode.beacons_m[name], SURVEYED))
             elif name in calibrated:
-                position, status = calibrated[name], CALIBRATED
+                slots.append((calibrated[name], CALIBRATED))
             else:
-                position, status = episode.prior_m[name], PRIOR_ONLY
-            slots[index, :3] = to_map_frame(position)
-            slots[index, 3] = status
-        observation[layout["beacons"]] = slots.reshape(-1)
-        parameters = episode.path_parameters
-        start = (parameters.x_start_m, parameters.y_at(parameters.x_start_m), 0.0)
-        end = (parameters.x_end_m, parameters.y_at(parameters.x_end_m), 0.0)
-        observation[layout["path"]] = [
-            *to_map_frame(start)[:2],
-            *to_map_frame(end)[:2],
-            *to_map_frame((*parameters.vertex_m, 0.0))[:2],
-            np.clip(parameters.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0),
-        ]
+                slots.append((episode.prior_m[name], PRIOR_ONLY))
+        positions, statuses = zip(*slots, strict=True)
+        observation[layout["beacons"]] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
+        observation[layout["path"]] = self._route_features(episode.path_parameters)
         decided = len(episode.chosen)
         if not episode.done:
             observation[layout["boundary"].start + decided] = 1.0
@@ -618,29 +576,24 @@ class BlockExpansionEnv(SonarEnv):
             observation[layout["progress"]] = episode.evaluated_until / last_index
         if episode.result is not None and decided > 0:
             last = episode.result.calibrations[decided - 1]
-            outcome = 1.0 if last.status == OK else -1.0
-            condition = last.calibration.condition if last.calibration is not None else math.inf
-            area = last.calibration.triangle_area_m2 if last.calibration is not None else 0.0
-            observation[layout["previous_calibration"]] = [
-                outcome,
-                min(math.log10(max(condition, 1.0)) / CONDITION_LOG_SCALE, 1.0),
-                min(area / TRIANGLE_AREA_SCALE_M2, 1.0),
-            ]
+            observation[layout["previous_calibration"]] = calibration_features(last)
         observation[layout["sensor"]] = [
             config.range_noise_std_m / NOISE_SCALE_M,
             config.timer_period_s / TIMER_SCALE_S,
         ]
         return observation.astype(np.float32)
 
+    def _route_features(self, route: PathParameters) -> FloatArray:
+        """:func:`~sonar_gym.routes.route_features`, kept while the route stays the same."""
+        if self._features_of_route is None or self._features_of_route[0] != route:
+            self._features_of_route = (route, route_features(route))
+        return self._features_of_route[1]
+
     def _calibrated_positions(self, episode: _Episode) -> dict[str, FloatArray]:
         """New beacons calibrated in the boundaries decided so far."""
         if episode.result is None:
             return {}
-        positions: dict[str, FloatArray] = {}
-        for calibration in episode.result.calibrations[: len(episode.chosen)]:
-            if calibration.calibration is not None and calibration.calibration.position is not None:
-                positions[calibration.new_beacon] = np.asarray(calibration.calibration.position)
-        return positions
+        return calibrated_positions(episode.result.calibrations[: len(episode.chosen)])
 
     def _info(
         self, position_error_m: float, errors: tuple[float, float] | None = None
@@ -662,16 +615,7 @@ class BlockExpansionEnv(SonarEnv):
         result = episode.result
         if result is None:
             return info
-        decided = result.calibrations[: len(episode.chosen)]
-        info["calibration_errors_m"] = {
-            c.new_beacon: float(c.error_m) for c in decided if c.error_m is not None
-        }
-        info["calibration_statuses"] = {c.new_beacon: c.status for c in decided}
-        info["calibration_conditions"] = {
-            c.new_beacon: float(c.calibration.condition)
-            for c in decided
-            if c.calibration is not None and math.isfinite(c.calibration.condition)
-        }
+        info.update(calibration_summaries(result.calibrations[: len(episode.chosen)]))
         fixes = np.count_nonzero(result.estimated_indices < episode.evaluated_until)
         info["failed_fix_fraction"] = float(1.0 - fixes / max(episode.evaluated_until, 1))
         return info
@@ -702,14 +646,3 @@ class BlockExpansionEnv(SonarEnv):
         if self._episode is None:
             raise RuntimeError("BlockExpansionEnv: call reset() first")
         return self._episode
-
-
-# --- helpers -----------------------------------------------------------------------------------
-
-
-def _final_status(result: BlockExpansionResult) -> str:
-    """``"ok"``, the first failed boundary's status, or ``"localization_failed"``."""
-    for calibration in result.calibrations:
-        if calibration.status != OK:
-            return calibration.status
-    return OK if result.ok else STATUS_LOCALIZATION_FAILED

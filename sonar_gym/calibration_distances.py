@@ -25,8 +25,30 @@ one is crossed after the previous one was saved (two and a half path steps)."""
 
 def fractions_to_distances(
     u: FloatArray, distance_range_m: tuple[float, float], ordering: str
+) -> tuple[tuple[float, float, float], ...]:
+    """The (d1, d2, d3) triples, metres, that fractions ``u`` in [0, 1] stand for (three per
+    boundary, ``(3 k,)``)."""
+    return tuple(
+        _triple_of_fractions(u[i : i + 3], distance_range_m, ordering) for i in range(0, len(u), 3)
+    )
+
+
+def distances_to_fractions(
+    d: FloatArray, distance_range_m: tuple[float, float], ordering: str
+) -> FloatArray:
+    """The fractions in [0, 1] nearest to standing for the d's ``(3 k,)``, metres (the inverse
+    of :func:`fractions_to_distances` where it can express them)."""
+    return np.concatenate(
+        [
+            _fractions_of_triple(d[i : i + 3], distance_range_m, ordering)
+            for i in range(0, len(d), 3)
+        ]
+    )
+
+
+def _triple_of_fractions(
+    u: FloatArray, distance_range_m: tuple[float, float], ordering: str
 ) -> tuple[float, float, float]:
-    """The (d1, d2, d3), metres, that three fractions ``u`` in [0, 1] stand for."""
     low, high = distance_range_m
     if ordering == "free":
         d = low + u * (high - low)
@@ -38,11 +60,9 @@ def fractions_to_distances(
     return float(d1), float(d2), float(d3)
 
 
-def distances_to_fractions(
+def _fractions_of_triple(
     d: FloatArray, distance_range_m: tuple[float, float], ordering: str
 ) -> FloatArray:
-    """The fractions in [0, 1] nearest to standing for the d's ``(3,)``, metres (the inverse
-    of :func:`fractions_to_distances` where it can express them)."""
     low, high = distance_range_m
     if ordering == "free":
         return np.clip((d - low) / (high - low), 0.0, 1.0)

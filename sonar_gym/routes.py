@@ -17,7 +17,13 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.localization.roh import parabolic_path
-from sonar_gym.maps import inside_triangle, jittered_beacons, side_of_line, triangle_area
+from sonar_gym.maps import (
+    inside_triangle,
+    jittered_beacons,
+    side_of_line,
+    to_map_frame,
+    triangle_area,
+)
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar.pulse_echo import WorldLike
 from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
@@ -54,6 +60,21 @@ class ParabolicRoute:
     def y_at(self, x_m: float) -> float:
         """y of the parabola at ``x_m``, metres."""
         return self.vertex_m[1] + self.curvature_per_m * (x_m - self.vertex_m[0]) ** 2
+
+
+def route_features(route: ParabolicRoute) -> FloatArray:
+    """``(7,)`` a route as features: x, y of its start, end and vertex in the beacon map's
+    frame (:func:`~sonar_gym.maps.to_map_frame`), then its curvature over
+    :data:`CURVATURE_SCALE_PER_M` clipped to [-1, 1]."""
+    points = np.array(
+        [
+            (route.x_start_m, route.y_at(route.x_start_m), 0.0),
+            (route.x_end_m, route.y_at(route.x_end_m), 0.0),
+            (*route.vertex_m, 0.0),
+        ]
+    )
+    curvature = np.clip(route.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0)
+    return np.append(to_map_frame(points)[:, :2].reshape(-1), curvature)
 
 
 PAPER_ROUTE = ParabolicRoute(2.75, 0.55, (1.6, 1.45), -0.9)

@@ -653,13 +653,13 @@ def trilaterate_path(
     }
     if method != "paper" or len(beacon_array) != 3:
         one_by_one = np.arange(n_rows)
-        ok = np.ones(n_rows, dtype=bool)
+        ok: npt.NDArray[np.bool_] = np.ones(n_rows, dtype=bool)
     else:
-        valid = np.isfinite(table).all(axis=1)
+        valid = np.asarray(np.isfinite(table).all(axis=1))
         vertical = beacon_array[:, 2] - height
         with np.errstate(invalid="ignore"):
             short = (table < np.abs(vertical) - height_tolerance_m).any(axis=1) & valid
-        usable = valid & ~short
+        usable: npt.NDArray[np.bool_] = valid & ~short
         for row in np.flatnonzero(~usable).tolist():
             statuses[row] = STATUS_DISTANCE_BELOW_HEIGHT if valid[row] else STATUS_TOO_FEW_BEACONS
         centres = beacon_array[:, :2]
