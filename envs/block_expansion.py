@@ -25,6 +25,7 @@ from sonar_gym.calibration_distances import (
 )
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import build_config, check_choice, check_number
+from sonar_gym.kept import KeptValue
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,
@@ -342,9 +343,11 @@ class BlockExpansionEnv(SonarEnv):
         # The paper path's samples, shared by its episodes (read-only).
         self._paper_path_samples = self._paper_path.sample()
         self._paper_path_samples.flags.writeable = False
-        self._true_path: tuple[PathParameters, TruePath] | None = None
-        self._features_of_route: tuple[PathParameters, FloatArray] | None = None
-        self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
+        # Kept between episodes while their inputs repeat (Table I, the paper path).
+        self._true_path: KeptValue[TruePath] = KeptValue()
+        self._features_of_route: KeptValue[FloatArray] = KeptValue()
+        self._world_of_beacons: KeptValue[RangingWorld] = KeptValue()
+        self._route_geometry: KeptValue[RouteGeometry] = KeptValue()
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
@@ -445,24 +448,19 @@ class BlockExpansionEnv(SonarEnv):
             + (rng.normal(0.0, config.beacon_prior_std_m, 3) if name in self._new_beacons else 0.0)
             for name in self._slot_names
         }
-        emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
-        scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
-        # Only the beacons move between episodes: the room's geometry is built once.
-        world = RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+        world = self._ranging_world(beacons_m)
         path = samples if samples is not None else self._paper_path_samples
         with self._timed("sensing"):
-            key = (path_parameters, tuple(beacons_m.items()))
-            if self._route_geometry is None or self._route_geometry[0] != key:
-                # Kept for the next episode: with the Table I layout and the paper path
-                # only the noise changes.
-                geometry = self.ranger.route_geometry(world, path, tuple(beacons_m))
-                self._route_geometry = (key, geometry)
+            geometry = self._route_geometry.get(
+                (path_parameters, tuple(beacons_m.items())),
+                lambda: self.ranger.route_geometry(world, path, tuple(beacons_m)),
+            )
             ranges, durations_s = range_along_route(
-                self.ranger, world, path, tuple(beacons_m), rng, self._route_geometry[1]
+                self.ranger, world, path, tuple(beacons_m), rng, geometry
             )
         self._episode = _Episode(
             world=world,
-            scenario=scenario,
+            scenario=world.scenario,
             beacons_m=beacons_m,
             prior_m=prior_m,
             path_parameters=path_parameters,
@@ -471,6 +469,17 @@ class BlockExpansionEnv(SonarEnv):
             round_durations_s=durations_s,
         )
         return self._info(position_error_m=0.0)
+
+    def _ranging_world(self, beacons_m: dict[str, tuple[float, float, float]]) -> RangingWorld:
+        """The room with the episode's beacons, kept while they stay the same (Table I); only
+        the beacons move between episodes, so the room's geometry is built once."""
+
+        def make() -> RangingWorld:
+            emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
+            scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
+            return RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+
+        return self._world_of_beacons.get(tuple(beacons_m.items()), make)
 
     def _runner_config(
         self,
@@ -528,13 +537,8 @@ class BlockExpansionEnv(SonarEnv):
         if not np.any(before):
             capped = self.config.failure_penalty * self.config.sigma_scale_m
             return capped, capped
-        return self._scored_path(episode).errors(result.estimated_xy[before])
-
-    def _scored_path(self, episode: _Episode) -> TruePath:
-        """The episode's true path prepared for scoring, kept while the path stays the same."""
-        if self._true_path is None or self._true_path[0] != episode.path_parameters:
-            self._true_path = (episode.path_parameters, TruePath(episode.path))
-        return self._true_path[1]
+        true_path = self._true_path.get(episode.path_parameters, lambda: TruePath(episode.path))
+        return true_path.errors(result.estimated_xy[before])
 
     def _loss(self, result: BlockExpansionResult, sigma_prime_m: float) -> float:
         """The episode's loss (see Rewards), without the sensing cost."""
@@ -566,7 +570,10 @@ class BlockExpansionEnv(SonarEnv):
                 slots.append((episode.prior_m[name], PRIOR_ONLY))
         positions, statuses = zip(*slots, strict=True)
         observation[layout["beacons"]] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
-        observation[layout["path"]] = self._route_features(episode.path_parameters)
+        route = episode.path_parameters
+        observation[layout["path"]] = self._features_of_route.get(
+            route, lambda: route_features(route)
+        )
         decided = len(episode.chosen)
         if not episode.done:
             observation[layout["boundary"].start + decided] = 1.0
@@ -582,12 +589,6 @@ class BlockExpansionEnv(SonarEnv):
             config.timer_period_s / TIMER_SCALE_S,
         ]
         return observation.astype(np.float32)
-
-    def _route_features(self, route: PathParameters) -> FloatArray:
-        """:func:`~sonar_gym.routes.route_features`, kept while the route stays the same."""
-        if self._features_of_route is None or self._features_of_route[0] != route:
-            self._features_of_route = (route, route_features(route))
-        return self._features_of_route[1]
 
     def _calibrated_positions(self, episode: _Episode) -> dict[str, FloatArray]:
         """New beacons calibrated in the boundaries decided so far."""

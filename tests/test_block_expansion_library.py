@@ -9,6 +9,7 @@ from sonar_gym.calibration_distances import (
     distances_to_fractions,
     fractions_to_distances,
 )
+from sonar_gym.kept import KeptValue
 from sonar_gym.maps import CALIBRATED, SURVEYED, UNUSED, beacon_slot_features
 from sonar_gym.routes import PAPER_ROUTE, ParabolicRoute, route_features
 
@@ -48,3 +49,17 @@ def test_beacon_slots_fill_the_given_beacons_then_mark_unused_slots() -> None:
     np.testing.assert_array_equal(slots[0], [0.0, 0.0, 0.0, SURVEYED])
     np.testing.assert_array_equal(slots[1], [1.0, -1.0, -1.0, CALIBRATED])
     np.testing.assert_array_equal(slots[2:], [[0.0, 0.0, 0.0, UNUSED]] * 2)
+
+
+def test_a_kept_value_is_remade_only_when_its_key_changes() -> None:
+    kept: KeptValue[list[int]] = KeptValue()
+    made: list[int] = []
+
+    def make() -> list[int]:
+        made.append(len(made))
+        return [len(made)]
+
+    first = kept.get(("A", (1.0, 2.0)), make)
+    assert kept.get(("A", (1.0, 2.0)), make) is first  # equal content, not the same object
+    second = kept.get(("A", (1.0, 2.5)), make)
+    assert second is not first and made == [0, 1]

@@ -634,7 +634,7 @@ def trilaterate_path(
             f"distances must have shape (n, {len(beacon_array)}) (rows x beacons), "
             f"got {table.shape}"
         )
-    if np.any(table[np.isfinite(table)] < 0.0):
+    if np.any(table < 0.0) and np.any(table[np.isfinite(table)] < 0.0):
         raise ValueError("distances must be non-negative metres (NaN marks a missing range)")
     height = _finite_float(sensor_height, "sensor_height")
     if method not in TRILATERATION_METHODS:
@@ -749,8 +749,8 @@ def _paper_centroids(
     normal = np.column_stack([-unit[:, 1], unit[:, 0]])
     foot = ca + along[..., None] * unit
     half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
-    first = foot + half_chord[..., None] * normal
-    second = foot - half_chord[..., None] * normal
+    along_chord = half_chord[..., None] * normal
+    first, second = foot + along_chord, foot - along_chord
     miss_first = np.abs(np.hypot(first[..., 0] - ck[:, 0], first[..., 1] - ck[:, 1]) - rk)
     miss_second = np.abs(np.hypot(second[..., 0] - ck[:, 0], second[..., 1] - ck[:, 1]) - rk)
     kept = np.where((miss_second < miss_first)[..., None], second, first)
