@@ -1,23 +1,15 @@
 """``SonarGym/BlockExpansion-v0``: choose the calibration distances of Roh et al.'s block expansion.
 
 Roh et al., *Development of new block expansion algorithm for indoor mobile robot
-localization*: a robot drives a curved path across two or three triangular areas of ultrasonic
-beacons (Table I). It trilaterates with the three beacons of its area (Sec. III.A); before each
-area boundary it saves three of its own positions at the user's distances d1, d2, d3 from the
-boundary (Sec. III.C), auto-calibrates the next area's beacon from the ranges measured there
-(Sec. III.B) and switches to it past the boundary (Sec. II, Fig. 3). The three saved positions
-lie on a short stretch of a gently curved path, so the calibration is badly conditioned; which
-d's keep it in check is the free choice the paper leaves to its user (Sec. IV.E). Here an agent
-makes that choice. The method itself runs unchanged:
-:class:`sonar_gym.localization.roh.BlockExpansion`, fed a distance table (path samples x
-beacons) that the one-way ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger`
-measures along the whole path at reset (:func:`sonar_gym.routes.range_along_route`).
+localization* (see the env's Description). The method runs unchanged
+(:class:`sonar_gym.localization.roh.BlockExpansion`) on a distance table that the one-way
+ranging sensor :class:`sonar_gym.sonar.ranging.BeaconRanger` measures along the whole path at
+reset (:func:`sonar_gym.routes.range_along_route`); the agent chooses the d's.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,6 +17,12 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.block_expansion_view import render_drive
+from sonar_gym.calibration_distances import (
+    DECREASING_GAP_M,
+    distances_to_fractions,
+    fractions_to_distances,
+)
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -33,7 +31,7 @@ from sonar_gym.envs.config import (
     number_field,
     numbers_field,
 )
-from sonar_gym.geometry import StaticGeometry
+from sonar_gym.kept import KeptValue
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh import (
     PAPER_THREE_AREAS,
@@ -42,7 +40,13 @@ from sonar_gym.localization.roh import (
     BlockExpansion,
     BlockExpansionConfig,
     BlockExpansionResult,
-    path_errors,
+    TruePath,
+)
+from sonar_gym.localization.roh_outcomes import (
+    calibrated_positions,
+    calibration_features,
+    calibration_summaries,
+    final_status,
 )
 from sonar_gym.maps import (
     CALIBRATED,
@@ -50,23 +54,20 @@ from sonar_gym.maps import (
     MAP_FRAME_HALF_SPAN_M,
     PRIOR_ONLY,
     SURVEYED,
-    UNUSED,
-    jittered_beacons,
+    beacon_slot_features,
     new_beacons_of_areas,
-    to_map_frame,
 )
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray
 from sonar_gym.routes import (
-    CURVATURE_SCALE_PER_M,
     PAPER_ROUTE,
     ParabolicRoute,
-    random_parabolic_route,
+    draw_beacons_and_route,
     range_along_route,
-    route_suits_areas,
+    route_features,
 )
 from sonar_gym.scenario import Emitter, Scenario, load_scenario
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
-from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
+from sonar_gym.sonar.ranging import BeaconRanger, RangingWorld, RouteGeometry
 from sonar_gym.validation import MIN_SCALE
 from sonar_gym.world import World
 
@@ -85,10 +86,6 @@ PAPER_PATH_X_END_M = {2: 1.3, 3: 0.55}
 """x where the paper-like parabola (:func:`parabolic_path` defaults) ends: inside Area 2 of the
 two-area run (Sec. IV.B), inside Area 3 of the three-area run (Sec. IV.D)."""
 
-DECREASING_GAP_M = 0.01
-"""With ``ordering="decreasing"`` consecutive d's differ by at least this much, metres, so each
-one is crossed after the previous one was saved (two and a half path steps)."""
-
 MAX_BEACON_SLOTS = 5
 LAYOUT_JITTER_XY_M = 0.25
 """``layout="random"``: each Table I beacon moves uniformly within +-0.25 m in x and y ..."""
@@ -105,13 +102,10 @@ BOUNDARY_END_MARGIN_M = 0.1
 # Normalisation of the observation (positions use the beacon map's frame, sonar_gym.maps).
 FRAME_CENTRE_M = MAP_FRAME_CENTRE_M
 FRAME_HALF_SPAN_M = MAP_FRAME_HALF_SPAN_M
-CONDITION_LOG_SCALE = 4.0
-TRIANGLE_AREA_SCALE_M2 = 0.1
 NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
 
 STATUS_RUNNING = "running"
-STATUS_LOCALIZATION_FAILED = "localization_failed"
 
 
 @dataclass(frozen=True)
@@ -175,21 +169,11 @@ def make_ranger(config: BlockExpansionEnvConfig, sensor_height_m: float) -> Beac
     )
 
 
-@dataclass(frozen=True)
-class _RangingWorld:
-    """What the ranging sensor reads of a world (:class:`~sonar_gym.sonar.pulse_echo.WorldLike`):
-    the room's static geometry, shared by every episode, with the episode's beacons."""
-
-    geometry: StaticGeometry
-    temperature_c: float
-    scenario: Scenario
-
-
 @dataclass
 class _Episode:
     """Everything one episode holds; pickles with the env."""
 
-    world: _RangingWorld
+    world: RangingWorld
     scenario: Scenario
     beacons_m: dict[str, tuple[float, float, float]]
     prior_m: dict[str, FloatArray]
@@ -354,8 +338,17 @@ class BlockExpansionEnv(SonarEnv):
         self._slot_names = (*self._areas[0], *new_beacons_of_areas(self._areas))
         self._new_beacons = self._slot_names[3:]
         self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
-        self._paper_path_samples: dict[PathParameters, FloatArray] = {}
-        self._route_geometry: tuple[tuple[Any, ...], RouteGeometry] | None = None
+        self._paper_path = dataclasses.replace(
+            PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas]
+        )
+        # The paper path's samples, shared by its episodes (read-only).
+        self._paper_path_samples = self._paper_path.sample()
+        self._paper_path_samples.flags.writeable = False
+        # Kept between episodes while their inputs repeat (Table I, the paper path).
+        self._true_path: KeptValue[TruePath] = KeptValue()
+        self._features_of_route: KeptValue[FloatArray] = KeptValue()
+        self._world_of_beacons: KeptValue[RangingWorld] = KeptValue()
+        self._route_geometry: KeptValue[RouteGeometry] = KeptValue()
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
@@ -371,10 +364,6 @@ class BlockExpansionEnv(SonarEnv):
         }
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
         self._episode: _Episode | None = None
-
-    @property
-    def _paper_path(self) -> PathParameters:
-        return dataclasses.replace(PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[self.config.n_areas])
 
     @property
     def areas(self) -> tuple[tuple[str, str, str], ...]:
@@ -417,9 +406,7 @@ class BlockExpansionEnv(SonarEnv):
                 f"action must have shape {self.action_space.shape}; got {values.shape}"
             )
         fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
-        return tuple(
-            self._fractions_to_distances(fractions[i : i + 3]) for i in range(0, len(fractions), 3)
-        )
+        return fractions_to_distances(fractions, self.config.distance_range_m, self.config.ordering)
 
     def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
         """The action for d's in metres (3 per boundary the action covers).
@@ -434,62 +421,47 @@ class BlockExpansionEnv(SonarEnv):
                 f"distances_m must hold {self.action_space.shape[0]} finite metres "
                 f"(d1, d2, d3 per boundary); got {distances_m!r}"
             )
-        fractions = np.concatenate(
-            [self._distances_to_fractions(values[i : i + 3]) for i in range(0, len(values), 3)]
+        fractions = distances_to_fractions(
+            values, self.config.distance_range_m, self.config.ordering
         )
         return (2.0 * fractions - 1.0).astype(np.float32)
-
-    def _fractions_to_distances(self, u: FloatArray) -> tuple[float, float, float]:
-        low, high = self.config.distance_range_m
-        if self.config.ordering == "free":
-            d = low + u * (high - low)
-            return float(d[0]), float(d[1]), float(d[2])
-        gap = DECREASING_GAP_M
-        d1 = low + 2 * gap + u[0] * (high - low - 2 * gap)
-        d2 = low + gap + u[1] * (d1 - low - 2 * gap)
-        d3 = low + u[2] * (d2 - low - gap)
-        return float(d1), float(d2), float(d3)
-
-    def _distances_to_fractions(self, d: FloatArray) -> FloatArray:
-        low, high = self.config.distance_range_m
-        if self.config.ordering == "free":
-            return np.clip((d - low) / (high - low), 0.0, 1.0)
-        gap = DECREASING_GAP_M
-        u1 = _unit_fraction(d[0] - low - 2 * gap, high - low - 2 * gap)
-        d1 = low + 2 * gap + u1 * (high - low - 2 * gap)
-        u2 = _unit_fraction(d[1] - low - gap, d1 - low - 2 * gap)
-        d2 = low + gap + u2 * (d1 - low - 2 * gap)
-        u3 = _unit_fraction(d[2] - low, d2 - low - gap)
-        return np.array([u1, u2, u3])
 
     # --- episode ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        beacons_m, path_parameters = self._draw_layout_and_path(rng)
+        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
+        beacons_m, path_parameters, samples = draw_beacons_and_route(
+            rng,
+            table_i,
+            self._paper_path,
+            self._areas,
+            self._base_scenario.bounds,
+            jitter_m=(LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M) if config.layout == "random" else None,
+            route_x_end_m=PAPER_PATH_X_END_M[config.n_areas] if config.path == "random" else None,
+            curvature_range_per_m=RANDOM_CURVATURE_PER_M,
+            min_beacon_height_m=self.sensor_height_m + MIN_BEACON_CLEARANCE_M,
+            end_margin_m=BOUNDARY_END_MARGIN_M,
+            max_tries=MAX_LAYOUT_TRIES,
+        )
         prior_m = {
             name: np.array(beacons_m[name])
             + (rng.normal(0.0, config.beacon_prior_std_m, 3) if name in self._new_beacons else 0.0)
             for name in self._slot_names
         }
-        emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
-        scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
-        # Only the beacons move between episodes: the room's geometry is built once.
-        world = _RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
-        path = self._sampled_path(path_parameters)
+        world = self._ranging_world(beacons_m)
+        path = samples if samples is not None else self._paper_path_samples
         with self._timed("sensing"):
-            key = (path_parameters, tuple(beacons_m.items()))
-            if self._route_geometry is None or self._route_geometry[0] != key:
-                # Kept for the next episode: with the Table I layout and the paper path
-                # only the noise changes.
-                geometry = self.ranger.route_geometry(world, path, tuple(beacons_m))
-                self._route_geometry = (key, geometry)
+            geometry = self._route_geometry.get(
+                (path_parameters, tuple(beacons_m.items())),
+                lambda: self.ranger.route_geometry(world, path, tuple(beacons_m)),
+            )
             ranges, durations_s = range_along_route(
-                self.ranger, world, path, tuple(beacons_m), rng, self._route_geometry[1]
+                self.ranger, world, path, tuple(beacons_m), rng, geometry
             )
         self._episode = _Episode(
             world=world,
-            scenario=scenario,
+            scenario=world.scenario,
             beacons_m=beacons_m,
             prior_m=prior_m,
             path_parameters=path_parameters,
@@ -499,48 +471,16 @@ class BlockExpansionEnv(SonarEnv):
         )
         return self._info(position_error_m=0.0)
 
-    def _sampled_path(self, parameters: PathParameters) -> FloatArray:
-        """The path's samples; the paper path's are computed once per env (read-only)."""
-        if parameters != self._paper_path:
-            return parameters.sample()
-        if parameters not in self._paper_path_samples:
-            samples = parameters.sample()
-            samples.flags.writeable = False
-            self._paper_path_samples[parameters] = samples
-        return self._paper_path_samples[parameters]
+    def _ranging_world(self, beacons_m: dict[str, tuple[float, float, float]]) -> RangingWorld:
+        """The room with the episode's beacons, kept while they stay the same (Table I); only
+        the beacons move between episodes, so the room's geometry is built once."""
 
-    def _draw_layout_and_path(
-        self, rng: np.random.Generator
-    ) -> tuple[dict[str, tuple[float, float, float]], PathParameters]:
-        """Beacons and path of an episode; random ones are redrawn until they are valid."""
-        config = self.config
-        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
-        paper_path = self._paper_path
-        if config.layout == "table_i" and config.path == "paper":
-            return table_i, paper_path
-        for _ in range(MAX_LAYOUT_TRIES):
-            beacons = (
-                table_i
-                if config.layout == "table_i"
-                else jittered_beacons(table_i, rng, LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M)
-            )
-            path = (
-                paper_path
-                if config.path == "paper"
-                else random_parabolic_route(
-                    rng, PAPER_PATH_X_END_M[config.n_areas], RANDOM_CURVATURE_PER_M
-                )
-            )
-            if route_suits_areas(
-                path.sample(),
-                beacons,
-                self._areas,
-                self._base_scenario.bounds,
-                self.sensor_height_m + MIN_BEACON_CLEARANCE_M,
-                BOUNDARY_END_MARGIN_M,
-            ):
-                return beacons, path
-        return table_i, paper_path
+        def make() -> RangingWorld:
+            emitters = tuple(Emitter(name, beacons_m[name]) for name in self._slot_names)
+            scenario = dataclasses.replace(self._base_scenario, emitters=emitters)
+            return RangingWorld(self._static_world.geometry, TEMPERATURE_C, scenario)
+
+        return self._world_of_beacons.get(tuple(beacons_m.items()), make)
 
     def _runner_config(
         self,
@@ -584,7 +524,7 @@ class BlockExpansionEnv(SonarEnv):
             errors = self._errors(result, episode.evaluated_until)
             return StepOutcome(reward, info=self._info(position_error_m=errors[1], errors=errors))
         episode.done = True
-        episode.status = _final_status(result)
+        episode.status = final_status(result)
         errors = self._errors(result, len(episode.path))
         reward -= self._loss(result, errors[1])
         return StepOutcome(
@@ -598,7 +538,8 @@ class BlockExpansionEnv(SonarEnv):
         if not np.any(before):
             capped = self.config.failure_penalty * self.config.sigma_scale_m
             return capped, capped
-        return path_errors(result.estimated_xy[before], episode.path)
+        true_path = self._true_path.get(episode.path_parameters, lambda: TruePath(episode.path))
+        return true_path.errors(result.estimated_xy[before])
 
     def _loss(self, result: BlockExpansionResult, sigma_prime_m: float) -> float:
         """The episode's loss (see Rewards), without the sensing cost."""
@@ -620,27 +561,20 @@ class BlockExpansionEnv(SonarEnv):
         layout = self.observation_layout
         observation = np.zeros(self.observation_space.shape, dtype=np.float64)
         calibrated = self._calibrated_positions(episode)
-        slots = np.zeros((MAX_BEACON_SLOTS, 4))
-        slots[:, 3] = UNUSED
+        slots: list[tuple[npt.ArrayLike, float]] = []
         for index, name in enumerate(self._slot_names):
             if index < 3:
-                position, status = np.asarray(episode.beacons_m[name]), SURVEYED
+                slots.append((episode.beacons_m[name], SURVEYED))
             elif name in calibrated:
-                position, status = calibrated[name], CALIBRATED
+                slots.append((calibrated[name], CALIBRATED))
             else:
-                position, status = episode.prior_m[name], PRIOR_ONLY
-            slots[index, :3] = to_map_frame(position)
-            slots[index, 3] = status
-        observation[layout["beacons"]] = slots.reshape(-1)
-        parameters = episode.path_parameters
-        start = (parameters.x_start_m, parameters.y_at(parameters.x_start_m), 0.0)
-        end = (parameters.x_end_m, parameters.y_at(parameters.x_end_m), 0.0)
-        observation[layout["path"]] = [
-            *to_map_frame(start)[:2],
-            *to_map_frame(end)[:2],
-            *to_map_frame((*parameters.vertex_m, 0.0))[:2],
-            np.clip(parameters.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0),
-        ]
+                slots.append((episode.prior_m[name], PRIOR_ONLY))
+        positions, statuses = zip(*slots, strict=True)
+        observation[layout["beacons"]] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
+        route = episode.path_parameters
+        observation[layout["path"]] = self._features_of_route.get(
+            route, lambda: route_features(route)
+        )
         decided = len(episode.chosen)
         if not episode.done:
             observation[layout["boundary"].start + decided] = 1.0
@@ -650,14 +584,7 @@ class BlockExpansionEnv(SonarEnv):
             observation[layout["progress"]] = episode.evaluated_until / last_index
         if episode.result is not None and decided > 0:
             last = episode.result.calibrations[decided - 1]
-            outcome = 1.0 if last.status == OK else -1.0
-            condition = last.calibration.condition if last.calibration is not None else math.inf
-            area = last.calibration.triangle_area_m2 if last.calibration is not None else 0.0
-            observation[layout["previous_calibration"]] = [
-                outcome,
-                min(math.log10(max(condition, 1.0)) / CONDITION_LOG_SCALE, 1.0),
-                min(area / TRIANGLE_AREA_SCALE_M2, 1.0),
-            ]
+            observation[layout["previous_calibration"]] = calibration_features(last)
         observation[layout["sensor"]] = [
             config.range_noise_std_m / NOISE_SCALE_M,
             config.timer_period_s / TIMER_SCALE_S,
@@ -668,11 +595,7 @@ class BlockExpansionEnv(SonarEnv):
         """New beacons calibrated in the boundaries decided so far."""
         if episode.result is None:
             return {}
-        positions: dict[str, FloatArray] = {}
-        for calibration in episode.result.calibrations[: len(episode.chosen)]:
-            if calibration.calibration is not None and calibration.calibration.position is not None:
-                positions[calibration.new_beacon] = np.asarray(calibration.calibration.position)
-        return positions
+        return calibrated_positions(episode.result.calibrations[: len(episode.chosen)])
 
     def _info(
         self, position_error_m: float, errors: tuple[float, float] | None = None
@@ -694,76 +617,34 @@ class BlockExpansionEnv(SonarEnv):
         result = episode.result
         if result is None:
             return info
-        decided = result.calibrations[: len(episode.chosen)]
-        info["calibration_errors_m"] = {
-            c.new_beacon: float(c.error_m) for c in decided if c.error_m is not None
-        }
-        info["calibration_statuses"] = {c.new_beacon: c.status for c in decided}
-        info["calibration_conditions"] = {
-            c.new_beacon: float(c.calibration.condition)
-            for c in decided
-            if c.calibration is not None and math.isfinite(c.calibration.condition)
-        }
+        info.update(calibration_summaries(result.calibrations[: len(episode.chosen)]))
         fixes = np.count_nonzero(result.estimated_indices < episode.evaluated_until)
         info["failed_fix_fraction"] = float(1.0 - fixes / max(episode.evaluated_until, 1))
         return info
 
     # --- rendering ----------------------------------------------------------------------------
     def _render_frame(self) -> np.ndarray:
-        from sonar_gym.render import render_topdown
-
         episode = self._require_episode()
         result = episode.result
         shown = max(episode.evaluated_until, 1)
-        index = shown - 1
-        path = episode.path
-        direction = path[min(index + 1, len(path) - 1)] - path[max(index - 1, 0)]
-        heading = math.atan2(direction[1], direction[0])
-        true_pose = Pose(float(episode.path[index, 0]), float(episode.path[index, 1]), heading)
-        estimated_pose = None
-        fixes = None
-        if result is not None:
-            kept = result.estimated_indices < shown
-            fixes = result.estimated_xy[kept]
-            if len(fixes):
-                estimated_pose = Pose(float(fixes[-1, 0]), float(fixes[-1, 1]), heading)
-        extra = [
-            f"d (mm): {[[round(d * 1000) for d in t] for t in episode.chosen]}",
-            f"status: {episode.status}",
-        ]
-        if result is not None:
-            calibrated = self._calibrated_positions(episode)
-            for name, position in calibrated.items():
-                error = float(np.linalg.norm(position - np.asarray(episode.beacons_m[name])))
-                extra.append(f"{name} calibrated, error {error * 1000:.0f} mm")
-        return render_topdown(
+        fixes = None if result is None else result.estimated_xy[result.estimated_indices < shown]
+        errors_m = {
+            name: float(np.linalg.norm(position - np.asarray(episode.beacons_m[name])))
+            for name, position in self._calibrated_positions(episode).items()
+        }
+        title = f"BlockExpansion  {self.config.n_areas} areas"
+        return render_drive(
             episode.scenario,
-            true_pose=true_pose,
-            estimated_pose=estimated_pose,
-            scan_points=fixes,
-            title=f"BlockExpansion  {self.config.n_areas} areas",
-            extra=extra,
+            episode.path,
+            shown,
+            fixes,
+            episode.chosen,
+            episode.status,
+            errors_m,
+            title,
         )
 
     def _require_episode(self) -> _Episode:
         if self._episode is None:
             raise RuntimeError("BlockExpansionEnv: call reset() first")
         return self._episode
-
-
-# --- helpers -----------------------------------------------------------------------------------
-
-
-def _unit_fraction(numerator: float, denominator: float) -> float:
-    """``numerator / denominator`` clipped to [0, 1]; 0 for an empty interval."""
-    if denominator <= 0.0:
-        return 0.0
-    return float(np.clip(numerator / denominator, 0.0, 1.0))
-
-
-def _final_status(result: BlockExpansionResult) -> str:
-    """``"ok"``, the first failed boundary's status, or ``"localization_failed"``."""
-    for calibration in result.calibrations:
-        if calibration.status != OK:
-            return calibration.status
-    return OK if result.ok else STATUS_LOCALIZATION_FAILED

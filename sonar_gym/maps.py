@@ -142,6 +142,21 @@ def to_map_frame(position: npt.ArrayLike) -> FloatArray:
     return np.clip(scaled, -1.0, 1.0)
 
 
+def beacon_slot_features(
+    positions_m: Sequence[npt.ArrayLike], statuses: Sequence[float], max_slots: int
+) -> FloatArray:
+    """``(4 max_slots,)`` the beacon map as features: per slot x, y, z in the map frame
+    (:func:`to_map_frame`) and what the robot knows of the beacon (:data:`SURVEYED`, ...);
+    the slots after the given beacons are zeros with status :data:`UNUSED`."""
+    slots = np.zeros((max_slots, 4))
+    slots[:, 3] = UNUSED
+    count = len(positions_m)
+    if count:
+        slots[:count, :3] = to_map_frame(np.array(positions_m, dtype=np.float64))
+        slots[:count, 3] = statuses
+    return slots.reshape(-1)
+
+
 def from_map_frame(scaled: npt.ArrayLike) -> FloatArray:
     """The {W} position (metres) of a map-frame value (the inverse of :func:`to_map_frame`
     inside the frame)."""

@@ -17,7 +17,13 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.localization.roh import parabolic_path
-from sonar_gym.maps import inside_triangle, side_of_line, triangle_area
+from sonar_gym.maps import (
+    inside_triangle,
+    jittered_beacons,
+    side_of_line,
+    to_map_frame,
+    triangle_area,
+)
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar.pulse_echo import WorldLike
 from sonar_gym.sonar.ranging import BeaconRanger, RouteGeometry
@@ -54,6 +60,21 @@ class ParabolicRoute:
     def y_at(self, x_m: float) -> float:
         """y of the parabola at ``x_m``, metres."""
         return self.vertex_m[1] + self.curvature_per_m * (x_m - self.vertex_m[0]) ** 2
+
+
+def route_features(route: ParabolicRoute) -> FloatArray:
+    """``(7,)`` a route as features: x, y of its start, end and vertex in the beacon map's
+    frame (:func:`~sonar_gym.maps.to_map_frame`), then its curvature over
+    :data:`CURVATURE_SCALE_PER_M` clipped to [-1, 1]."""
+    points = np.array(
+        [
+            (route.x_start_m, route.y_at(route.x_start_m), 0.0),
+            (route.x_end_m, route.y_at(route.x_end_m), 0.0),
+            (*route.vertex_m, 0.0),
+        ]
+    )
+    curvature = np.clip(route.curvature_per_m / CURVATURE_SCALE_PER_M, -1.0, 1.0)
+    return np.append(to_map_frame(points)[:, :2].reshape(-1), curvature)
 
 
 PAPER_ROUTE = ParabolicRoute(2.75, 0.55, (1.6, 1.45), -0.9)
@@ -181,3 +202,44 @@ def range_along_route(
     route = ranger.measure_geometry(geometry, world.temperature_c, rng)
     ranges = route.distances[:, 0, :]
     return np.where(ranges >= 0.0, ranges, np.nan), route.round_durations_s
+
+
+def draw_beacons_and_route(
+    rng: np.random.Generator,
+    beacons_m: dict[str, tuple[float, float, float]],
+    route: ParabolicRoute,
+    areas: Sequence[Sequence[str]],
+    bounds: tuple[tuple[float, float], tuple[float, float]],
+    *,
+    jitter_m: tuple[float, float] | None,
+    route_x_end_m: float | None,
+    curvature_range_per_m: tuple[float, float],
+    min_beacon_height_m: float,
+    end_margin_m: float,
+    max_tries: int,
+) -> tuple[dict[str, tuple[float, float, float]], ParabolicRoute, FloatArray | None]:
+    """An episode's beacons and route, redrawn until the route suits the areas.
+
+    Each try moves ``beacons_m`` with :func:`~sonar_gym.maps.jittered_beacons` by
+    ``jitter_m = (xy, z)`` metres (None keeps them) and then draws a
+    :func:`random_parabolic_route` ending near ``route_x_end_m`` (None keeps ``route``), and
+    keeps them if :func:`route_suits_areas`. With neither drawn, or after ``max_tries``
+    failed tries, ``beacons_m`` and ``route`` themselves are returned.
+
+    Returns:
+        ``(beacons, route, samples)``: ``samples`` is the drawn route's ``sample()``, or None
+        when the given route is returned.
+    """
+    if jitter_m is None and route_x_end_m is None:
+        return beacons_m, route, None
+    for _ in range(max_tries):
+        beacons = beacons_m if jitter_m is None else jittered_beacons(beacons_m, rng, *jitter_m)
+        drawn = (
+            route
+            if route_x_end_m is None
+            else random_parabolic_route(rng, route_x_end_m, curvature_range_per_m)
+        )
+        samples = drawn.sample()
+        if route_suits_areas(samples, beacons, areas, bounds, min_beacon_height_m, end_margin_m):
+            return beacons, drawn, samples
+    return beacons_m, route, None

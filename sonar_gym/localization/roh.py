@@ -1,14 +1,15 @@
 """Roh et al., *Development of new block expansion algorithm for indoor mobile robot localization*.
 
-The public face of the method, split over two modules with one job each:
+The public face of the method, split over three modules with one job each:
 
 * :mod:`sonar_gym.localization.roh_trilateration`: trilateration from three beacons
   (Sec. III.A, with the reading of its "three lines of intersection" explained there) and
   auto-calibration of a new beacon from three robot positions (Sec. III.B).
 * :mod:`sonar_gym.localization.roh_block_expansion`: three-point extraction at distances
   d1, d2, d3 from an area boundary (Sec. III.C), the block expansion runner over two and
-  three triangular areas (Sec. II, Fig. 3), the path errors sigma and sigma' (Sec. IV.B),
-  and the paper's Tables I-V.
+  three triangular areas (Sec. II, Fig. 3) and the paper's Tables I-V.
+* :mod:`sonar_gym.localization.roh_path_errors`: the path errors sigma and sigma'
+  (Sec. IV.B) and the distance from a localized point to the true path (Figs. 5, 7, 8).
 
 Units are metres; Table I and the d's of Tables II-V are printed in millimetres and converted
 at the edge (``TABLE_I_BEACONS_M``, ``BlockExpansionConfig.paper``).
@@ -35,11 +36,10 @@ from sonar_gym.localization.roh_block_expansion import (
     ThreePointExtractor,
     ThreePoints,
     distance_to_segment,
-    distances_to_polyline,
     extract_three_points,
     parabolic_path,
-    path_errors,
 )
+from sonar_gym.localization.roh_path_errors import TruePath, distances_to_polyline, path_errors
 from sonar_gym.localization.roh_trilateration import (
     DEFAULT_SENSOR_HEIGHT_M,
     TRILATERATION_METHODS,
@@ -81,6 +81,7 @@ __all__ = [
     "ThreePointExtractor",
     "ThreePoints",
     "TrilaterationResult",
+    "TruePath",
     "auto_calibrate",
     "circle_intersections",
     "distance_to_segment",

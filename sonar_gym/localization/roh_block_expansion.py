@@ -1,4 +1,4 @@
-"""Block expansion of Roh et al.: three-point extraction, the area-to-area runner, path errors.
+"""Block expansion of Roh et al.: three-point extraction and the area-to-area runner.
 
 The robot starts in a triangular area whose three beacons it knows (Table I, beacons A-C)
 and localizes by trilateration (Sec. III.A). Approaching the boundary to the next area, it
@@ -38,6 +38,14 @@ import numpy.typing as npt
 from scipy.optimize import brentq
 
 from sonar_gym.localization.result import OK
+from sonar_gym.localization.roh_path_errors import (
+    distances_to_polyline,
+    path_errors,
+    points_array,
+)
+from sonar_gym.localization.roh_path_errors import (
+    distances_to_polyline_reference as distances_to_polyline_reference,
+)
 from sonar_gym.localization.roh_trilateration import (
     DEFAULT_MAX_CALIBRATION_CONDITION,
     DEFAULT_SENSOR_HEIGHT_M,
@@ -123,18 +131,6 @@ STATUS_LOCALIZATION_FAILED = "localization_failed"
 # ---------------------------------------------------------------------------------------------
 
 
-def _points_array(points: npt.ArrayLike, name: str, min_count: int = 1) -> FloatArray:
-    array = np.asarray(points, dtype=np.float64)
-    if array.ndim != 2 or array.shape[1] != 2 or array.shape[0] < min_count:
-        raise ValueError(
-            f"{name} must have shape (n, 2) of (x, y) in metres with n >= {min_count}, "
-            f"got {array.shape}"
-        )
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be finite")
-    return array
-
-
 def _planar_point(point: npt.ArrayLike, name: str) -> FloatArray:
     array = np.asarray(point, dtype=np.float64).reshape(-1)
     if array.shape not in ((2,), (3,)) or not np.all(np.isfinite(array)):
@@ -164,194 +160,6 @@ def distance_to_segment(
     t = np.clip(((p - a) @ direction) / length_sq, 0.0, 1.0)
     foot = a + t[..., None] * direction
     return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
-
-
-POLYLINE_BLOCK_SEGMENTS = 8
-"""Consecutive polyline segments bounded together by one circle in :func:`distances_to_polyline`."""
-
-
-def distances_to_polyline(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
-    """Distance (metres) from each point to the nearest segment of a polyline.
-
-    This is the per-point "path error" of Figs. 5, 7 and 8. The segments are taken in blocks
-    of :data:`POLYLINE_BLOCK_SEGMENTS`, each bounded by a circle. For each point the block
-    whose circle comes nearest is searched first; its distance bounds the answer, so only the
-    blocks whose circles come within that distance are searched too. The result is the exact
-    minimum over all segments (as :func:`distances_to_polyline_reference`, which searches
-    every segment).
-
-    Args:
-        points: ``(m, 2)`` points, metres.
-        polyline: ``(n, 2)`` vertices in order, n >= 2, metres.
-
-    Returns:
-        ``(m,)`` distances.
-    """
-    p = _points_array(points, "points")
-    line = _points_array(polyline, "polyline", min_count=2)
-    n_segments = len(line) - 1
-    n_blocks = -(-n_segments // POLYLINE_BLOCK_SEGMENTS)
-    # Segment indices per block; the last block repeats its last segment (harmless for a min).
-    members = np.minimum(
-        np.arange(n_blocks * POLYLINE_BLOCK_SEGMENTS).reshape(n_blocks, -1), n_segments - 1
-    )
-    block_vertices = np.concatenate([line[members], line[members[:, -1:] + 1]], axis=1)
-    centres = 0.5 * (block_vertices.min(axis=1) + block_vertices.max(axis=1))
-    radii = np.sqrt(((block_vertices - centres[:, None, :]) ** 2).sum(axis=2)).max(axis=1)
-    dx, dy = p[:, 0, None] - centres[:, 0], p[:, 1, None] - centres[:, 1]
-    lower = np.sqrt(dx * dx + dy * dy) - radii
-    blocks = _PolylineBlocks(line, members)
-    rows = np.arange(len(p))
-    upper = np.sqrt(blocks.nearest_sq(p, rows, np.argmin(lower, axis=1)))
-    # The slack absorbs the rounding of the bounds (far below any distance that matters).
-    point_index, block_index = np.nonzero(lower <= (upper + 1e-9 * (1.0 + upper))[:, None])
-    nearest_sq = blocks.nearest_sq(p, point_index, block_index)
-    # np.nonzero lists the pairs point by point, and every point has its first block.
-    first_pair = np.flatnonzero(np.diff(point_index, prepend=-1))
-    return np.sqrt(np.minimum.reduceat(nearest_sq, first_pair))
-
-
-class _PolylineBlocks:
-    """The segments of a polyline in blocks, as component arrays ``(blocks, block size)``."""
-
-    def __init__(self, line: FloatArray, members: npt.NDArray[np.intp]) -> None:
-        starts = line[members]
-        direction = line[members + 1] - starts
-        self.sx, self.sy = starts[..., 0], starts[..., 1]
-        self.dx, self.dy = direction[..., 0], direction[..., 1]
-        length_sq = self.dx * self.dx + self.dy * self.dy
-        self.degenerate = length_sq == 0.0
-        self.safe_length_sq = np.where(self.degenerate, 1.0, length_sq)
-
-    def nearest_sq(
-        self, p: FloatArray, point_index: npt.NDArray[np.intp], block_index: npt.NDArray[np.intp]
-    ) -> FloatArray:
-        """Per (point, block) pair, the squared distance to the block's nearest segment."""
-        dx, dy = self.dx[block_index], self.dy[block_index]
-        rx = p[point_index, 0, None] - self.sx[block_index]
-        ry = p[point_index, 1, None] - self.sy[block_index]
-        t = np.clip((rx * dx + ry * dy) / self.safe_length_sq[block_index], 0.0, 1.0)
-        t[self.degenerate[block_index]] = 0.0
-        gx, gy = rx - t * dx, ry - t * dy
-        return np.asarray((gx * gx + gy * gy).min(axis=1))
-
-
-def distances_to_polyline_reference(points: npt.ArrayLike, polyline: npt.ArrayLike) -> FloatArray:
-    """:func:`distances_to_polyline` by searching every segment for every point (the
-    reference the fast search is tested against), metres."""
-    p = _points_array(points, "points")
-    line = _points_array(polyline, "polyline", min_count=2)
-    starts, ends = line[:-1], line[1:]
-    direction = ends - starts
-    length_sq = np.einsum("ij,ij->i", direction, direction)
-    safe_length_sq = np.where(length_sq > 0.0, length_sq, 1.0)
-    result = np.empty(len(p))
-    block = 512
-    for first in range(0, len(p), block):
-        chunk = p[first : first + block]
-        relative = chunk[:, None, :] - starts[None, :, :]
-        t = np.clip(np.einsum("mnk,nk->mn", relative, direction) / safe_length_sq, 0.0, 1.0)
-        t = np.where(length_sq > 0.0, t, 0.0)
-        gap = relative - t[..., None] * direction[None, :, :]
-        result[first : first + block] = np.sqrt(np.min(np.einsum("mnk,mnk->mn", gap, gap), axis=1))
-    return result
-
-
-def _y_on_path(x: FloatArray, true_path: FloatArray) -> FloatArray:
-    """``f(x)`` of a path ``y = f(x)`` given as a polyline with strictly monotonic x.
-
-    Linear interpolation between vertices; beyond the ends, linear extrapolation of the end
-    segments.
-    """
-    order = np.argsort(true_path[:, 0])
-    xs, ys = true_path[order, 0], true_path[order, 1]
-    inside = np.interp(x, xs, ys)
-    low_slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
-    high_slope = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
-    below = ys[0] + low_slope * (x - xs[0])
-    above = ys[-1] + high_slope * (x - xs[-1])
-    return np.where(x < xs[0], below, np.where(x > xs[-1], above, inside))
-
-
-def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, float]:
-    """The path errors ``(sigma, sigma_prime)`` of Sec. IV.B, metres.
-
-    * ``sigma``: the RMS "difference between the y-coordinate of a localized path and that
-      of an actual path". The actual path is a curve ``y = f(x)``; for each localized point
-      ``(x_e, y_e)`` the difference is ``y_e - f(x_e)``, with ``f`` the true polyline
-      interpolated linearly at the same x (extrapolated linearly beyond its ends). It is not
-      the difference between points of equal time index. It grows where the path is steep:
-      a normal offset ``e`` shows as ``e * sqrt(1 + f'(x)^2)`` in y.
-    * ``sigma_prime``: "an average distance from every single data point in a localized path
-      to an actual path": the mean over localized points of the Euclidean distance to the
-      true polyline (nearest point on any of its segments).
-
-    Args:
-        estimated: ``(m, 2)`` localized points, metres (only successful fixes; no NaN).
-        true: ``(n, 2)`` vertices of the true path, n >= 2, whose x is strictly monotonic
-            (increasing or decreasing) so that it is a function ``y = f(x)``.
-
-    Returns:
-        ``(sigma, sigma_prime)`` in metres.
-
-    Raises:
-        ValueError: on wrong shapes, non-finite values, or a true path whose x is not
-            strictly monotonic.
-    """
-    points = _points_array(estimated, "estimated")
-    true_path = _points_array(true, "true", min_count=2)
-    steps = np.diff(true_path[:, 0])
-    if not (np.all(steps > 0.0) or np.all(steps < 0.0)):
-        raise ValueError("true must be a path y = f(x): its x must be strictly monotonic")
-    y_difference = points[:, 1] - _y_on_path(points[:, 0], true_path)
-    sigma = float(np.sqrt(np.mean(y_difference**2)))
-    sigma_prime = float(np.mean(_distances_to_function_path(points, true_path, y_difference)))
-    return sigma, sigma_prime
-
-
-MAX_WINDOW_SEGMENTS = 8
-"""Most segments :func:`_distances_to_function_path` searches per point as one window."""
-
-
-def _distances_to_function_path(
-    points: FloatArray, true_path: FloatArray, y_difference: FloatArray
-) -> FloatArray:
-    """:func:`distances_to_polyline` for a path ``y = f(x)`` (x strictly monotonic), metres.
-
-    The vertical gap ``|y - f(x)|`` (inside the path's x range), or the distance to the
-    nearer end vertex, bounds each point's distance ``u``; the nearest point of the path then
-    lies within ``x +- u``, so only the segments overlapping that x window can hold it. Points
-    whose window spans more than :data:`MAX_WINDOW_SEGMENTS` segments take the general search.
-    The per-segment arithmetic is :func:`distances_to_polyline`'s, so the results agree.
-    """
-    line = true_path
-    increasing = bool(line[0, 0] < line[-1, 0])
-    xs = line[:, 0] if increasing else line[::-1, 0]
-    to_ends = np.minimum(
-        np.hypot(points[:, 0] - line[0, 0], points[:, 1] - line[0, 1]),
-        np.hypot(points[:, 0] - line[-1, 0], points[:, 1] - line[-1, 1]),
-    )
-    within = (points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])
-    bound = np.where(within, np.minimum(np.abs(y_difference), to_ends), to_ends)
-    bound = bound * (1.0 + 1e-9) + 1e-12  # rounding slack
-    n_segments = len(line) - 1
-    # Segment k spans [xs[k], xs[k + 1]]; those meeting [x - bound, x + bound]:
-    first = np.clip(np.searchsorted(xs, points[:, 0] - bound, side="right") - 1, 0, n_segments - 1)
-    last = np.clip(np.searchsorted(xs, points[:, 0] + bound, side="left"), 1, n_segments) - 1
-    if not increasing:  # segment k of the reversed vertices is segment n - 1 - k of the path
-        first, last = n_segments - 1 - last, n_segments - 1 - first
-    count = last - first + 1
-    result = np.empty(len(points))
-    narrow = count <= MAX_WINDOW_SEGMENTS
-    if np.any(~narrow):
-        result[~narrow] = distances_to_polyline(points[~narrow], line)
-    if np.any(narrow):
-        width = int(count[narrow].max())
-        members = np.minimum(first[narrow, None] + np.arange(width), last[narrow, None])
-        blocks = _PolylineBlocks(line, members)
-        rows = np.arange(int(np.count_nonzero(narrow)))
-        result[narrow] = np.sqrt(blocks.nearest_sq(points[narrow], rows, rows))
-    return result
 
 
 MAX_PATH_SAMPLES = 1_000_000
@@ -541,7 +349,7 @@ class ThreePointExtractor:
             How many positions were used: all ``m``, or up to and including the one at which
             the third point was saved.
         """
-        points = _points_array(positions, "positions", min_count=0)
+        points = points_array(positions, "positions", min_count=0)
         index_array = np.asarray(indices, dtype=np.int64).reshape(-1)
         if index_array.shape != (len(points),):
             raise ValueError(
@@ -655,7 +463,7 @@ def extract_three_points(
         ValueError: on wrong shapes, non-finite values, a degenerate boundary or negative
             distances.
     """
-    positions = _points_array(path, "path")
+    positions = points_array(path, "path")
     extractor = ThreePointExtractor(boundary_a, boundary_b, distances)
     for index, position in enumerate(positions):
         extractor.update(position, index)
@@ -1018,7 +826,7 @@ class BlockExpansion:
         position; the runner adds Gaussian noise of ``range_noise_std_m`` drawn from ``rng``
         (one draw per point and beacon, row by row). Negative or infinite values become NaN.
         """
-        positions = _points_array(path, "path")
+        positions = points_array(path, "path")
         noise = self.config.range_noise_std_m
         if noise > 0.0 and not isinstance(rng, np.random.Generator):
             raise ValueError("rng must be a numpy.random.Generator when range_noise_std_m > 0")
@@ -1058,7 +866,7 @@ class BlockExpansion:
             ValueError: on wrong shapes, a missing ``rng`` when noise is configured, or both
                 ``measure`` and ``distance_table``.
         """
-        positions = _points_array(path, "path")
+        positions = points_array(path, "path")
         config = self.config
         names = config.beacon_names
         if distance_table is not None:
@@ -1080,7 +888,7 @@ class BlockExpansion:
         boundary_count = len(config.areas) - 1
         n_points = len(positions)
         progress: list[_BoundaryProgress] = []
-        statuses = np.full(n_points, OK, dtype=object)
+        statuses = [OK] * n_points
         fixes_xy = np.full((n_points, 2), np.nan)
         used_radical_centre = np.zeros(n_points, dtype=bool)
         area_indices = np.empty(n_points, dtype=np.int64)

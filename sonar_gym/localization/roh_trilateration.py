@@ -31,6 +31,7 @@ point beacons carry no heading, so a result has ``has_heading=False`` and its po
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -354,6 +355,13 @@ def _finite_float(value: float, name: str) -> float:
     return number
 
 
+@functools.lru_cache(maxsize=64)
+def _centres_are_collinear(centres: bytes, tolerance: float) -> bool:
+    """:func:`_are_collinear` of 2D centres given as the bytes of a float64 ``(k, 2)`` array,
+    kept per beacon set (a path's range table is trilaterated with the same beacons)."""
+    return _are_collinear(np.frombuffer(centres).reshape(-1, 2), tolerance)
+
+
 def _are_collinear(points: FloatArray, tolerance: float) -> bool:
     """Whether 2D points lie on one line: spread across the best-fit line vs along it."""
     centred = points - points.mean(axis=0)
@@ -626,7 +634,7 @@ def trilaterate_path(
             f"distances must have shape (n, {len(beacon_array)}) (rows x beacons), "
             f"got {table.shape}"
         )
-    if np.any(table[np.isfinite(table)] < 0.0):
+    if np.any(table < 0.0) and np.any(table[np.isfinite(table)] < 0.0):
         raise ValueError("distances must be non-negative metres (NaN marks a missing range)")
     height = _finite_float(sensor_height, "sensor_height")
     if method not in TRILATERATION_METHODS:
@@ -637,7 +645,7 @@ def trilaterate_path(
         raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
     n_rows = len(table)
     positions = np.full((n_rows, 2), np.nan)
-    statuses = np.full(n_rows, OK, dtype=object)
+    statuses = [OK] * n_rows
     fallback = np.zeros(n_rows, dtype=bool)
     options = {
         "height_tolerance_m": height_tolerance_m,
@@ -645,37 +653,46 @@ def trilaterate_path(
     }
     if method != "paper" or len(beacon_array) != 3:
         one_by_one = np.arange(n_rows)
+        ok: npt.NDArray[np.bool_] = np.ones(n_rows, dtype=bool)
     else:
-        valid = np.isfinite(table).all(axis=1)
-        statuses[~valid] = STATUS_TOO_FEW_BEACONS
+        valid = np.asarray(np.isfinite(table).all(axis=1))
         vertical = beacon_array[:, 2] - height
         with np.errstate(invalid="ignore"):
             short = (table < np.abs(vertical) - height_tolerance_m).any(axis=1) & valid
-        statuses[short] = STATUS_DISTANCE_BELOW_HEIGHT
-        usable = valid & ~short
+        usable: npt.NDArray[np.bool_] = valid & ~short
+        for row in np.flatnonzero(~usable).tolist():
+            statuses[row] = STATUS_DISTANCE_BELOW_HEIGHT if valid[row] else STATUS_TOO_FEW_BEACONS
         centres = beacon_array[:, :2]
-        if _are_collinear(centres, collinearity_tolerance):
-            statuses[usable] = STATUS_COLLINEAR_BEACONS
+        rows = np.flatnonzero(usable)
+        if _centres_are_collinear(centres.tobytes(), collinearity_tolerance):
+            for row in rows.tolist():
+                statuses[row] = STATUS_COLLINEAR_BEACONS
             return PathFixes(tuple(statuses), positions, fallback)
         radii = np.sqrt(np.maximum(table[usable] ** 2 - vertical**2, 0.0))
         centroid, met = _paper_centroids(centres, radii)
-        rows = np.flatnonzero(usable)
-        positions[rows[met]] = centroid[met]
-        centre = _radical_centres(centres, radii[~met]) if not met.all() else None
-        if centre is None:
-            one_by_one = rows[~met]
-        else:
-            positions[rows[~met]] = centre
-            fallback[rows[~met]] = True
+        ok = usable
+        if met.all():
+            positions[rows] = centroid
             one_by_one = rows[:0]
-    for row in one_by_one:
+        else:
+            positions[rows[met]] = centroid[met]
+            centre = _radical_centres(centres, radii[~met])
+            if centre is None:
+                one_by_one = rows[~met]
+            else:
+                positions[rows[~met]] = centre
+                fallback[rows[~met]] = True
+                one_by_one = rows[:0]
+    for row in one_by_one.tolist():
         fix = trilaterate(beacon_array, table[row], height, method, **options)  # type: ignore[arg-type]
         statuses[row] = fix.status
+        ok[row] = fix.status == OK
         fallback[row] = fix.used_radical_centre
         if fix.position is not None:
             positions[row] = fix.position
-    bad = (statuses == OK) & ~np.isfinite(positions).all(axis=1)
-    statuses[bad] = STATUS_NUMERICAL_FAILURE
+    bad = np.flatnonzero(ok & ~np.isfinite(positions).all(axis=1))
+    for row in bad.tolist():
+        statuses[row] = STATUS_NUMERICAL_FAILURE
     positions[bad] = np.nan
     return PathFixes(tuple(statuses), positions, fallback)
 
@@ -698,41 +715,45 @@ def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | Non
     return np.asarray(solution.T)
 
 
+_CENTROID_PAIRS = ((0, 1), (1, 2), (0, 2))
+"""The circle pairs of :func:`paper_centroid`, in its order."""
+
+
 def _paper_centroids(
     centres: FloatArray, radii: FloatArray
 ) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
     """:func:`paper_centroid` over rows of radii ``(m, 3)`` for one set of three centres.
 
+    The three circle pairs are computed side by side (arrays ``(m, 3)``, one column per
+    pair), each element with the arithmetic of :func:`circle_intersections`.
+
     Returns ``(centroids (m, 2), met (m,))``; ``met`` is False where some pair of circles does
     not intersect (those rows need the radical-centre fallback; their centroid is garbage).
     """
-    kept = np.empty((len(radii), 3, 2))
-    met = np.ones(len(radii), dtype=bool)
-    for slot, (i, j) in enumerate(((0, 1), (1, 2), (0, 2))):
-        k = 3 - i - j
-        ca, cb = centres[i], centres[j]
-        offset = cb - ca
-        separation = math.hypot(offset[0], offset[1])
-        if separation == 0.0:
-            met[:] = False
-            continue
-        ra, rb = radii[:, i], radii[:, j]
-        ra_sq, rb_sq = ra * ra, rb * rb
-        along = (ra_sq - rb_sq + separation**2) / (2.0 * separation)
-        half_chord_sq = ra_sq - along * along
-        tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(
-            np.maximum(ra_sq, rb_sq), separation**2
-        )
-        met &= half_chord_sq >= -tolerance
-        unit = offset / separation
-        foot = ca + along[:, None] * unit
-        half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
-        normal = np.array([-unit[1], unit[0]])
-        first = foot + half_chord[:, None] * normal
-        second = foot - half_chord[:, None] * normal
-        miss_first = np.abs(np.hypot(*(first - centres[k]).T) - radii[:, k])
-        miss_second = np.abs(np.hypot(*(second - centres[k]).T) - radii[:, k])
-        kept[:, slot] = np.where((miss_second < miss_first)[:, None], second, first)
+    first_of, second_of = [i for i, _ in _CENTROID_PAIRS], [j for _, j in _CENTROID_PAIRS]
+    third_of = [3 - i - j for i, j in _CENTROID_PAIRS]
+    ca, cb, ck = centres[first_of], centres[second_of], centres[third_of]
+    offset = cb - ca
+    separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
+    if 0.0 in separations:
+        return np.zeros((len(radii), 2)), np.zeros(len(radii), dtype=bool)
+    separation = np.array(separations)
+    separation_sq = np.array([value**2 for value in separations])
+    ra, rb, rk = radii[:, first_of], radii[:, second_of], radii[:, third_of]
+    ra_sq, rb_sq = ra * ra, rb * rb
+    along = (ra_sq - rb_sq + separation_sq) / (2.0 * separation)
+    half_chord_sq = ra_sq - along * along
+    tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(np.maximum(ra_sq, rb_sq), separation_sq)
+    met = (half_chord_sq >= -tolerance).all(axis=1)
+    unit = offset / separation[:, None]
+    normal = np.column_stack([-unit[:, 1], unit[:, 0]])
+    foot = ca + along[..., None] * unit
+    half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
+    along_chord = half_chord[..., None] * normal
+    first, second = foot + along_chord, foot - along_chord
+    miss_first = np.abs(np.hypot(first[..., 0] - ck[:, 0], first[..., 1] - ck[:, 1]) - rk)
+    miss_second = np.abs(np.hypot(second[..., 0] - ck[:, 0], second[..., 1] - ck[:, 1]) - rk)
+    kept = np.where((miss_second < miss_first)[..., None], second, first)
     return np.mean(kept, axis=1), met
 
 

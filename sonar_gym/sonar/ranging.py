@@ -35,6 +35,7 @@ import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -45,10 +46,26 @@ from sonar_gym.sonar.acoustics import REFERENCE_TEMPERATURE_C, speed_of_sound_mp
 from sonar_gym.sonar.echoes import PATH_END_TOLERANCE
 from sonar_gym.sonar.pulse_echo import WorldLike
 
+if TYPE_CHECKING:
+    from sonar_gym.geometry import StaticGeometry
+    from sonar_gym.scenario import Scenario
+
 WU_TSAI_TIMER_PERIOD_S = 1.0 / 50e3
 """Wu & Tsai sec. 4: "the counting rate of the 8051 chip is 50 kHz"."""
 WU_TSAI_RECEIVERS_XY = ((0.0, 0.2), (0.0, -0.2))
 """Wu & Tsai sec. 4: receivers at [0, 20, 0] and [0, -20, 0] cm in the robot frame."""
+
+
+@dataclass(frozen=True)
+class RangingWorld:
+    """The least world a :class:`BeaconRanger` reads (a
+    :class:`~sonar_gym.sonar.pulse_echo.WorldLike`): a room's static geometry, which can be
+    shared while only the beacons (the scenario's emitters) change, and the air temperature
+    (deg C)."""
+
+    geometry: StaticGeometry
+    temperature_c: float
+    scenario: Scenario
 
 
 @dataclass(frozen=True)
