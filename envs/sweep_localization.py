@@ -321,12 +321,13 @@ class SweepLocalizationEnv(SonarEnv):
             start += size
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(start,), dtype=np.float32)
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
+        # One world for every episode: ``World.reset_episode`` keeps its static geometry.
+        self._world = World(self._scenario, temperature_c=config.temperature_c)
         if config.route == "table1":
-            world = World(self._scenario, temperature_c=config.temperature_c)
             blocked = [
                 (float(x), float(y))
                 for x, y in TABLE_1_TRUE_POSITIONS_M
-                if not world.is_free((x, y))
+                if not self._world.is_free((x, y))
             ]
             if blocked:
                 raise ValueError(
@@ -354,7 +355,8 @@ class SweepLocalizationEnv(SonarEnv):
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        world = World(self._scenario, temperature_c=config.temperature_c)
+        world = self._world
+        world.reset_episode(config.temperature_c)
         route = (
             self._table1_route
             if config.route == "table1"

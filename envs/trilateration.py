@@ -363,6 +363,8 @@ class TrilaterationEnv(SonarEnv):
         (x0, y0), (x1, y1) = self.scenario.bounds
         self._centre = np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
         self._half_size = np.array([(x1 - x0) / 2.0, (y1 - y0) / 2.0])
+        # One world for every episode: ``World.reset_episode`` keeps its static geometry.
+        self._world = World(self.scenario, temperature_c=config.temperature_c)
         self._check_route_fits()
         self.action_space = gym.spaces.Discrete(len(config.fix_counts))
         self.observation_layout = {
@@ -416,8 +418,7 @@ class TrilaterationEnv(SonarEnv):
 
     # --- episode -----------------------------------------------------------------------
     def _check_route_fits(self) -> None:
-        world = World(self.scenario, temperature_c=self.config.temperature_c)
-        margin = world.robot_radius + self.config.wall_clearance_m
+        margin = self._world.robot_radius + self.config.wall_clearance_m
         if self.scenario.room is not None:
             (x0, y0), (x1, y1) = self.scenario.room.min, self.scenario.room.max
         else:
@@ -432,7 +433,8 @@ class TrilaterationEnv(SonarEnv):
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        world = World(self.scenario, temperature_c=config.temperature_c)
+        world = self._world
+        world.reset_episode(config.temperature_c)
         scale_left, scale_right = np.clip(
             rng.normal(0.0, config.wheel_scale_error_std, 2), -0.05, 0.05
         )
