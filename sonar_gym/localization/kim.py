@@ -427,16 +427,21 @@ def _vote_positions(
     ``(reading, anchor)`` ``pairs`` of :func:`_candidate_pairs` are tried.
     """
     pair_j, pair_k = pairs
-    free = table[direction_index[:, pair_j], pair_k[None, :]] > readings.range_m[pair_j][None, :]
+    n_anchors = table.shape[1]
+    # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
+    flat = direction_index[:, pair_j] * n_anchors + pair_k[None, :]
+    free = table.ravel().take(flat) > readings.range_m.take(pair_j)[None, :]
     heading_i, pair_i = np.nonzero(free)  # (h, P)
-    reading_i, cell_i = pair_j[pair_i], pair_k[pair_i]
+    reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
     cos_h, sin_h = np.cos(headings), np.sin(headings)
     end_x = readings.end_xy[:, 0]
     end_y = readings.end_xy[:, 1]
     rotated_x = cos_h[:, None] * end_x[None, :] - sin_h[:, None] * end_y[None, :]
     rotated_y = sin_h[:, None] * end_x[None, :] + cos_h[:, None] * end_y[None, :]
-    t_x = anchors[cell_i, 0] - rotated_x[heading_i, reading_i]
-    t_y = anchors[cell_i, 1] - rotated_y[heading_i, reading_i]
+    n_readings = end_x.size
+    rotated_at = heading_i * n_readings + reading_i
+    t_x = anchors[:, 0].take(cell_i) - rotated_x.ravel().take(rotated_at)
+    t_y = anchors[:, 1].take(cell_i) - rotated_y.ravel().take(rotated_at)
     return heading_i, t_x, t_y
 
 
