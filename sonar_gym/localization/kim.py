@@ -411,6 +411,44 @@ def _candidate_pairs(
     return pair_j, pair_k
 
 
+def _pairs_reachable_by_headings(
+    readings: _Readings,
+    anchors: FloatArray,
+    center: FloatArray | None,
+    radius: float | None,
+    headings: FloatArray,
+    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+    """The ``pairs`` whose vote some candidate heading can bring into the search circle.
+
+    ``|t - c|^2 = D^2 + E^2 - 2 D E cos(heading - psi*)`` (``D = |a - c|``, ``E = |e|``,
+    ``psi*`` the heading that turns ``e`` onto ``a - c``) is within ``radius^2`` only for
+    headings within ``delta = arccos((D^2 + E^2 - radius^2) / 2DE)`` of ``psi*``; every
+    candidate lies within ``spread`` of the middle one, so a pair with ``psi*`` farther than
+    ``spread + delta`` from it never votes inside. The test is padded so that rounding never
+    drops a pair that votes; the kept pairs keep their order. Without a circle: all pairs.
+    """
+    pair_j, pair_k = pairs
+    if center is None or radius is None or headings.size == 0 or pair_j.size == 0:
+        return pairs
+    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
+    middle = float(headings[headings.size // 2])
+    spread = float(np.max(np.abs(wrap_angles(headings - middle))))
+    distance = np.hypot(to_anchor_x, to_anchor_y)[pair_k]
+    length = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])[pair_j]
+    padded = radius * (1.0 + 1e-9) + 1e-12
+    product = 2.0 * distance * length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cosine = (distance * distance + length * length - padded * padded) / product
+    half_width = np.where(product > 1e-12, np.arccos(np.clip(cosine, -1.0, 1.0)), np.pi)
+    best = (
+        np.arctan2(to_anchor_y, to_anchor_x)[pair_k]
+        - np.arctan2(readings.end_xy[:, 1], readings.end_xy[:, 0])[pair_j]
+    )
+    reachable = np.abs(wrap_angles(best - middle)) <= spread + half_width + 1e-6
+    return pair_j[reachable], pair_k[reachable]
+
+
 def _vote_positions(
     readings: _Readings,
     anchors: FloatArray,
@@ -610,6 +648,7 @@ def vote_localize(
     cells_per_layer = wx * wy
     volume = np.zeros((headings.size, wx, wy), dtype=np.int64)
     pairs = _candidate_pairs(readings, anchors, center, radius)
+    pairs = _pairs_reachable_by_headings(readings, anchors, center, radius, headings, pairs)
     if pairs[0].size == 0 or cells_per_layer == 0:
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
