@@ -144,7 +144,14 @@ class _Episode:
     last_fix_ok: bool = False
     true_track: list[np.ndarray] = field(default_factory=list)
     estimate_track: list[np.ndarray] = field(default_factory=list)
-    scan_points: np.ndarray | None = None
+    scanned: tuple[tuple[Sweep, Pose], ...] = ()
+    """The last decision's sweeps with the true poses they were taken at (for rendering)."""
+
+    def scan_points(self) -> np.ndarray | None:
+        """End points ({W}) of the last decision's echoes, or None before any sweep."""
+        if not self.scanned:
+            return None
+        return np.concatenate([sweep_end_points(sweep, pose)[1] for sweep, pose in self.scanned])
 
 
 class SweepLocalizationEnv(SonarEnv):
@@ -321,12 +328,13 @@ class SweepLocalizationEnv(SonarEnv):
             start += size
         self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(start,), dtype=np.float32)
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
+        # One world for every episode: ``World.reset_episode`` keeps its static geometry.
+        self._world = World(self._scenario, temperature_c=config.temperature_c)
         if config.route == "table1":
-            world = World(self._scenario, temperature_c=config.temperature_c)
             blocked = [
                 (float(x), float(y))
                 for x, y in TABLE_1_TRUE_POSITIONS_M
-                if not world.is_free((x, y))
+                if not self._world.is_free((x, y))
             ]
             if blocked:
                 raise ValueError(
@@ -354,7 +362,8 @@ class SweepLocalizationEnv(SonarEnv):
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        world = World(self._scenario, temperature_c=config.temperature_c)
+        world = self._world
+        world.reset_episode(config.temperature_c)
         route = (
             self._table1_route
             if config.route == "table1"
@@ -409,12 +418,8 @@ class SweepLocalizationEnv(SonarEnv):
         episode.decisions += 1
         step_sensing_s = 0.0
         fix_info: dict[str, Any] = {"fix_status": "none"}
-        scan_points: list[np.ndarray] = []
         if n_sweeps > 0:
-            step_sensing_s, fix_info = self._sense_and_fix(
-                episode, n_sweeps, sector, next_station, scan_points
-            )
-            episode.scan_points = np.concatenate(scan_points) if scan_points else None
+            step_sensing_s, fix_info = self._sense_and_fix(episode, n_sweeps, sector, next_station)
         self._drive_to(episode, next_station)
         episode.sensing_time_s += step_sensing_s
         true_pose = episode.world.robot_pose
@@ -439,13 +444,13 @@ class SweepLocalizationEnv(SonarEnv):
         n_sweeps: int,
         sector: int,
         next_station_m: float,
-        scan_points: list[np.ndarray],
     ) -> tuple[float, dict[str, Any]]:
         """Take the sweeps between short moves, localize, correct the EKF."""
         config = self.config
         first_estimate, first_covariance = episode.estimate, episode.covariance.copy()
         first_truth = episode.world.robot_pose
         sweeps: list[Sweep] = []
+        scanned: list[tuple[Sweep, Pose]] = []
         duration_s = 0.0
         offset = episode.world.scenario.robot.sensor_offset
         for index in range(n_sweeps):
@@ -461,9 +466,10 @@ class SweepLocalizationEnv(SonarEnv):
             duration_s += scan.duration_s
             odometry = _relative_pose(first_estimate, episode.estimate)
             sweeps.append(Sweep(scan.angles, scan.ranges, offset, odometry))
-            scan_points.append(sweep_end_points(sweeps[-1], true_pose)[1])
+            scanned.append((sweeps[-1], true_pose))
             episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector
+        episode.scanned = tuple(scanned)
         with self._timed("localization"):
             result = vote_around_estimate(
                 self.grid,
@@ -597,7 +603,7 @@ class SweepLocalizationEnv(SonarEnv):
             self._scenario,
             true_pose=truth,
             estimated_pose=episode.estimate,
-            scan_points=episode.scan_points,
+            scan_points=episode.scan_points(),
             title=f"SweepLocalization  decision {episode.decisions}/{len(stations)}",
             extra={
                 "E_xy [m]": position_error_m(episode.estimate, truth),

@@ -9,13 +9,15 @@ chooses ``n`` (0 keeps dead reckoning), trading pose error against measurement t
 The models that describe a fix's uncertainty to the agent and weight it in the optional
 covariance-weighted correction (:func:`quantised_range_error`,
 :func:`predicted_fix_covariance`, :class:`TransmitterFrame`) live in
-:mod:`sonar_gym.localization.wu_tsai_models`; they are re-exported here.
+:mod:`sonar_gym.localization.wu_tsai_models`; they are re-exported here. The episode state,
+the observation's features and the ``info`` dict are in
+:mod:`sonar_gym.envs.trilateration_observation`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,12 +33,19 @@ from sonar_gym.envs.config import (
     numbers_field,
     scenario_field,
 )
+from sonar_gym.envs.trilateration_observation import (
+    OBSERVATION_LAYOUT,
+    OBSERVATION_SIZE,
+    TIME_SINCE_FIX_SCALE_S,
+    FeatureScales,
+    TrilaterationEpisode,
+    episode_info,
+    trilateration_observation,
+)
 from sonar_gym.localization.ekf import ekf_update
 from sonar_gym.localization.wu_tsai_models import (
     RangeErrorModel,
     TransmitterFrame,
-    heading_std_rad,
-    position_std_m,
     predicted_fix_covariance,
     quantised_range_error,
     rotate_covariance,
@@ -45,12 +54,11 @@ from sonar_gym.localization.wu_tsai import (
     PAPER_COUNTER_RATE_HZ,
     PAPER_REPEATED_FIXES,
     PAPER_TEMPERATURE_C,
-    Fix,
     localize_repeated,
 )
 from sonar_gym.metrics import heading_error_rad, position_error_m
-from sonar_gym.odometry import OdometryConfig, propagate_covariance
-from sonar_gym.polyline import densify, draw_equal_legs
+from sonar_gym.odometry import OdometryConfig
+from sonar_gym.polyline import densify, draw_equal_legs, drive_leg_dead_reckoned
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import load_scenario
@@ -64,8 +72,6 @@ DEFAULT_FIX_COUNTS: tuple[int, ...] = (0, 1, 2, 3, 5, 10, 20)
 STATUS_RUNNING = "running"
 STATUS_OK = "ok"
 NO_FIX = "no_fix"
-TIME_SINCE_FIX_SCALE_S = 10.0
-"""Time that maps to 0.5 in the ``time_since_fix`` feature, seconds."""
 
 
 # --------------------------------------------------------------------------------------------
@@ -150,25 +156,6 @@ class TrilaterationConfig:
 # --------------------------------------------------------------------------------------------
 # The environment
 # --------------------------------------------------------------------------------------------
-
-
-@dataclass
-class _Episode:
-    world: World
-    robot: DifferentialDriveRobot
-    waypoints: FloatArray
-    true_pose: Pose
-    estimate: Pose
-    covariance: FloatArray
-    decisions: int = 0
-    sensing_time_s: float = 0.0
-    elapsed_time_s: float = 0.0
-    time_since_fix_s: float = 0.0
-    distance_since_fix_m: float = 0.0
-    collided: bool = False
-    last_fix: Fix | None = None
-    true_trail: list[tuple[float, float]] = field(default_factory=list)
-    fix_trail: list[tuple[float, float]] = field(default_factory=list)
 
 
 class TrilaterationEnv(SonarEnv):
@@ -352,24 +339,24 @@ class TrilaterationEnv(SonarEnv):
         (x0, y0), (x1, y1) = self.scenario.bounds
         self._centre = np.array([(x0 + x1) / 2.0, (y0 + y1) / 2.0])
         self._half_size = np.array([(x1 - x0) / 2.0, (y1 - y0) / 2.0])
+        # One world for every episode: ``World.reset_episode`` keeps its static geometry.
+        self._world = World(self.scenario, temperature_c=config.temperature_c)
         self._check_route_fits()
         self.action_space = gym.spaces.Discrete(len(config.fix_counts))
-        self.observation_layout = {
-            "estimated_xy": slice(0, 2),
-            "estimated_heading": slice(2, 4),
-            "time_since_fix": slice(4, 5),
-            "distance_since_fix": slice(5, 6),
-            "dead_reckoning_position_std": slice(6, 7),
-            "dead_reckoning_heading_std": slice(7, 8),
-            "transmitter_offset": slice(8, 10),
-            "transmitter_distance": slice(10, 11),
-            "fix_position_std": slice(11, 12),
-            "fix_heading_std": slice(12, 13),
-            "progress": slice(13, 14),
-            "steps_remaining": slice(14, 15),
-        }
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(15,), dtype=np.float32)
-        self._episode: _Episode | None = None
+        self.observation_layout = dict(OBSERVATION_LAYOUT)
+        self.observation_space = gym.spaces.Box(
+            -1.0, 1.0, shape=(OBSERVATION_SIZE,), dtype=np.float32
+        )
+        self._feature_scales = FeatureScales(
+            centre_xy=self._centre,
+            half_size_xy=self._half_size,
+            transmitter_centroid_xy=self.transmitter_frame.centroid_xy(),
+            route_length_m=config.route_length_m,
+            position_scale_m=config.position_scale_m,
+            heading_scale_rad=config.heading_scale_rad,
+            n_decision_points=config.n_decision_points,
+        )
+        self._episode: TrilaterationEpisode | None = None
 
     # --- actions -----------------------------------------------------------------------
     def fix_count(self, action: Any) -> int:
@@ -405,8 +392,7 @@ class TrilaterationEnv(SonarEnv):
 
     # --- episode -----------------------------------------------------------------------
     def _check_route_fits(self) -> None:
-        world = World(self.scenario, temperature_c=self.config.temperature_c)
-        margin = world.robot_radius + self.config.wall_clearance_m
+        margin = self._world.robot_radius + self.config.wall_clearance_m
         if self.scenario.room is not None:
             (x0, y0), (x1, y1) = self.scenario.room.min, self.scenario.room.max
         else:
@@ -421,7 +407,8 @@ class TrilaterationEnv(SonarEnv):
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        world = World(self.scenario, temperature_c=config.temperature_c)
+        world = self._world
+        world.reset_episode(config.temperature_c)
         scale_left, scale_right = np.clip(
             rng.normal(0.0, config.wheel_scale_error_std, 2), -0.05, 0.05
         )
@@ -460,45 +447,35 @@ class TrilaterationEnv(SonarEnv):
             ]
         )
         robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
-        self._episode = _Episode(world, robot, waypoints, true_start, estimate, covariance)
-        self._episode.true_trail.append((true_start.x, true_start.y))
-        self._drive_next_leg(self._episode)
-        return self._info(STATUS_RUNNING, n_fixes=0, fix_status=NO_FIX, measurement_time_s=0.0)
-
-    def _drive_next_leg(self, episode: _Episode) -> None:
-        """Drive to the next waypoint; dead reckoning and its covariance follow."""
-        target = episode.waypoints[episode.decisions + 1]
-        wheel_base = episode.robot.wheel_base_for(episode.world)
-        estimate_before = episode.estimate
-        motion = episode.robot.move_to(
-            episode.world, (float(target[0]), float(target[1])), self.np_random
+        episode = TrilaterationEpisode(world, robot, waypoints, true_start, estimate, covariance)
+        episode.true_trail.append((true_start.x, true_start.y))
+        self._episode = episode
+        self._drive_next_leg(episode)
+        return episode_info(
+            episode, STATUS_RUNNING, n_fixes=0, fix_status=NO_FIX, measurement_time_s=0.0
         )
-        parts = motion.parts or (motion,)
+
+    def _drive_next_leg(self, episode: TrilaterationEpisode) -> None:
+        """Drive to the next waypoint; dead reckoning and its covariance follow."""
         config = self.config
-        covariance = propagate_covariance(
-            [estimate_before, *(part.odometry_pose for part in parts[:-1])],
-            [(part.encoder_left_m, part.encoder_right_m) for part in parts],
+        leg = drive_leg_dead_reckoned(
+            episode.robot,
+            episode.world,
+            episode.waypoints[episode.decisions + 1],
             episode.covariance,
-            wheel_base,
             config.encoder_std_m_per_sqrt_m**2,
             config.wheel_scale_error_std**2,
-            integration="midpoint",
+            config.robot_speed_mps,
+            config.turn_rate_rad_s,
+            self.np_random,
         )
-        drive_time = 0.0
-        travelled = 0.0
-        for part in parts:
-            forward = 0.5 * abs(part.encoder_left_m + part.encoder_right_m)
-            turn = abs(part.encoder_right_m - part.encoder_left_m) / wheel_base
-            drive_time += forward / config.robot_speed_mps + turn / config.turn_rate_rad_s
-            travelled += forward
-        episode.true_pose = motion.true_pose
-        episode.estimate = motion.odometry_pose
-        episode.covariance = covariance
-        episode.collided = episode.collided or motion.collided
-        episode.elapsed_time_s += drive_time
-        episode.time_since_fix_s += drive_time
-        episode.distance_since_fix_m += travelled
-        episode.true_trail.append((motion.true_pose.x, motion.true_pose.y))
+        episode.true_pose, episode.estimate = leg.motion.true_pose, leg.motion.odometry_pose
+        episode.covariance = leg.covariance
+        episode.collided = episode.collided or leg.motion.collided
+        episode.elapsed_time_s += leg.drive_time_s
+        episode.time_since_fix_s += leg.drive_time_s
+        episode.distance_since_fix_m += leg.travelled_m
+        episode.true_trail.append((episode.true_pose.x, episode.true_pose.y))
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
@@ -549,7 +526,8 @@ class TrilaterationEnv(SonarEnv):
             - config.measurement_cost_per_s * measurement_time_s
         )
         done = episode.decisions >= config.n_decision_points
-        info = self._info(
+        info = episode_info(
+            episode,
             STATUS_OK if done else STATUS_RUNNING,
             n_fixes=n_fixes,
             fix_status=STATUS_OK if n_ok else failure,
@@ -562,7 +540,7 @@ class TrilaterationEnv(SonarEnv):
             self._drive_next_leg(episode)
         return StepOutcome(reward, terminated=done, info=info)
 
-    def _correct(self, episode: _Episode, fix_pose: Pose, n_ok: int) -> None:
+    def _correct(self, episode: TrilaterationEpisode, fix_pose: Pose, n_ok: int) -> None:
         """Correct the estimate with an averaged fix of ``n_ok`` fixes (see ``correction``)."""
         fix_covariance = self.fix_covariance(fix_pose, n_ok)
         if self.config.correction == "replace":
@@ -579,83 +557,15 @@ class TrilaterationEnv(SonarEnv):
     # --- observation and info ---------------------------------------------------------
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
-        config = self.config
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
-        estimate = episode.estimate
-        observation[layout["estimated_xy"]] = np.clip(
-            (estimate.position - self._centre) / self._half_size, -1.0, 1.0
+        return trilateration_observation(
+            self._feature_scales,
+            episode.estimate,
+            episode.covariance,
+            self.fix_covariance(episode.estimate, 1),
+            episode.time_since_fix_s,
+            episode.distance_since_fix_m,
+            episode.decisions,
         )
-        observation[layout["estimated_heading"]] = [
-            math.cos(estimate.theta),
-            math.sin(estimate.theta),
-        ]
-        time_since = episode.time_since_fix_s
-        observation[layout["time_since_fix"]] = time_since / (time_since + TIME_SINCE_FIX_SCALE_S)
-        observation[layout["distance_since_fix"]] = min(
-            episode.distance_since_fix_m / config.route_length_m, 1.0
-        )
-        observation[layout["dead_reckoning_position_std"]] = _saturate(
-            position_std_m(episode.covariance), config.position_scale_m
-        )
-        observation[layout["dead_reckoning_heading_std"]] = _saturate(
-            heading_std_rad(episode.covariance), config.heading_scale_rad
-        )
-        offset = estimate.position - self.transmitter_frame.centroid_xy()
-        observation[layout["transmitter_offset"]] = np.clip(offset / self._half_size, -1.0, 1.0)
-        observation[layout["transmitter_distance"]] = min(
-            float(np.linalg.norm(offset)) / float(np.linalg.norm(self._half_size)), 1.0
-        )
-        single_fix = self.fix_covariance(estimate, 1)
-        observation[layout["fix_position_std"]] = _saturate(
-            position_std_m(single_fix), config.position_scale_m
-        )
-        observation[layout["fix_heading_std"]] = _saturate(
-            heading_std_rad(single_fix), config.heading_scale_rad
-        )
-        n = config.n_decision_points
-        observation[layout["progress"]] = episode.decisions / n
-        observation[layout["steps_remaining"]] = (n - episode.decisions) / n
-        return observation
-
-    def _info(
-        self,
-        status: str,
-        *,
-        n_fixes: int,
-        fix_status: str,
-        measurement_time_s: float,
-        n_fixes_ok: int = 0,
-        dead_reckoning: Pose | None = None,
-        fix_pose: Pose | None = None,
-    ) -> dict[str, Any]:
-        episode = self._require_episode()
-        before = dead_reckoning if dead_reckoning is not None else episode.estimate
-        truth = episode.true_pose
-        info: dict[str, Any] = {
-            "position_error_m": position_error_m(episode.estimate, truth),
-            "heading_error_rad": heading_error_rad(episode.estimate, truth),
-            "sensing_time_s": episode.sensing_time_s,
-            "status": status,
-            "n_fixes": n_fixes,
-            "n_fixes_ok": n_fixes_ok,
-            "fix_status": fix_status,
-            "measurement_time_s": measurement_time_s,
-            "dead_reckoning_position_error_m": position_error_m(before, truth),
-            "dead_reckoning_heading_error_rad": heading_error_rad(before, truth),
-            "predicted_position_std_m": position_std_m(episode.covariance),
-            "predicted_heading_std_rad": heading_std_rad(episode.covariance),
-            "decision_point": episode.decisions,
-            "elapsed_time_s": episode.elapsed_time_s,
-            "collided": episode.collided,
-            "true_pose": truth.as_array(),
-            "estimated_pose": episode.estimate.as_array(),
-        }
-        if fix_pose is not None and episode.last_fix is not None:
-            info["fix_position_error_m"] = position_error_m(fix_pose, truth)
-            info["fix_heading_error_rad"] = heading_error_rad(fix_pose, truth)
-            info["fix_z_m"] = episode.last_fix.z
-        return info
 
     # --- rendering ----------------------------------------------------------------------
     def _render_frame(self) -> np.ndarray:
@@ -678,19 +588,15 @@ class TrilaterationEnv(SonarEnv):
             },
         )
 
-    def _require_episode(self) -> _Episode:
+    def _require_episode(self) -> TrilaterationEpisode:
         if self._episode is None:
             raise RuntimeError("TrilaterationEnv: call reset() first")
         return self._episode
 
 
-def _saturate(value: float, scale: float) -> float:
-    """``value / (value + scale)``: 0 at 0, 0.5 at ``scale``, below 1 for any finite value."""
-    return value / (value + scale) if value > 0.0 else 0.0
-
-
 __all__ = [
     "DEFAULT_FIX_COUNTS",
+    "TIME_SINCE_FIX_SCALE_S",
     "RangeErrorModel",
     "TransmitterFrame",
     "TrilaterationConfig",

@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from sonar_gym.odometry import predict_over_motion
+from sonar_gym.odometry import predict_over_motion, propagate_covariance
 from sonar_gym.pose import FloatArray, Pose
-from sonar_gym.robot import DifferentialDriveRobot
+from sonar_gym.robot import DifferentialDriveRobot, MotionResult
 from sonar_gym.world import World
 
 ROUTE_CLEARANCE_M = 0.03
@@ -224,11 +224,70 @@ def follow_route(
     return FollowedLeg(estimate, covariance, tuple(rolled))
 
 
+@dataclass(frozen=True)
+class DeadReckonedLeg:
+    """One leg driven by :func:`drive_leg_dead_reckoned`.
+
+    Attributes:
+        motion: the robot's motion (its parts: the turn, then the straight).
+        covariance: the dead-reckoning covariance at its end (3x3, ``[x, y, theta]``).
+        drive_time_s: forward travel over the speed plus turning over the turn rate, seconds.
+        travelled_m: the forward encoder travel ``|d_l + d_r| / 2`` summed over the parts, m.
+    """
+
+    motion: MotionResult
+    covariance: FloatArray
+    drive_time_s: float
+    travelled_m: float
+
+
+def drive_leg_dead_reckoned(
+    robot: DifferentialDriveRobot,
+    world: World,
+    target_xy: FloatArray,
+    covariance: FloatArray,
+    encoder_variance_per_m: float,
+    scale_error_variance: float,
+    speed_mps: float,
+    turn_rate_rad_s: float,
+    rng: np.random.Generator,
+) -> DeadReckonedLeg:
+    """Turn toward ``target_xy`` ({W}) and drive to it, planned from the odometry estimate.
+
+    The covariance follows every part through the odometry model of Kim et al. sec. 3.1
+    (:func:`sonar_gym.odometry.propagate_covariance`, midpoint integration): encoder variance
+    ``encoder_variance_per_m |d|`` plus ``scale_error_variance d^2`` per wheel and command.
+    """
+    wheel_base = robot.wheel_base_for(world)
+    estimate_before = robot.odometry_pose or world.robot_pose  # the belief move_to plans from
+    motion = robot.move_to(world, (float(target_xy[0]), float(target_xy[1])), rng)
+    parts = motion.parts or (motion,)
+    covariance = propagate_covariance(
+        [estimate_before, *(part.odometry_pose for part in parts[:-1])],
+        [(part.encoder_left_m, part.encoder_right_m) for part in parts],
+        covariance,
+        wheel_base,
+        encoder_variance_per_m,
+        scale_error_variance,
+        integration="midpoint",
+    )
+    drive_time = 0.0
+    travelled = 0.0
+    for part in parts:
+        forward = 0.5 * abs(part.encoder_left_m + part.encoder_right_m)
+        turn = abs(part.encoder_right_m - part.encoder_left_m) / wheel_base
+        drive_time += forward / speed_mps + turn / turn_rate_rad_s
+        travelled += forward
+    return DeadReckonedLeg(motion, covariance, drive_time, travelled)
+
+
 __all__ = [
+    "DeadReckonedLeg",
     "ROUTE_CLEARANCE_M",
     "ROUTE_MIN_LEG_M",
     "Route",
     "draw_free_route",
     "draw_polyline",
+    "drive_leg_dead_reckoned",
     "leg_is_free",
 ]

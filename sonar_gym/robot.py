@@ -232,13 +232,19 @@ class DifferentialDriveRobot:
         normals = rng.standard_normal(2)
         uniforms = rng.random(4)
 
-        commanded = np.array([d_left_m, d_right_m])
-        encoder = commanded + noise.encoder_std_m_per_sqrt_m * np.sqrt(np.abs(commanded)) * normals
-        slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
-        slipped = uniforms[:2] < slip_probability
-        slip_loss = np.where(slipped, uniforms[2:] * noise.slip_fraction_max, 0.0)
-        scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
-        ground = commanded * scale * (1.0 - slip_loss)
+        # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
+        encoder = (
+            _encoder_reading(d_left_m, noise.encoder_std_m_per_sqrt_m, float(normals[0])),
+            _encoder_reading(d_right_m, noise.encoder_std_m_per_sqrt_m, float(normals[1])),
+        )
+        ground = (
+            _ground_travel(
+                d_left_m, noise.scale_error_left, noise, float(uniforms[0]), float(uniforms[2])
+            ),
+            _ground_travel(
+                d_right_m, noise.scale_error_right, noise, float(uniforms[1]), float(uniforms[3])
+            ),
+        )
 
         n = self._substep_count(ground, encoder, wheel_base, substeps)
         start = world.robot_pose
@@ -266,7 +272,11 @@ class DifferentialDriveRobot:
         )
 
     def _substep_count(
-        self, ground: np.ndarray, encoder: np.ndarray, wheel_base: float, substeps: int | None
+        self,
+        ground: tuple[float, float],
+        encoder: tuple[float, float],
+        wheel_base: float,
+        substeps: int | None,
     ) -> int:
         if substeps is not None:
             if int(substeps) != substeps or substeps < 1:
@@ -274,7 +284,7 @@ class DifferentialDriveRobot:
                     f"argument 'substeps' must be a positive integer or None; got {substeps!r}"
                 )
             return int(substeps)
-        travel = float(max(np.max(np.abs(ground)), np.max(np.abs(encoder))))
+        travel = max(abs(ground[0]), abs(ground[1]), abs(encoder[0]), abs(encoder[1]))
         turn = abs(float(ground[1] - ground[0])) / wheel_base
         return max(
             1, math.ceil(travel / self.max_substep_m), math.ceil(turn / self.max_substep_rad)
@@ -342,7 +352,31 @@ class DifferentialDriveRobot:
         )
 
 
-def _path_is_clear(world: World, start: Pose, ground: np.ndarray, wheel_base_m: float) -> bool:
+def _encoder_reading(commanded_m: float, std_m_per_sqrt_m: float, normal: float) -> float:
+    """One wheel's encoder increment: the command plus noise of std ``std * sqrt(|d|)``, m."""
+    return commanded_m + std_m_per_sqrt_m * math.sqrt(abs(commanded_m)) * normal
+
+
+def _ground_travel(
+    commanded_m: float,
+    scale_error: float,
+    noise: OdometryConfig,
+    slip_draw: float,
+    slip_size_draw: float,
+) -> float:
+    """One wheel's travel on the ground: scaled by its radius error, less any slip, metres.
+
+    The wheel slips with probability ``1 - (1 - p)^|d|`` (``p`` per metre) and then loses the
+    fraction ``slip_size_draw * slip_fraction_max`` of the command (both draws uniform in [0, 1)).
+    """
+    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** abs(commanded_m)
+    slip_loss = slip_size_draw * noise.slip_fraction_max if slip_draw < slip_probability else 0.0
+    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
+
+
+def _path_is_clear(
+    world: World, start: Pose, ground: tuple[float, float], wheel_base_m: float
+) -> bool:
     """Whether the robot disc can follow the planned arc without touching a static shape.
 
     The arc of length ``L`` turning by ``phi`` lies within its sagitta ``<= L |phi| / 8`` of
@@ -407,7 +441,7 @@ def _segment_distance(
 
 
 def _free_motion(
-    world: World, start: Pose, ground: np.ndarray, wheel_base_m: float, substeps: int
+    world: World, start: Pose, ground: tuple[float, float], wheel_base_m: float, substeps: int
 ) -> tuple[Pose, bool, float]:
     """The outcome of :meth:`World.move_robot` along the arc when no contact can occur.
 
@@ -417,7 +451,7 @@ def _free_motion(
     """
     left, right = float(ground[0]), float(ground[1])
     pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
-    world.set_robot_pose(pose)
+    world.place_robot_on_clear_path(pose)  # _path_is_clear has shown the end free
     half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
     sinc = (
         1.0 - half_turn * half_turn / 6.0

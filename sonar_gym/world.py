@@ -292,6 +292,11 @@ class World:
             )
         self._teleport(pose)
 
+    def place_robot_on_clear_path(self, pose: Pose) -> None:
+        """Teleport the robot to ``pose`` without :meth:`is_free`: for a caller that has shown
+        the robot's whole path to ``pose`` clear of every static shape (so it ends free)."""
+        self._teleport(pose)
+
     def _teleport(self, pose: Pose) -> None:
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
         # happens next depends only on the pose, never on the history of the space. A body

@@ -378,3 +378,22 @@ def test_drive_rejects_bad_arguments() -> None:
         robot.drive(world, 0.1, 0.1, rng(), substeps=0)
     with pytest.raises(ValueError, match="odometry_integration"):
         DifferentialDriveRobot(odometry_integration="rk4")  # type: ignore[arg-type]
+
+
+def test_every_drive_without_contact_ends_with_the_robot_free_in_a_cluttered_arena() -> None:
+    from sonar_gym.scenario import load_scenario
+
+    world = World(load_scenario("kim_arena"))
+    robot = DifferentialDriveRobot(OdometryNoise())
+    rng = np.random.default_rng(3)
+    free_ends = 0
+    for _ in range(60):
+        world.set_robot_pose(world.sample_free_pose(rng))
+        for _ in range(10):
+            d_left, d_right = rng.uniform(-0.4, 0.4, 2)
+            motion = robot.drive(world, d_left, d_right, rng)
+            assert motion.true_pose == world.robot_pose
+            if not motion.collided:
+                free_ends += 1
+                assert world.is_free(motion.true_pose.position)
+    assert free_ends > 300

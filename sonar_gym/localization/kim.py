@@ -411,6 +411,44 @@ def _candidate_pairs(
     return pair_j, pair_k
 
 
+def _pairs_reachable_by_headings(
+    readings: _Readings,
+    anchors: FloatArray,
+    center: FloatArray | None,
+    radius: float | None,
+    headings: FloatArray,
+    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
+) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
+    """The ``pairs`` whose vote some candidate heading can bring into the search circle.
+
+    ``|t - c|^2 = D^2 + E^2 - 2 D E cos(heading - psi*)`` (``D = |a - c|``, ``E = |e|``,
+    ``psi*`` the heading that turns ``e`` onto ``a - c``) is within ``radius^2`` only for
+    headings within ``delta = arccos((D^2 + E^2 - radius^2) / 2DE)`` of ``psi*``; every
+    candidate lies within ``spread`` of the middle one, so a pair with ``psi*`` farther than
+    ``spread + delta`` from it never votes inside. The test is padded so that rounding never
+    drops a pair that votes; the kept pairs keep their order. Without a circle: all pairs.
+    """
+    pair_j, pair_k = pairs
+    if center is None or radius is None or headings.size == 0 or pair_j.size == 0:
+        return pairs
+    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
+    middle = float(headings[headings.size // 2])
+    spread = float(np.max(np.abs(wrap_angles(headings - middle))))
+    distance = np.hypot(to_anchor_x, to_anchor_y)[pair_k]
+    length = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])[pair_j]
+    padded = radius * (1.0 + 1e-9) + 1e-12
+    product = 2.0 * distance * length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cosine = (distance * distance + length * length - padded * padded) / product
+    half_width = np.where(product > 1e-12, np.arccos(np.clip(cosine, -1.0, 1.0)), np.pi)
+    best = (
+        np.arctan2(to_anchor_y, to_anchor_x)[pair_k]
+        - np.arctan2(readings.end_xy[:, 1], readings.end_xy[:, 0])[pair_j]
+    )
+    reachable = np.abs(wrap_angles(best - middle)) <= spread + half_width + 1e-6
+    return pair_j[reachable], pair_k[reachable]
+
+
 def _vote_positions(
     readings: _Readings,
     anchors: FloatArray,
@@ -427,17 +465,62 @@ def _vote_positions(
     ``(reading, anchor)`` ``pairs`` of :func:`_candidate_pairs` are tried.
     """
     pair_j, pair_k = pairs
-    free = table[direction_index[:, pair_j], pair_k[None, :]] > readings.range_m[pair_j][None, :]
+    n_anchors = table.shape[1]
+    # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
+    flat = direction_index[:, pair_j] * n_anchors + pair_k[None, :]
+    free = table.ravel().take(flat) > readings.range_m.take(pair_j)[None, :]
     heading_i, pair_i = np.nonzero(free)  # (h, P)
-    reading_i, cell_i = pair_j[pair_i], pair_k[pair_i]
+    reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
     cos_h, sin_h = np.cos(headings), np.sin(headings)
     end_x = readings.end_xy[:, 0]
     end_y = readings.end_xy[:, 1]
     rotated_x = cos_h[:, None] * end_x[None, :] - sin_h[:, None] * end_y[None, :]
     rotated_y = sin_h[:, None] * end_x[None, :] + cos_h[:, None] * end_y[None, :]
-    t_x = anchors[cell_i, 0] - rotated_x[heading_i, reading_i]
-    t_y = anchors[cell_i, 1] - rotated_y[heading_i, reading_i]
+    n_readings = end_x.size
+    rotated_at = heading_i * n_readings + reading_i
+    t_x = anchors[:, 0].take(cell_i) - rotated_x.ravel().take(rotated_at)
+    t_y = anchors[:, 1].take(cell_i) - rotated_y.ravel().take(rotated_at)
     return heading_i, t_x, t_y
+
+
+@dataclass(frozen=True)
+class _VoteWindow:
+    """The block of grid cells ``low .. low + shape - 1`` that holds every counted vote.
+
+    Votes are counted in this block only; with a search circle it is the circle's bounding
+    box plus two cells (one for the 3x3 smoothing, one for rounding at the circle's edge), so
+    the vote volume, its smoothing and the choice of the best cell cost what the circle
+    covers, not the whole grid. Cells outside hold no vote and score zero, and the block keeps
+    the grid's (ix, iy) order, so every maximum and tie-break is the one of the full grid.
+    """
+
+    low: tuple[int, int]
+    shape: tuple[int, int]
+
+    def full(self, grid: OccupancyGrid, block: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
+        """``block`` (``(..., wx, wy)``) placed in a zero array over the whole grid."""
+        whole = np.zeros((*block.shape[:-2], *grid.shape), dtype=block.dtype)
+        (x, y), (wx, wy) = self.low, self.shape
+        whole[..., x : x + wx, y : y + wy] = block
+        return whole
+
+
+def _vote_window(
+    grid: OccupancyGrid, center: FloatArray | None, radius: float | None
+) -> _VoteWindow:
+    """The :class:`_VoteWindow` of a search circle (the whole grid without one)."""
+    nx, ny = grid.shape
+    if center is None or radius is None:
+        return _VoteWindow((0, 0), (nx, ny))
+    x0, y0 = grid.origin_m
+    size = grid.cell_size_m
+    low_x = max(math.floor((center[0] - radius - x0) / size) - 2, 0)
+    low_y = max(math.floor((center[1] - radius - y0) / size) - 2, 0)
+    high_x = min(math.floor((center[0] + radius - x0) / size) + 2, nx - 1)
+    high_y = min(math.floor((center[1] + radius - y0) / size) + 2, ny - 1)
+    if high_x < low_x or high_y < low_y:
+        return _VoteWindow((0, 0), (0, 0))
+    return _VoteWindow((low_x, low_y), (high_x - low_x + 1, high_y - low_y + 1))
 
 
 def _vote_cells(
@@ -559,12 +642,14 @@ def vote_localize(
     if anchors.shape[0] == 0:
         return _failure(NO_VOTES, "the grid has no occupied cell")
 
-    # Vote volume over (heading, ix, iy), built in blocks of headings.
-    nx, ny = grid.shape
-    cells_per_layer = nx * ny
-    volume = np.zeros((headings.size, nx, ny), dtype=np.int64)
+    # Vote volume over (heading, ix, iy) of the vote window, built in blocks of headings.
+    window = _vote_window(grid, center, radius)
+    (low_x, low_y), (wx, wy) = window.low, window.shape
+    cells_per_layer = wx * wy
+    volume = np.zeros((headings.size, wx, wy), dtype=np.int64)
     pairs = _candidate_pairs(readings, anchors, center, radius)
-    if pairs[0].size == 0:
+    pairs = _pairs_reachable_by_headings(readings, anchors, center, radius, headings, pairs)
+    if pairs[0].size == 0 or cells_per_layer == 0:
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
@@ -577,22 +662,26 @@ def vote_localize(
             readings, anchors, table, block_headings, direction_index, pairs
         )
         cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
-        flat = heading_i[keep] * cells_per_layer + cell_x[keep] * ny + cell_y[keep]
+        local_x, local_y = cell_x - low_x, cell_y - low_y
+        keep &= (local_x >= 0) & (local_x < wx) & (local_y >= 0) & (local_y < wy)
+        flat = heading_i[keep] * cells_per_layer + local_x[keep] * wy + local_y[keep]
         counts = np.bincount(flat, minlength=block_headings.size * cells_per_layer)
-        volume[start : start + block_headings.size] = counts.reshape(-1, nx, ny)
+        volume[start : start + block_headings.size] = counts.reshape(-1, wx, wy)
 
     if not volume.any():
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
 
-    choice = _choose(grid, volume, selection)
+    choice = _choose(grid, volume, selection, window)
     heading = float(headings[choice.heading_index])
-    vote_map = volume[choice.heading_index].copy() if return_vote_map else None
-    votes = int(volume[choice.heading_index, choice.cell[0], choice.cell[1]])
+    vote_map = window.full(grid, volume[choice.heading_index]) if return_vote_map else None
+    votes = int(volume[choice.heading_index, choice.cell[0] - low_x, choice.cell[1] - low_y])
 
     if ambiguity_ratio is not None:
-        rival = _rival_score(grid, choice, headings, ambiguity_distance_m, ambiguity_heading_rad)
+        rival = _rival_score(
+            grid, choice, window, headings, ambiguity_distance_m, ambiguity_heading_rad
+        )
         if rival >= float(ambiguity_ratio) * choice.best_score:
             return VoteLocalization(
                 status=AMBIGUOUS,
@@ -636,7 +725,8 @@ class _Choice:
 
     ``window_low``..``window_high`` (inclusive cell indices) bound the cells whose votes make the
     chosen peak; ``cell`` is the cell of the window with most raw votes; ``centre`` the
-    position used without refinement; ``score`` the selection score over (heading, ix, iy).
+    position used without refinement; ``score`` the selection score over (heading, ix, iy) of
+    the vote window (:class:`_VoteWindow`).
     """
 
     heading_index: int
@@ -651,18 +741,25 @@ class _Choice:
         return int(self.score[self.heading_index].max())
 
 
-def _choose(grid: OccupancyGrid, volume: npt.NDArray[np.int64], selection: str) -> _Choice:
-    """Pick the heading and cell from the vote volume ``(heading, ix, iy)``.
+def _choose(
+    grid: OccupancyGrid,
+    volume: npt.NDArray[np.int64],
+    selection: str,
+    window: _VoteWindow,
+) -> _Choice:
+    """Pick the heading and cell from the vote volume ``(heading, ix, iy)`` of ``window``.
 
     ``"smoothed"``: maximum of the 3x3 binomial smoothing, window = the chosen cell +- 1.
     ``"max"``: raw maximum; ties go to the heading with most tied cells, then to the tied cell
     nearest the centroid of the tied cells (the centroid is the unrefined position).
+    Returned cells are indices of the whole grid; ``score`` covers ``window`` only.
     """
     nx, ny = grid.shape
+    offset = np.array(window.low)
     if selection == "max":
         tied = np.argwhere(volume == volume.max())
         heading_index = int(np.argmax(np.bincount(tied[:, 0], minlength=volume.shape[0])))
-        cells = tied[tied[:, 0] == heading_index, 1:]
+        cells = tied[tied[:, 0] == heading_index, 1:] + offset
         centres = grid.cell_to_world(cells)
         centroid = centres.mean(axis=0)
         nearest = cells[int(np.argmin(np.sum((centres - centroid) ** 2, axis=1)))]
@@ -671,9 +768,10 @@ def _choose(grid: OccupancyGrid, volume: npt.NDArray[np.int64], selection: str) 
         high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
         return _Choice(heading_index, cell, low, high, centroid, volume)
     score = _binomial_smooth(volume)
-    heading_index, best_x, best_y = (
+    heading_index, local_x, local_y = (
         int(i) for i in np.unravel_index(int(np.argmax(score)), score.shape)
     )
+    best_x, best_y = local_x + window.low[0], local_y + window.low[1]
     cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
@@ -683,18 +781,20 @@ def _choose(grid: OccupancyGrid, volume: npt.NDArray[np.int64], selection: str) 
 def _rival_score(
     grid: OccupancyGrid,
     choice: _Choice,
+    window: _VoteWindow,
     headings: FloatArray,
     distance_m: float,
     heading_rad: float,
 ) -> int:
     """Best score outside the neighbourhood (in position and heading) of the winner."""
     nx, ny = grid.shape
+    score = window.full(grid, choice.score)
     cells = np.stack(np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij"), axis=-1)
     offsets = (cells - np.array(choice.cell)) * grid.cell_size_m
     near_position = np.hypot(offsets[..., 0], offsets[..., 1]) <= distance_m
     near_heading = np.abs(wrap_angles(headings - headings[choice.heading_index])) <= heading_rad
     excluded = near_heading[:, None, None] & near_position[None, :, :]
-    return int(np.where(excluded, -1, choice.score).max())
+    return int(np.where(excluded, -1, score).max())
 
 
 def _mean_vote_position(
