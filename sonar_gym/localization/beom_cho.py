@@ -64,8 +64,10 @@ from sonar_gym.localization.beom_cho_rcd import (
     _require_finite,
     _require_non_negative,
     _require_positive,
+    _validated_scan_arrays,
     extract_rcds,
     make_rcd,
+    rcd_runs,
     symmetry_measure,
 )
 from sonar_gym.localization.beom_cho_refine import central_range_estimate, refine_two_beacon_pose
@@ -301,12 +303,34 @@ def filter_beacon_candidates(
     return tuple(
         rcd
         for rcd in rcds
-        if params.eta_min_rad - _EXTENT_TOLERANCE_RAD
-        <= rcd.eta
-        <= params.eta_max_rad + _EXTENT_TOLERANCE_RAD
+        if _extent_and_range_pass(rcd.eta, rcd.delta, params)
         and rcd.gamma < params.gamma_threshold_m
-        and params.r_min_m <= rcd.delta <= params.r_max_m
     )
+
+
+def _extent_and_range_pass(eta_rad: Any, delta_m: Any, params: BeomChoParameters) -> Any:
+    """The filters of :func:`filter_beacon_candidates` but symmetry: on floats a bool, on
+    arrays (one entry per RCD) a boolean array."""
+    return (
+        (params.eta_min_rad - _EXTENT_TOLERANCE_RAD <= eta_rad)
+        & (eta_rad <= params.eta_max_rad + _EXTENT_TOLERANCE_RAD)
+        & (params.r_min_m <= delta_m)
+        & (delta_m <= params.r_max_m)
+    )
+
+
+def _plausible_rcds(
+    angles: np.ndarray, ranges_m: np.ndarray, params: BeomChoParameters
+) -> tuple[int, list[RCD]]:
+    """How many RCDs :func:`extract_rcds` finds in a pan, and those of them that pass the
+    extent and range filters (in its order). Only these are built, as most RCDs of a pan
+    (short runs on walls and corners) fail the extent filter."""
+    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges_m)
+    runs = rcd_runs(angles_rad, ranges_m, params.eps_m)
+    plausible = np.flatnonzero(_extent_and_range_pass(runs.extent_rad, runs.delta_m, params))
+    return len(runs.first), [
+        make_rcd(angles_rad, ranges_m, runs.indices(k)) for k in plausible.tolist()
+    ]
 
 
 def assign_large_and_small(rcd_a: RCD, rcd_b: RCD) -> tuple[RCD, RCD]:
@@ -695,6 +719,38 @@ def localize_rcds(
         filters), ``"no_pair"`` (no pair within the tolerance, or a single candidate),
         ``"ambiguous_pair"`` (see ``agreement_m``) or ``"no_intersection"`` (``D < 0``).
     """
+    return _localize_rcds(
+        rcds,
+        len(rcds),
+        small_center,
+        small_radius,
+        large_center,
+        large_radius,
+        distance_tolerance,
+        params,
+        method,
+        prior,
+        prior_gate_m,
+        agreement_m,
+    )
+
+
+def _localize_rcds(
+    rcds: Sequence[RCD],
+    rcd_count: int,
+    small_center: tuple[float, float] | npt.ArrayLike,
+    small_radius: float,
+    large_center: tuple[float, float] | npt.ArrayLike,
+    large_radius: float,
+    distance_tolerance: float | None,
+    params: BeomChoParameters,
+    method: str,
+    prior: Pose | None,
+    prior_gate_m: float,
+    agreement_m: float | None,
+) -> BeaconLocalization:
+    """:func:`localize_rcds` on ``rcds``, which may leave out RCDs that fail the extent or
+    range filter; ``rcd_count`` is how many RCDs the pans held in all (for the message)."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     small_xy = _point("small_center", small_center)
@@ -715,7 +771,7 @@ def localize_rcds(
     if not candidates:
         return BeaconLocalization(
             "no_candidates",
-            message=f"none of {len(rcds)} RCDs passed the extent, symmetry and range filters",
+            message=f"none of {rcd_count} RCDs passed the extent, symmetry and range filters",
         )
 
     pairs = _ranked_pairs(candidates, params, small_radius, large_radius, beacon_distance)
@@ -1001,29 +1057,34 @@ def localize_scans(
     if short and not _short_pans_are_valid(short, params):
         for angles, ranges_m in _ranges_in_window(short, params):
             extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
-    rcds = [
-        rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
-    ]
+    rcd_count = 0
+    plausible: list[RCD] = []
+    for angles, ranges_m in pans:
+        pan_count, pan_plausible = _plausible_rcds(angles, ranges_m, params)
+        rcd_count += pan_count
+        plausible += pan_plausible
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
 
-    def localize(candidate_rcds: list[RCD], agreement_m: float | None = None) -> BeaconLocalization:
-        return localize_rcds(
+    def localize(
+        candidate_rcds: list[RCD], count: int, agreement_m: float | None = None
+    ) -> BeaconLocalization:
+        return _localize_rcds(
             candidate_rcds,
-            small_center=small.center,
-            small_radius=small.radius,
-            large_center=large.center,
-            large_radius=large.radius,
-            params=params,
-            method=method,
-            prior=None
-            if prior is None
-            else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
-            prior_gate_m=prior_gate_m,
-            agreement_m=agreement_m,
+            count,
+            small.center,
+            small.radius,
+            large.center,
+            large.radius,
+            None,
+            params,
+            method,
+            None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+            prior_gate_m,
+            agreement_m,
         )
 
-    result = localize(rcds)
+    result = localize(plausible, rcd_count)
     if params.extraction == "occlusion_aware" and result.status in ("no_candidates", "no_pair"):
         rebuilt = [
             rcd
@@ -1036,7 +1097,7 @@ def localize_scans(
                 params.min_visible_extent_rad,
             )
         ]
-        second_try = localize(rebuilt, agreement_m=params.rebuilt_agreement_m)
+        second_try = localize(rebuilt, len(rebuilt), params.rebuilt_agreement_m)
         if second_try.ok or second_try.status == "ambiguous_pair":
             result = second_try
     if result.pose is None:
