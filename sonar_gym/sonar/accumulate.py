@@ -59,8 +59,10 @@ class ScanMemory:
             return
         slots = self._slots(scan.angles)
         increment = 1
-        if len(slots) > 1:
-            increment = int(np.min(np.diff(np.sort(np.unique(slots))), initial=self.n_slots)) or 1
+        if len(slots) > 1:  # the smallest gap between distinct slots, n_slots if none
+            gaps = np.diff(np.sort(slots))
+            gaps = gaps[gaps > 0]
+            increment = int(gaps.min()) if len(gaps) else self.n_slots
         self.round_trip_tof_s[slots] = 2.0 * scan.ranges / assumed_speed_of_sound_mps
         self.amplitudes[slots] = scan.amplitudes
         self.scanned[slots] = True
@@ -110,35 +112,43 @@ class ScanMemory:
         +-180 deg only when ``g`` divides the grid (else the lattice does not close on
         itself). Every slot has at most one predecessor (``s - g``), so the links form paths
         and, for a lattice scanned all the way round, rings; a ring starts at its lowest slot.
+
+        The slots of one increment ``g`` and one residue ``s mod g`` form a lattice; sorted
+        along it, chains are its runs of neighbours ``g`` apart, and the run that ends on the
+        lattice's last point before +-180 deg continues into the run from its first point
+        when ``g`` divides the grid (unless that is one run, a ring). Chains are listed by
+        increment, residue and slot.
         """
         n = self.n_slots
-        slots = np.arange(n)
-        increment = np.maximum(self.slot_increment, 1)
-        after = slots + increment
-        successor = after % n
-        linked = (
-            self.scanned
-            & self.scanned[successor]
-            & (self.slot_increment[successor] == self.slot_increment)
-            & ((after < n) | (n % increment == 0))
-        )
-        has_predecessor = np.zeros(n, dtype=bool)
-        has_predecessor[successor[linked]] = True
-        visited = np.zeros(n, dtype=bool)
-        chains = []
-        heads = np.flatnonzero(self.scanned & ~has_predecessor)
-        rings = np.flatnonzero(self.scanned & has_predecessor)  # candidates; most are visited
-        for head in (*heads.tolist(), *rings.tolist()):
-            if visited[head]:
-                continue
-            chain = [head]
-            visited[head] = True
-            slot = head
-            while linked[slot] and not visited[successor[slot]]:
-                slot = int(successor[slot])
-                visited[slot] = True
-                chain.append(slot)
-            chains.append(np.array(chain, dtype=np.int64))
+        slots = np.flatnonzero(self.scanned)
+        if len(slots) == 0:
+            return []
+        increment = np.maximum(self.slot_increment[slots], 1)
+        residue = slots % increment
+        order = np.lexsort((slots, residue, increment))
+        slots, increment, residue = slots[order], increment[order], residue[order]
+        same_lattice = (increment[1:] == increment[:-1]) & (residue[1:] == residue[:-1])
+        linked = same_lattice & (slots[1:] - slots[:-1] == increment[:-1])
+        run_starts = np.flatnonzero(np.concatenate(([True], ~linked)))
+        opens_lattice = np.concatenate(([True], ~same_lattice))[run_starts].tolist()
+        closes_lattice = [*opens_lattice[1:], True]
+        chains: list[np.ndarray] = []
+        lattice_first = 0  # position in chains of the current lattice's first run
+        for run, g, opens, closes in zip(
+            np.split(slots, run_starts[1:]),
+            increment[run_starts].tolist(),
+            opens_lattice,
+            closes_lattice,
+            strict=True,
+        ):
+            if opens:
+                lattice_first = len(chains)
+            first_run = chains[lattice_first] if not opens else run
+            wraps_on = n % g == 0 and int(run[-1]) + g - n == int(first_run[0])
+            if closes and not opens and wraps_on:
+                chains[lattice_first] = np.concatenate([run, first_run])
+            else:
+                chains.append(run)
         return chains
 
     def _slots(self, angles_rad: FloatArray) -> np.ndarray:
