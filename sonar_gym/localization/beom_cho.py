@@ -64,6 +64,8 @@ from sonar_gym.localization.beom_cho_rcd import (
     _require_finite,
     _require_non_negative,
     _require_positive,
+    _runs_of_links,
+    _runs_with_parameters,
     _validated_scan_arrays,
     extract_rcds,
     make_rcd,
@@ -317,6 +319,94 @@ def _extent_and_range_pass(eta_rad: Any, delta_m: Any, params: BeomChoParameters
         & (params.r_min_m <= delta_m)
         & (delta_m <= params.r_max_m)
     )
+
+
+def _plausible_rcds_of_pans(
+    pans: Sequence[tuple[np.ndarray, np.ndarray]], params: BeomChoParameters
+) -> tuple[int, list[RCD]]:
+    """:func:`_plausible_rcds` summed over ``pans`` (each ``(angles, ranges)``, in their order).
+
+    Pans that are not a full turn share one pass over their concatenated samples (with the
+    links between pans cut), as an agent's sector pans leave many short chains in the scan
+    memory; a full turn, whose RCDs may wrap, gets a pass of its own. Any pan that fails
+    :func:`extract_rcds`'s checks sends the whole set through the pan-by-pan path, which
+    raises the same error as before.
+    """
+    if not pans:
+        return 0, []
+    checked = _pans_checked_at_once(pans)
+    if checked is None:
+        total, rcds = 0, []
+        for angles, ranges_m in pans:
+            count, pan_rcds = _plausible_rcds(angles, ranges_m, params)
+            total += count
+            rcds += pan_rcds
+        return total, rcds
+    angles_rad, ranges_m, offsets, full_turn = checked
+    _require_positive("eps", params.eps_m)
+    per_pan: list[list[RCD]] = [[] for _ in pans]
+    total = 0
+    finite = np.isfinite(ranges_m)
+    with np.errstate(invalid="ignore"):
+        links = finite[:-1] & finite[1:] & (np.abs(ranges_m[1:] - ranges_m[:-1]) < params.eps_m)
+    links[offsets[1:-1] - 1] = False  # the last sample of a pan and the first of the next
+    for k in np.flatnonzero(full_turn).tolist():
+        links[offsets[k] : offsets[k + 1] - 1] = False
+        pan_angles, pan_ranges = pans[k]
+        count, per_pan[k] = _plausible_rcds(pan_angles, pan_ranges, params)
+        total += count
+    starts, stops = _runs_of_links(links)
+    runs = _runs_with_parameters(angles_rad, ranges_m, starts, stops - starts + 1)
+    total += len(starts)
+    plausible = np.flatnonzero(_extent_and_range_pass(runs.extent_rad, runs.delta_m, params))
+    pan_of_run = np.searchsorted(offsets, starts[plausible], side="right") - 1
+    for run, k in zip(plausible.tolist(), pan_of_run.tolist(), strict=True):
+        first = int(starts[run]) - int(offsets[k])
+        pan_angles, pan_ranges = pans[k]
+        indices = np.arange(first, first + int(runs.count[run]))
+        per_pan[k].append(make_rcd(pan_angles, pan_ranges, indices))
+    return total, [rcd for pan_rcds in per_pan for rcd in pan_rcds]
+
+
+def _pans_checked_at_once(
+    pans: Sequence[tuple[np.ndarray, np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The concatenated angles and ranges of ``pans`` (float64 arrays of two samples or
+    more), the offset of each pan in them (and the total length last) and which pans are full
+    turns, when every pan passes :func:`extract_rcds`'s checks (the same comparisons, made on
+    all pans at once); ``None`` when any pan does not, or is not such an array."""
+    for angles, ranges_m in pans:
+        if not (
+            type(angles) is np.ndarray
+            and type(ranges_m) is np.ndarray
+            and angles.dtype == np.float64
+            and ranges_m.dtype == np.float64
+            and angles.ndim == 1
+            and ranges_m.shape == angles.shape
+            and len(angles) >= MIN_RCD_SAMPLES
+        ):
+            return None
+    lengths = np.array([len(angles) for angles, _ in pans], dtype=np.int64)
+    offsets = np.concatenate(([0], np.cumsum(lengths)))
+    angles_rad = np.concatenate([angles for angles, _ in pans])
+    ranges_m = np.concatenate([ranges for _, ranges in pans])
+    firsts, lasts = offsets[:-1], offsets[1:] - 1
+    span_rad = angles_rad[lasts] - angles_rad[firsts]
+    increment_rad = span_rad / (lengths - 1)
+    step_increment = np.repeat(increment_rad, lengths)[:-1]
+    within_pan = np.ones(len(angles_rad) - 1, dtype=bool)
+    within_pan[lasts[:-1]] = False
+    steps = angles_rad[1:] - angles_rad[:-1]
+    if (
+        not np.isfinite(angles_rad).all()
+        or (increment_rad <= 0.0).any()
+        or (within_pan & (np.abs(steps - step_increment) > 1e-4 * step_increment)).any()
+        or (span_rad >= 2.0 * math.pi).any()
+        or ((ranges_m < 0.0) & (ranges_m > -math.inf)).any()
+    ):
+        return None
+    full_turn = np.abs(span_rad + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad
+    return angles_rad, ranges_m, offsets, full_turn
 
 
 def _plausible_rcds(
@@ -1057,12 +1147,7 @@ def localize_scans(
     if short and not _short_pans_are_valid(short, params):
         for angles, ranges_m in _ranges_in_window(short, params):
             extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
-    rcd_count = 0
-    plausible: list[RCD] = []
-    for angles, ranges_m in pans:
-        pan_count, pan_plausible = _plausible_rcds(angles, ranges_m, params)
-        rcd_count += pan_count
-        plausible += pan_plausible
+    rcd_count, plausible = _plausible_rcds_of_pans(pans, params)
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
 

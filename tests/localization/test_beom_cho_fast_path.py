@@ -16,6 +16,8 @@ from hypothesis import strategies as st
 
 from sonar_gym.localization.beom_cho import (
     BeomChoParameters,
+    _plausible_rcds_of_pans,
+    _ranges_in_window,
     filter_beacon_candidates,
     localize_rcds,
     localize_scans,
@@ -147,3 +149,57 @@ def test_localize_scans_finds_what_the_whole_chain_finds(seed: int) -> None:
     assert fast.pair_error_m == reference.pair_error_m
     assert fast.small_rcd == reference.small_rcd and fast.large_rcd == reference.large_rcd
     assert filter_beacon_candidates(fast.candidates, params) == fast.candidates
+
+
+@settings(max_examples=200, deadline=None)
+@given(pans=st.lists(_pans(), min_size=1, max_size=6))
+def test_pans_taken_together_give_the_rcds_of_each_pan(
+    pans: list[tuple[np.ndarray, np.ndarray]],
+) -> None:
+    params = BeomChoParameters()
+    scans = [Scan(angles, ranges, np.ones(len(angles)), 0.0) for angles, ranges in pans]
+    windowed = [pan for pan in _ranges_in_window(scans, params) if len(pan[0]) >= 2]
+    count, plausible = _plausible_rcds_of_pans(windowed, params)
+    every_rcd = [rcd for angles, ranges in windowed for rcd in extract_rcds(angles, ranges)]
+    assert count == len(every_rcd)
+    assert filter_beacon_candidates(plausible, params) == filter_beacon_candidates(
+        every_rcd, params
+    )
+    assert plausible == [rcd for rcd in every_rcd if _passes_extent_and_range(rcd, params)]
+
+
+def _passes_extent_and_range(rcd: RCD, params: BeomChoParameters) -> bool:
+    slack = 1e-9
+    return (
+        params.eta_min_rad - slack <= rcd.eta <= params.eta_max_rad + slack
+        and params.r_min_m <= rcd.delta <= params.r_max_m
+    )
+
+
+@pytest.mark.parametrize(
+    ("bad_angles", "message"),
+    [
+        (np.radians([0.0, 1.0, 3.0, 4.0]), "equally spaced"),
+        (np.radians([0.0, -1.0, -2.0, -3.0]), "ascending"),
+        (np.array([0.0, np.nan, 0.1, 0.2]), "finite"),
+    ],
+)
+def test_a_bad_pan_among_good_ones_raises_as_it_does_alone(
+    bad_angles: np.ndarray, message: str
+) -> None:
+    good = Scan(np.radians(np.arange(40.0)), np.full(40, 2.0), np.ones(40), 0.0)
+    bad = Scan(bad_angles, np.full(len(bad_angles), 2.0), np.ones(len(bad_angles)), 0.0)
+    with pytest.raises(ValueError, match=message) as together:
+        localize_scans([good, bad, good], LAB)
+    with pytest.raises(ValueError) as alone:
+        extract_rcds(bad.angles, bad.ranges)
+    assert str(together.value) == str(alone.value)
+
+
+def test_an_rcd_never_runs_on_from_one_pan_into_the_next() -> None:
+    """Two sector pans at one range: an RCD each (the second a beacon-sized 20 deg)."""
+    first = (np.radians(np.arange(-60.0, -30.0)), np.full(30, 2.0))
+    second = (np.radians(np.arange(-29.0, -8.0)), np.full(21, 2.0))
+    count, plausible = _plausible_rcds_of_pans([first, second], BeomChoParameters())
+    assert count == 2
+    assert [(rcd.start_index, rcd.end_index) for rcd in plausible] == [(0, 20)]
