@@ -84,26 +84,35 @@ class ScanMemory:
         at 1 deg comes back as the pan from -pi). Other chains keep their angles unwrapped
         (they may exceed pi) and are listed in angular order, starting after the widest
         unscanned gap; an unscanned slot on the lattice ends a chain, as it would end an RCD.
+        The pans' arrays are slices of arrays made afresh on each call.
         """
-        ranges = self.ranges(speed_of_sound_mps)
+        n = self.n_slots
         scanned = np.flatnonzero(self.scanned)
         if len(scanned) == 0:
             return []
         chains = self._chains()
-        gaps = np.diff(np.append(scanned, scanned[0] + self.n_slots))
+        gaps = np.diff(np.append(scanned, scanned[0] + n))
         walk_start = int(scanned[(int(np.argmax(gaps)) + 1) % len(scanned)])
-        chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % self.n_slots)
-        scans = []
-        for chain in chains:
-            head = int(chain[0])
-            if head < walk_start and len(chain) * self.slot_increment[head] < self.n_slots:
-                head += self.n_slots  # the walk reaches it after crossing +-180 deg
-            unwrapped = head + self.slot_increment[chain[0]] * np.arange(len(chain))
-            angles = -math.pi + self.resolution_rad * unwrapped
-            scans.append(
-                Scan(angles.astype(np.float64), ranges[chain], self.amplitudes[chain], 0.0)
-            )
-        return scans
+        chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % n)
+        # All chains at once, one array each for angles, ranges and amplitudes; the scans
+        # handed out are consecutive slices of them.
+        members = np.concatenate(chains)
+        lengths = np.array([len(chain) for chain in chains], dtype=np.int64)
+        starts = np.concatenate(([0], np.cumsum(lengths)[:-1]))
+        heads = members[starts]
+        increments = self.slot_increment[heads]
+        # a chain the walk reaches after crossing +-180 deg is unwrapped past pi
+        heads = heads + np.where((heads < walk_start) & (lengths * increments < n), n, 0)
+        position = np.arange(len(members)) - np.repeat(starts, lengths)
+        unwrapped = np.repeat(heads, lengths) + np.repeat(increments, lengths) * position
+        angles = -math.pi + self.resolution_rad * unwrapped
+        ranges = self.ranges(speed_of_sound_mps)[members]
+        amplitudes = self.amplitudes[members]
+        bounds = [*starts.tolist(), len(members)]
+        return [
+            Scan(angles[a:b], ranges[a:b], amplitudes[a:b], 0.0)
+            for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+        ]
 
     def _chains(self) -> list[np.ndarray]:
         """Scanned slots grouped into chains ``s, s + g, ...`` (``g``: their pans' increment).
@@ -134,13 +143,16 @@ class ScanMemory:
         closes_lattice = [*opens_lattice[1:], True]
         chains: list[np.ndarray] = []
         lattice_first = 0  # position in chains of the current lattice's first run
-        for run, g, opens, closes in zip(
-            np.split(slots, run_starts[1:]),
+        run_bounds = [*run_starts.tolist(), len(slots)]
+        for a, b, g, opens, closes in zip(
+            run_bounds[:-1],
+            run_bounds[1:],
             increment[run_starts].tolist(),
             opens_lattice,
             closes_lattice,
             strict=True,
         ):
+            run = slots[a:b]
             if opens:
                 lattice_first = len(chains)
             first_run = chains[lattice_first] if not opens else run
