@@ -31,8 +31,6 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.envs.action_check import ActionCheck
-
 INFO_KEYS = ("position_error_m", "heading_error_rad", "sensing_time_s", "status")
 """The ``info`` keys every task reports on every step (opt in with ``required_info_keys``)."""
 REWARDS_INFO_KEY = "rewards"
@@ -211,7 +209,9 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
 
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
-        if not np.isfinite(observation).all():
+        # A sum is finite unless an entry is not (or the sum overflows, which the full
+        # check then clears): one reduction for the common case.
+        if not math.isfinite(observation.sum()) and not np.isfinite(observation).all():
             raise RuntimeError(f"{type(self).__name__}: non-finite observation")
         return observation
 
@@ -238,6 +238,67 @@ class _PhaseTimer:
     def __exit__(self, *exc_info: object) -> None:
         timing = self.timing
         timing[self.phase] = timing.get(self.phase, 0.0) + time.perf_counter() - self.start
+
+
+class ActionCheck:
+    """``space.contains`` with fast paths for ``MultiDiscrete`` and ``Discrete`` spaces.
+
+    Gymnasium's ``contains`` goes through several NumPy calls and reductions, a noticeable
+    share of a step. The common cases (an integer array of the space's own dtype and shape;
+    a Python int or NumPy int64 for an int64 ``Discrete``) are answered with plain integer
+    comparisons; every other value goes to ``space.contains``, so the check accepts and
+    rejects exactly what ``space.contains`` does.
+
+    The space's bounds are read once, at construction; make a new check when the space's
+    ``start``, ``nvec`` or ``n`` change (the env rebuilds it whenever ``action_space`` is
+    replaced or these arrays are reassigned).
+    """
+
+    def __init__(self, space: gym.Space[Any]) -> None:
+        self.space = space
+        self._start: Any = None
+        self._nvec: Any = None
+        self._low: list[int] = []
+        self._high: list[int] = []
+        kind = type(space)
+        self._multi_discrete = kind is gym.spaces.MultiDiscrete
+        self._discrete = kind is gym.spaces.Discrete and space.dtype == np.int64
+        if isinstance(space, gym.spaces.MultiDiscrete) and self._multi_discrete:
+            self._start, self._nvec = space.start, space.nvec
+            self._low = space.start.ravel().tolist()
+            self._high = (space.start + (space.nvec - 1)).ravel().tolist()
+        elif isinstance(space, gym.spaces.Discrete) and self._discrete:
+            self._start, self._nvec = space.start, space.n
+            self._low = [int(space.start)]
+            self._high = [int(space.start) + int(space.n) - 1]
+
+    def is_current_for(self, space: gym.Space[Any]) -> bool:
+        """Whether this check was built for ``space`` as it is now (same bound arrays)."""
+        if space is not self.space:
+            return False
+        if self._multi_discrete:
+            return space.start is self._start and space.nvec is self._nvec  # type: ignore[attr-defined]
+        if self._discrete:
+            return space.start is self._start and space.n is self._nvec  # type: ignore[attr-defined]
+        return True
+
+    def __call__(self, action: Any) -> bool:
+        """Whether ``action`` lies in the space; the same answer as ``space.contains``."""
+        space = self.space
+        if self._multi_discrete:
+            if (
+                type(action) is np.ndarray
+                and action.dtype == space.dtype
+                and action.shape == space.shape
+            ):
+                values = action.ravel().tolist()
+                return all(
+                    low <= value <= high
+                    for low, value, high in zip(self._low, values, self._high, strict=True)
+                )
+        elif self._discrete and (type(action) is int or type(action) is np.int64):
+            return self._low[0] <= int(action) <= self._high[0]
+        return bool(space.contains(action))
 
 
 def unwrap_sonar_env(env: gym.Env[Any, Any]) -> SonarEnv:

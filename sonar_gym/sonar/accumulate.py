@@ -51,7 +51,7 @@ class ScanMemory:
     @property
     def coverage(self) -> float:
         """Fraction of the grid's slots scanned at least once."""
-        return float(self.scanned.mean())
+        return np.count_nonzero(self.scanned) / self.n_slots
 
     def add(self, scan: Scan, assumed_speed_of_sound_mps: float) -> None:
         """Store a pan; its ranges were converted with ``assumed_speed_of_sound_mps`` (m/s)."""

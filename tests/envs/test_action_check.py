@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sonar_gym.envs.action_check import ActionCheck
+from sonar_gym.envs.base import ActionCheck
 
 MULTI = gym.spaces.MultiDiscrete([3, 36, 5, 3])
 MULTI_WITH_START = gym.spaces.MultiDiscrete([3, 4], start=[-2, 5])
