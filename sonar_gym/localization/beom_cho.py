@@ -334,7 +334,7 @@ def _plausible_rcds_of_pans(
     """
     if not pans:
         return 0, []
-    checked = _pans_checked_at_once(pans)
+    checked = None if len(pans) == 1 else _pans_checked_at_once(pans)
     if checked is None:
         total, rcds = 0, []
         for angles, ranges_m in pans:

@@ -8,6 +8,7 @@ when the robot localizes (a calibration after the pans still corrects them).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -96,19 +97,23 @@ class ScanMemory:
         chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % n)
         # All chains at once, one array each for angles, ranges and amplitudes; the scans
         # handed out are consecutive slices of them.
-        members = np.concatenate(chains)
-        lengths = np.array([len(chain) for chain in chains], dtype=np.int64)
-        starts = np.concatenate(([0], np.cumsum(lengths)[:-1]))
-        heads = members[starts]
-        increments = self.slot_increment[heads]
-        # a chain the walk reaches after crossing +-180 deg is unwrapped past pi
-        heads = heads + np.where((heads < walk_start) & (lengths * increments < n), n, 0)
-        position = np.arange(len(members)) - np.repeat(starts, lengths)
-        unwrapped = np.repeat(heads, lengths) + np.repeat(increments, lengths) * position
+        members = np.concatenate(chains) if len(chains) > 1 else chains[0]
+        lengths = [len(chain) for chain in chains]
+        starts = [0, *itertools.accumulate(lengths[:-1])]
+        increments = self.slot_increment[members[starts]].tolist()
+        heads = members[starts].tolist()
+        for k, (head, length, increment) in enumerate(zip(heads, lengths, increments, strict=True)):
+            if head < walk_start and length * increment < n:
+                heads[k] = head + n  # the walk reaches it after crossing +-180 deg
+        if len(chains) == 1:
+            unwrapped = heads[0] + increments[0] * np.arange(lengths[0])
+        else:
+            position = np.arange(len(members)) - np.repeat(starts, lengths)
+            unwrapped = np.repeat(heads, lengths) + np.repeat(increments, lengths) * position
         angles = -math.pi + self.resolution_rad * unwrapped
         ranges = self.ranges(speed_of_sound_mps)[members]
         amplitudes = self.amplitudes[members]
-        bounds = [*starts.tolist(), len(members)]
+        bounds = [*starts, len(members)]
         return [
             Scan(angles[a:b], ranges[a:b], amplitudes[a:b], 0.0)
             for a, b in zip(bounds[:-1], bounds[1:], strict=True)
