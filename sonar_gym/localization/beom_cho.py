@@ -140,6 +140,15 @@ intersection points are computed with the rotation-invariant construction instea
 
 
 def _point(name: str, value: tuple[float, float] | npt.ArrayLike) -> tuple[float, float]:
+    if (
+        type(value) is tuple
+        and len(value) == 2
+        and type(value[0]) is float
+        and type(value[1]) is float
+        and math.isfinite(value[0])
+        and math.isfinite(value[1])
+    ):
+        return value  # a scenario's own (x, y), as every localization passes it
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (2,) or not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
