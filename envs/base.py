@@ -24,8 +24,7 @@ from __future__ import annotations
 import math
 import time
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -101,6 +100,7 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         self.timing: dict[str, float] = {"sensing": 0.0, "localization": 0.0}
         self._episode_started = False
         self._record = EpisodeRecord()
+        self._action_check: ActionCheck | None = None
 
     # --- the agent API -----------------------------------------------------------------
     @property
@@ -147,7 +147,10 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if not self._episode_started:
             raise RuntimeError(f"{type(self).__name__}: call reset() before step()")
-        if not self.action_space.contains(action):
+        check = self._action_check
+        if check is None or not check.is_current_for(self.action_space):
+            check = self._action_check = ActionCheck(self.action_space)
+        if not check(action):
             raise ValueError(
                 f"{type(self).__name__}: action {action!r} is not in the action space "
                 f"{self.action_space}"
@@ -207,18 +210,96 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
 
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
-        if not np.all(np.isfinite(observation)):
+        # A sum is finite unless an entry is not (or the sum overflows, which the full
+        # check then clears): one reduction for the common case.
+        if not math.isfinite(observation.sum()) and not np.isfinite(observation).all():
             raise RuntimeError(f"{type(self).__name__}: non-finite observation")
         return observation
 
-    @contextmanager
-    def _timed(self, phase: str) -> Iterator[None]:
-        """Add the wall-clock time of the block to ``self.timing[phase]`` (seconds)."""
-        start = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.timing[phase] = self.timing.get(phase, 0.0) + time.perf_counter() - start
+    def _timed(self, phase: str) -> _PhaseTimer:
+        """A context that adds the wall-clock time of its block to ``self.timing[phase]``
+        (seconds)."""
+        return _PhaseTimer(self.timing, phase)
+
+
+class _PhaseTimer:
+    """The context behind :meth:`SonarEnv._timed` (a plain class: a generator-based context
+    costs several times more per block)."""
+
+    __slots__ = ("phase", "start", "timing")
+
+    def __init__(self, timing: dict[str, float], phase: str) -> None:
+        self.timing = timing
+        self.phase = phase
+        self.start = 0.0
+
+    def __enter__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __exit__(self, *exc_info: object) -> None:
+        timing = self.timing
+        timing[self.phase] = timing.get(self.phase, 0.0) + time.perf_counter() - self.start
+
+
+class ActionCheck:
+    """``space.contains`` with fast paths for ``MultiDiscrete`` and ``Discrete`` spaces.
+
+    Gymnasium's ``contains`` goes through several NumPy calls and reductions, a noticeable
+    share of a step. The common cases (an integer array of the space's own dtype and shape;
+    a Python int or NumPy int64 for an int64 ``Discrete``) are answered with plain integer
+    comparisons; every other value goes to ``space.contains``, so the check accepts and
+    rejects exactly what ``space.contains`` does.
+
+    The space's bounds are read once, at construction; make a new check when the space's
+    ``start``, ``nvec`` or ``n`` change (the env rebuilds it whenever ``action_space`` is
+    replaced or these arrays are reassigned).
+    """
+
+    def __init__(self, space: gym.Space[Any]) -> None:
+        self.space = space
+        self._start: Any = None
+        self._nvec: Any = None
+        self._low: list[int] = []
+        self._high: list[int] = []
+        kind = type(space)
+        self._multi_discrete = kind is gym.spaces.MultiDiscrete
+        self._discrete = kind is gym.spaces.Discrete and space.dtype == np.int64
+        if isinstance(space, gym.spaces.MultiDiscrete) and self._multi_discrete:
+            self._start, self._nvec = space.start, space.nvec
+            self._low = space.start.ravel().tolist()
+            self._high = (space.start + (space.nvec - 1)).ravel().tolist()
+        elif isinstance(space, gym.spaces.Discrete) and self._discrete:
+            self._start, self._nvec = space.start, space.n
+            self._low = [int(space.start)]
+            self._high = [int(space.start) + int(space.n) - 1]
+
+    def is_current_for(self, space: gym.Space[Any]) -> bool:
+        """Whether this check was built for ``space`` as it is now (same bound arrays)."""
+        if space is not self.space:
+            return False
+        if self._multi_discrete:
+            return space.start is self._start and space.nvec is self._nvec  # type: ignore[attr-defined]
+        if self._discrete:
+            return space.start is self._start and space.n is self._nvec  # type: ignore[attr-defined]
+        return True
+
+    def __call__(self, action: Any) -> bool:
+        """Whether ``action`` lies in the space; the same answer as ``space.contains``."""
+        space = self.space
+        if self._multi_discrete:
+            if (
+                type(action) is np.ndarray
+                and action.dtype == space.dtype
+                and action.shape == space.shape
+            ):
+                values = action.ravel().tolist()
+                return all(
+                    low <= value <= high
+                    for low, value, high in zip(self._low, values, self._high, strict=True)
+                )
+        elif self._discrete and (type(action) is int or type(action) is np.int64):
+            return self._low[0] <= int(action) <= self._high[0]
+        return bool(space.contains(action))
 
 
 def unwrap_sonar_env(env: gym.Env[Any, Any]) -> SonarEnv:

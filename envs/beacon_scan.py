@@ -177,6 +177,8 @@ class _Episode:
     prior_features: np.ndarray = field(default_factory=lambda: np.zeros(10, dtype=np.float32))
     scan_features: np.ndarray | None = None  # cached until the next pan or calibration
     coverage: float = 0.0  # of the memory, cached with scan_features
+    # the observation so far: scan features as cached, prior features, progress of last step
+    observation: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.float32))
 
 
 class BeaconScanEnv(SonarEnv):
@@ -392,7 +394,12 @@ class BeaconScanEnv(SonarEnv):
             rest, increment_index = divmod(code - 2, n_inc)
             centre_index, width_index = divmod(rest, n_width)
         else:
-            kind, centre_index, width_index, increment_index = (int(v) for v in action)
+            values = (
+                action.tolist()
+                if type(action) is np.ndarray and action.dtype.kind in "iu"
+                else [int(v) for v in action]
+            )
+            kind, centre_index, width_index, increment_index = values
             if kind != PAN:
                 return PanCommand(ACTION_KINDS[kind])
         return PanCommand(
@@ -423,6 +430,7 @@ class BeaconScanEnv(SonarEnv):
             true_pose.y + rng.normal(0.0, config.prior_position_std_m),
             true_pose.theta + rng.normal(0.0, math.radians(config.prior_heading_std_deg)),
         )
+        prior_features = self._prior_features(room, prior, sonar.transducer.max_range_m)
         self._episode = _Episode(
             room,
             world,
@@ -430,8 +438,11 @@ class BeaconScanEnv(SonarEnv):
             prior,
             sonar,
             ScanMemory(math.radians(1.0)),
-            prior_features=self._prior_features(room, prior, sonar.transducer.max_range_m),
+            prior_features=prior_features,
             scan_features=self._unscanned_features,
+            observation=np.concatenate(
+                [self._unscanned_features, prior_features, np.zeros(5, dtype=np.float32)]
+            ),
         )
         return self._info("sensing")
 
@@ -532,20 +543,20 @@ class BeaconScanEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
         config = self.config
+        observation = episode.observation
+        scan_end = 2 * config.n_bins
         if episode.scan_features is None:  # pans and calibrations change it, nothing else
             episode.scan_features = self._scan_features(episode)
             episode.coverage = episode.memory.coverage
-        progress = np.array(
-            [
-                min(episode.sensing_time_s / config.time_budget_s, 1.0),
-                float(episode.calibrated),
-                min(episode.steps / config.max_steps, 1.0),
-                float(config.allow_calibration),
-                episode.coverage,
-            ],
-            dtype=np.float32,
+            observation[:scan_end] = episode.scan_features
+        observation[scan_end + 10 :] = (
+            min(episode.sensing_time_s / config.time_budget_s, 1.0),
+            float(episode.calibrated),
+            min(episode.steps / config.max_steps, 1.0),
+            float(config.allow_calibration),
+            episode.coverage,
         )
-        return np.concatenate([episode.scan_features, episode.prior_features, progress])
+        return observation.copy()
 
     def _scan_features(self, episode: _Episode) -> np.ndarray:
         """``bin_ranges`` and ``bin_scanned`` of the observation (float32)."""

@@ -64,8 +64,12 @@ from sonar_gym.localization.beom_cho_rcd import (
     _require_finite,
     _require_non_negative,
     _require_positive,
+    _runs_of_links,
+    _runs_with_parameters,
+    _validated_scan_arrays,
     extract_rcds,
     make_rcd,
+    rcd_runs,
     symmetry_measure,
 )
 from sonar_gym.localization.beom_cho_refine import central_range_estimate, refine_two_beacon_pose
@@ -136,6 +140,15 @@ intersection points are computed with the rotation-invariant construction instea
 
 
 def _point(name: str, value: tuple[float, float] | npt.ArrayLike) -> tuple[float, float]:
+    if (
+        type(value) is tuple
+        and len(value) == 2
+        and type(value[0]) is float
+        and type(value[1]) is float
+        and math.isfinite(value[0])
+        and math.isfinite(value[1])
+    ):
+        return value  # a scenario's own (x, y), as every localization passes it
     array = np.asarray(value, dtype=np.float64)
     if array.shape != (2,) or not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
@@ -301,12 +314,122 @@ def filter_beacon_candidates(
     return tuple(
         rcd
         for rcd in rcds
-        if params.eta_min_rad - _EXTENT_TOLERANCE_RAD
-        <= rcd.eta
-        <= params.eta_max_rad + _EXTENT_TOLERANCE_RAD
+        if _extent_and_range_pass(rcd.eta, rcd.delta, params)
         and rcd.gamma < params.gamma_threshold_m
-        and params.r_min_m <= rcd.delta <= params.r_max_m
     )
+
+
+def _extent_and_range_pass(eta_rad: Any, delta_m: Any, params: BeomChoParameters) -> Any:
+    """The filters of :func:`filter_beacon_candidates` but symmetry: on floats a bool, on
+    arrays (one entry per RCD) a boolean array."""
+    return (
+        (params.eta_min_rad - _EXTENT_TOLERANCE_RAD <= eta_rad)
+        & (eta_rad <= params.eta_max_rad + _EXTENT_TOLERANCE_RAD)
+        & (params.r_min_m <= delta_m)
+        & (delta_m <= params.r_max_m)
+    )
+
+
+def _plausible_rcds_of_pans(
+    pans: Sequence[tuple[np.ndarray, np.ndarray]], params: BeomChoParameters
+) -> tuple[int, list[RCD]]:
+    """:func:`_plausible_rcds` summed over ``pans`` (each ``(angles, ranges)``, in their order).
+
+    Pans that are not a full turn share one pass over their concatenated samples (with the
+    links between pans cut), as an agent's sector pans leave many short chains in the scan
+    memory; a full turn, whose RCDs may wrap, gets a pass of its own. Any pan that fails
+    :func:`extract_rcds`'s checks sends the whole set through the pan-by-pan path, which
+    raises the same error as before.
+    """
+    if not pans:
+        return 0, []
+    checked = None if len(pans) == 1 else _pans_checked_at_once(pans)
+    if checked is None:
+        total, rcds = 0, []
+        for angles, ranges_m in pans:
+            count, pan_rcds = _plausible_rcds(angles, ranges_m, params)
+            total += count
+            rcds += pan_rcds
+        return total, rcds
+    angles_rad, ranges_m, offsets, full_turn = checked
+    _require_positive("eps", params.eps_m)
+    per_pan: list[list[RCD]] = [[] for _ in pans]
+    total = 0
+    finite = np.isfinite(ranges_m)
+    with np.errstate(invalid="ignore"):
+        links = finite[:-1] & finite[1:] & (np.abs(ranges_m[1:] - ranges_m[:-1]) < params.eps_m)
+    links[offsets[1:-1] - 1] = False  # the last sample of a pan and the first of the next
+    for k in np.flatnonzero(full_turn).tolist():
+        links[offsets[k] : offsets[k + 1] - 1] = False
+        pan_angles, pan_ranges = pans[k]
+        count, per_pan[k] = _plausible_rcds(pan_angles, pan_ranges, params)
+        total += count
+    starts, stops = _runs_of_links(links)
+    runs = _runs_with_parameters(angles_rad, ranges_m, starts, stops - starts + 1)
+    total += len(starts)
+    plausible = np.flatnonzero(_extent_and_range_pass(runs.extent_rad, runs.delta_m, params))
+    pan_of_run = np.searchsorted(offsets, starts[plausible], side="right") - 1
+    for run, k in zip(plausible.tolist(), pan_of_run.tolist(), strict=True):
+        first = int(starts[run]) - int(offsets[k])
+        pan_angles, pan_ranges = pans[k]
+        indices = np.arange(first, first + int(runs.count[run]))
+        per_pan[k].append(make_rcd(pan_angles, pan_ranges, indices))
+    return total, [rcd for pan_rcds in per_pan for rcd in pan_rcds]
+
+
+def _pans_checked_at_once(
+    pans: Sequence[tuple[np.ndarray, np.ndarray]],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The concatenated angles and ranges of ``pans`` (float64 arrays of two samples or
+    more), the offset of each pan in them (and the total length last) and which pans are full
+    turns, when every pan passes :func:`extract_rcds`'s checks (the same comparisons, made on
+    all pans at once); ``None`` when any pan does not, or is not such an array."""
+    for angles, ranges_m in pans:
+        if not (
+            type(angles) is np.ndarray
+            and type(ranges_m) is np.ndarray
+            and angles.dtype == np.float64
+            and ranges_m.dtype == np.float64
+            and angles.ndim == 1
+            and ranges_m.shape == angles.shape
+            and len(angles) >= MIN_RCD_SAMPLES
+        ):
+            return None
+    lengths = np.array([len(angles) for angles, _ in pans], dtype=np.int64)
+    offsets = np.concatenate(([0], np.cumsum(lengths)))
+    angles_rad = np.concatenate([angles for angles, _ in pans])
+    ranges_m = np.concatenate([ranges for _, ranges in pans])
+    firsts, lasts = offsets[:-1], offsets[1:] - 1
+    span_rad = angles_rad[lasts] - angles_rad[firsts]
+    increment_rad = span_rad / (lengths - 1)
+    step_increment = np.repeat(increment_rad, lengths)[:-1]
+    within_pan = np.ones(len(angles_rad) - 1, dtype=bool)
+    within_pan[lasts[:-1]] = False
+    steps = angles_rad[1:] - angles_rad[:-1]
+    if (
+        not np.isfinite(angles_rad).all()
+        or (increment_rad <= 0.0).any()
+        or (within_pan & (np.abs(steps - step_increment) > 1e-4 * step_increment)).any()
+        or (span_rad >= 2.0 * math.pi).any()
+        or ((ranges_m < 0.0) & (ranges_m > -math.inf)).any()
+    ):
+        return None
+    full_turn = np.abs(span_rad + increment_rad - 2.0 * math.pi) <= 1e-3 * increment_rad
+    return angles_rad, ranges_m, offsets, full_turn
+
+
+def _plausible_rcds(
+    angles: np.ndarray, ranges_m: np.ndarray, params: BeomChoParameters
+) -> tuple[int, list[RCD]]:
+    """How many RCDs :func:`extract_rcds` finds in a pan, and those of them that pass the
+    extent and range filters (in its order). Only these are built, as most RCDs of a pan
+    (short runs on walls and corners) fail the extent filter."""
+    angles_rad, ranges_m = _validated_scan_arrays(angles, ranges_m)
+    runs = rcd_runs(angles_rad, ranges_m, params.eps_m)
+    plausible = np.flatnonzero(_extent_and_range_pass(runs.extent_rad, runs.delta_m, params))
+    return len(runs.first), [
+        make_rcd(angles_rad, ranges_m, runs.indices(k)) for k in plausible.tolist()
+    ]
 
 
 def assign_large_and_small(rcd_a: RCD, rcd_b: RCD) -> tuple[RCD, RCD]:
@@ -695,6 +818,38 @@ def localize_rcds(
         filters), ``"no_pair"`` (no pair within the tolerance, or a single candidate),
         ``"ambiguous_pair"`` (see ``agreement_m``) or ``"no_intersection"`` (``D < 0``).
     """
+    return _localize_rcds(
+        rcds,
+        len(rcds),
+        small_center,
+        small_radius,
+        large_center,
+        large_radius,
+        distance_tolerance,
+        params,
+        method,
+        prior,
+        prior_gate_m,
+        agreement_m,
+    )
+
+
+def _localize_rcds(
+    rcds: Sequence[RCD],
+    rcd_count: int,
+    small_center: tuple[float, float] | npt.ArrayLike,
+    small_radius: float,
+    large_center: tuple[float, float] | npt.ArrayLike,
+    large_radius: float,
+    distance_tolerance: float | None,
+    params: BeomChoParameters,
+    method: str,
+    prior: Pose | None,
+    prior_gate_m: float,
+    agreement_m: float | None,
+) -> BeaconLocalization:
+    """:func:`localize_rcds` on ``rcds``, which may leave out RCDs that fail the extent or
+    range filter; ``rcd_count`` is how many RCDs the pans held in all (for the message)."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     small_xy = _point("small_center", small_center)
@@ -715,7 +870,7 @@ def localize_rcds(
     if not candidates:
         return BeaconLocalization(
             "no_candidates",
-            message=f"none of {len(rcds)} RCDs passed the extent, symmetry and range filters",
+            message=f"none of {rcd_count} RCDs passed the extent, symmetry and range filters",
         )
 
     pairs = _ranked_pairs(candidates, params, small_radius, large_radius, beacon_distance)
@@ -1001,29 +1156,29 @@ def localize_scans(
     if short and not _short_pans_are_valid(short, params):
         for angles, ranges_m in _ranges_in_window(short, params):
             extract_rcds(angles, ranges_m, eps=params.eps_m)  # raises, naming the problem
-    rcds = [
-        rcd for angles, ranges_m in pans for rcd in extract_rcds(angles, ranges_m, eps=params.eps_m)
-    ]
+    rcd_count, plausible = _plausible_rcds_of_pans(pans, params)
     small = scenario.beacon(SMALL_BEACON_NAME)
     large = scenario.beacon(LARGE_BEACON_NAME)
 
-    def localize(candidate_rcds: list[RCD], agreement_m: float | None = None) -> BeaconLocalization:
-        return localize_rcds(
+    def localize(
+        candidate_rcds: list[RCD], count: int, agreement_m: float | None = None
+    ) -> BeaconLocalization:
+        return _localize_rcds(
             candidate_rcds,
-            small_center=small.center,
-            small_radius=small.radius,
-            large_center=large.center,
-            large_radius=large.radius,
-            params=params,
-            method=method,
-            prior=None
-            if prior is None
-            else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
-            prior_gate_m=prior_gate_m,
-            agreement_m=agreement_m,
+            count,
+            small.center,
+            small.radius,
+            large.center,
+            large.radius,
+            None,
+            params,
+            method,
+            None if prior is None else prior.compose(Pose(*scenario.robot.sensor_offset, 0.0)),
+            prior_gate_m,
+            agreement_m,
         )
 
-    result = localize(rcds)
+    result = localize(plausible, rcd_count)
     if params.extraction == "occlusion_aware" and result.status in ("no_candidates", "no_pair"):
         rebuilt = [
             rcd
@@ -1036,7 +1191,7 @@ def localize_scans(
                 params.min_visible_extent_rad,
             )
         ]
-        second_try = localize(rebuilt, agreement_m=params.rebuilt_agreement_m)
+        second_try = localize(rebuilt, len(rebuilt), params.rebuilt_agreement_m)
         if second_try.ok or second_try.status == "ambiguous_pair":
             result = second_try
     if result.pose is None:

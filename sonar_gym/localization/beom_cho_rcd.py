@@ -25,8 +25,10 @@ __all__ = [
     "MIN_RCD_SAMPLES",
     "RCD",
     "SMALL_BEACON_NAME",
+    "RCDRuns",
     "extract_rcds",
     "make_rcd",
+    "rcd_runs",
     "symmetry_measure",
 ]
 
@@ -153,30 +155,78 @@ def extract_rcds(angles: npt.ArrayLike, ranges: npt.ArrayLike, eps: float = 0.02
         The RCDs in the order of their first sample in the arrays (a wrapped RCD comes last).
     """
     angles_rad, ranges_m = _validated_scan_arrays(angles, ranges)
+    runs = rcd_runs(angles_rad, ranges_m, eps)
+    return [make_rcd(angles_rad, ranges_m, runs.indices(k)) for k in range(len(runs.first))]
+
+
+@dataclass(frozen=True)
+class RCDRuns:
+    """The sample runs of a pan's RCDs (eqs (3)-(5)), before their parameters are computed.
+
+    Run ``k`` holds the samples ``(first[k] + j) % sample_count`` for ``j < count[k]``, in
+    angular order (on a full turn a run may wrap across +-180 deg). Runs are listed in
+    :func:`extract_rcds`'s order. ``extent_rad`` and ``delta_m`` are what :func:`make_rcd`
+    gives as ``eta`` and ``delta`` for each run (same arithmetic, all runs at once), so a
+    filter on them can run before any RCD is built.
+    """
+
+    first: np.ndarray  # int64, index of each run's first sample
+    count: np.ndarray  # int64, samples per run (>= MIN_RCD_SAMPLES)
+    sample_count: int
+    extent_rad: np.ndarray  # eta = beta_e - beta_s, radians
+    delta_m: np.ndarray  # range at beta, metres
+
+    def indices(self, k: int) -> np.ndarray:
+        """The sample indices of run ``k``, in angular order."""
+        first, count = int(self.first[k]), int(self.count[k])
+        if first + count <= self.sample_count:
+            return np.arange(first, first + count)
+        return (first + np.arange(count)) % self.sample_count
+
+
+def rcd_runs(angles_rad: np.ndarray, ranges_m: np.ndarray, eps: float) -> RCDRuns:
+    """The runs of :func:`extract_rcds` for arrays that passed its checks (float64, radians,
+    metres); see there for the rules of eqs (3)-(5)."""
     _require_positive("eps", eps)
     sample_count = len(angles_rad)
+    none = np.zeros(0, dtype=np.int64)
     if sample_count < MIN_RCD_SAMPLES:
-        return []
+        return _runs_with_parameters(angles_rad, ranges_m, none, none)
     increment_rad = (angles_rad[-1] - angles_rad[0]) / (sample_count - 1)
 
     finite = np.isfinite(ranges_m)
     with np.errstate(invalid="ignore"):
         close_to_next = finite[:-1] & finite[1:] & (np.abs(ranges_m[1:] - ranges_m[:-1]) < eps)
     if not _covers_full_turn(angles_rad, increment_rad):
-        runs = _runs_of_links(close_to_next)
-        return [make_rcd(angles_rad, ranges_m, np.arange(a, b + 1)) for a, b in runs]
+        starts, stops = _runs_of_links(close_to_next)
+        return _runs_with_parameters(angles_rad, ranges_m, starts, stops - starts + 1)
 
     wrap_link = bool(finite[-1] and finite[0] and abs(ranges_m[0] - ranges_m[-1]) < eps)
     links = np.append(close_to_next, wrap_link)
     if links.all():
-        return [make_rcd(angles_rad, ranges_m, np.arange(sample_count))]
-    first_break = int(np.flatnonzero(~links)[0])
-    order = np.roll(np.arange(sample_count), -(first_break + 1))
-    rotated_links = np.roll(links, -(first_break + 1))[:-1]
-    rcds = [
-        make_rcd(angles_rad, ranges_m, order[a : b + 1]) for a, b in _runs_of_links(rotated_links)
-    ]
-    return sorted(rcds, key=lambda rcd: (rcd.start_index > rcd.end_index, rcd.start_index))
+        whole = np.array([sample_count], dtype=np.int64)
+        return _runs_with_parameters(angles_rad, ranges_m, np.zeros(1, dtype=np.int64), whole)
+    shift = int(np.flatnonzero(~links)[0]) + 1  # the walk starts after the first break
+    starts, stops = _runs_of_links(np.roll(links, -shift)[:-1])
+    first = (starts + shift) % sample_count
+    count = stops - starts + 1
+    wrapped = (first + count - 1) % sample_count < first
+    order = np.lexsort((first, wrapped))  # by start index, the wrapped RCD last
+    return _runs_with_parameters(angles_rad, ranges_m, first[order], count[order])
+
+
+def _runs_with_parameters(
+    angles_rad: np.ndarray, ranges_m: np.ndarray, first: np.ndarray, count: np.ndarray
+) -> RCDRuns:
+    """:class:`RCDRuns` with each run's ``eta`` and ``delta`` computed as :func:`make_rcd` does."""
+    n = len(angles_rad)
+    last = (first + count - 1) % max(n, 1)
+    beta_start = angles_rad[first]
+    beta_end = angles_rad[last] + np.where(last < first, 2.0 * math.pi, 0.0)
+    middle = ranges_m[(first + count // 2) % max(n, 1)]
+    before_middle = ranges_m[(first + count // 2 - 1) % max(n, 1)]
+    delta = np.where(count % 2 == 1, middle, 0.5 * (before_middle + middle))
+    return RCDRuns(first, count, n, beta_end - beta_start, delta)
 
 
 def symmetry_measure(
@@ -227,8 +277,8 @@ def _symmetry(rcd_angles: np.ndarray, rcd_ranges: np.ndarray) -> float:
     return float(np.abs(above - below).sum() / half_count)  # the mean, as np.mean rounds it
 
 
-def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
-    """``(first, last)`` sample positions of each maximal run of true links.
+def _runs_of_links(links: npt.NDArray[np.bool_]) -> tuple[np.ndarray, np.ndarray]:
+    """First and last sample positions (int64 arrays) of each maximal run of true links.
 
     ``links[k]`` says whether samples ``k`` and ``k + 1`` are close; a run of links
     ``k0..k1`` makes the RCD of samples ``k0..k1 + 1``.
@@ -236,9 +286,7 @@ def _runs_of_links(links: npt.NDArray[np.bool_]) -> list[tuple[int, int]]:
     padded = np.zeros(len(links) + 2, dtype=np.int8)
     padded[1:-1] = links
     edges = padded[1:] - padded[:-1]
-    starts = np.nonzero(edges == 1)[0].tolist()
-    stops = np.nonzero(edges == -1)[0].tolist()
-    return list(zip(starts, stops, strict=True))
+    return np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
 
 
 def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) -> RCD:

@@ -8,6 +8,7 @@ when the robot localizes (a calibration after the pans still corrects them).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -51,7 +52,7 @@ class ScanMemory:
     @property
     def coverage(self) -> float:
         """Fraction of the grid's slots scanned at least once."""
-        return float(self.scanned.mean())
+        return np.count_nonzero(self.scanned) / self.n_slots
 
     def add(self, scan: Scan, assumed_speed_of_sound_mps: float) -> None:
         """Store a pan; its ranges were converted with ``assumed_speed_of_sound_mps`` (m/s)."""
@@ -59,8 +60,10 @@ class ScanMemory:
             return
         slots = self._slots(scan.angles)
         increment = 1
-        if len(slots) > 1:
-            increment = int(np.min(np.diff(np.sort(np.unique(slots))), initial=self.n_slots)) or 1
+        if len(slots) > 1:  # the smallest gap between distinct slots, n_slots if none
+            gaps = np.diff(np.sort(slots))
+            gaps = gaps[gaps > 0]
+            increment = int(gaps.min()) if len(gaps) else self.n_slots
         self.round_trip_tof_s[slots] = 2.0 * scan.ranges / assumed_speed_of_sound_mps
         self.amplitudes[slots] = scan.amplitudes
         self.scanned[slots] = True
@@ -82,26 +85,39 @@ class ScanMemory:
         at 1 deg comes back as the pan from -pi). Other chains keep their angles unwrapped
         (they may exceed pi) and are listed in angular order, starting after the widest
         unscanned gap; an unscanned slot on the lattice ends a chain, as it would end an RCD.
+        The pans' arrays are slices of arrays made afresh on each call.
         """
-        ranges = self.ranges(speed_of_sound_mps)
+        n = self.n_slots
         scanned = np.flatnonzero(self.scanned)
         if len(scanned) == 0:
             return []
         chains = self._chains()
-        gaps = np.diff(np.append(scanned, scanned[0] + self.n_slots))
+        gaps = np.diff(np.append(scanned, scanned[0] + n))
         walk_start = int(scanned[(int(np.argmax(gaps)) + 1) % len(scanned)])
-        chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % self.n_slots)
-        scans = []
-        for chain in chains:
-            head = int(chain[0])
-            if head < walk_start and len(chain) * self.slot_increment[head] < self.n_slots:
-                head += self.n_slots  # the walk reaches it after crossing +-180 deg
-            unwrapped = head + self.slot_increment[chain[0]] * np.arange(len(chain))
-            angles = -math.pi + self.resolution_rad * unwrapped
-            scans.append(
-                Scan(angles.astype(np.float64), ranges[chain], self.amplitudes[chain], 0.0)
-            )
-        return scans
+        chains.sort(key=lambda chain: (int(chain[0]) - walk_start) % n)
+        # All chains at once, one array each for angles, ranges and amplitudes; the scans
+        # handed out are consecutive slices of them.
+        members = np.concatenate(chains) if len(chains) > 1 else chains[0]
+        lengths = [len(chain) for chain in chains]
+        starts = [0, *itertools.accumulate(lengths[:-1])]
+        increments = self.slot_increment[members[starts]].tolist()
+        heads = members[starts].tolist()
+        for k, (head, length, increment) in enumerate(zip(heads, lengths, increments, strict=True)):
+            if head < walk_start and length * increment < n:
+                heads[k] = head + n  # the walk reaches it after crossing +-180 deg
+        if len(chains) == 1:
+            unwrapped = heads[0] + increments[0] * np.arange(lengths[0])
+        else:
+            position = np.arange(len(members)) - np.repeat(starts, lengths)
+            unwrapped = np.repeat(heads, lengths) + np.repeat(increments, lengths) * position
+        angles = -math.pi + self.resolution_rad * unwrapped
+        ranges = self.ranges(speed_of_sound_mps)[members]
+        amplitudes = self.amplitudes[members]
+        bounds = [*starts, len(members)]
+        return [
+            Scan(angles[a:b], ranges[a:b], amplitudes[a:b], 0.0)
+            for a, b in zip(bounds[:-1], bounds[1:], strict=True)
+        ]
 
     def _chains(self) -> list[np.ndarray]:
         """Scanned slots grouped into chains ``s, s + g, ...`` (``g``: their pans' increment).
@@ -110,35 +126,46 @@ class ScanMemory:
         +-180 deg only when ``g`` divides the grid (else the lattice does not close on
         itself). Every slot has at most one predecessor (``s - g``), so the links form paths
         and, for a lattice scanned all the way round, rings; a ring starts at its lowest slot.
+
+        The slots of one increment ``g`` and one residue ``s mod g`` form a lattice; sorted
+        along it, chains are its runs of neighbours ``g`` apart, and the run that ends on the
+        lattice's last point before +-180 deg continues into the run from its first point
+        when ``g`` divides the grid (unless that is one run, a ring). Chains are listed by
+        increment, residue and slot.
         """
         n = self.n_slots
-        slots = np.arange(n)
-        increment = np.maximum(self.slot_increment, 1)
-        after = slots + increment
-        successor = after % n
-        linked = (
-            self.scanned
-            & self.scanned[successor]
-            & (self.slot_increment[successor] == self.slot_increment)
-            & ((after < n) | (n % increment == 0))
-        )
-        has_predecessor = np.zeros(n, dtype=bool)
-        has_predecessor[successor[linked]] = True
-        visited = np.zeros(n, dtype=bool)
-        chains = []
-        heads = np.flatnonzero(self.scanned & ~has_predecessor)
-        rings = np.flatnonzero(self.scanned & has_predecessor)  # candidates; most are visited
-        for head in (*heads.tolist(), *rings.tolist()):
-            if visited[head]:
-                continue
-            chain = [head]
-            visited[head] = True
-            slot = head
-            while linked[slot] and not visited[successor[slot]]:
-                slot = int(successor[slot])
-                visited[slot] = True
-                chain.append(slot)
-            chains.append(np.array(chain, dtype=np.int64))
+        slots = np.flatnonzero(self.scanned)
+        if len(slots) == 0:
+            return []
+        increment = np.maximum(self.slot_increment[slots], 1)
+        residue = slots % increment
+        order = np.lexsort((slots, residue, increment))
+        slots, increment, residue = slots[order], increment[order], residue[order]
+        same_lattice = (increment[1:] == increment[:-1]) & (residue[1:] == residue[:-1])
+        linked = same_lattice & (slots[1:] - slots[:-1] == increment[:-1])
+        run_starts = np.flatnonzero(np.concatenate(([True], ~linked)))
+        opens_lattice = np.concatenate(([True], ~same_lattice))[run_starts].tolist()
+        closes_lattice = [*opens_lattice[1:], True]
+        chains: list[np.ndarray] = []
+        lattice_first = 0  # position in chains of the current lattice's first run
+        run_bounds = [*run_starts.tolist(), len(slots)]
+        for a, b, g, opens, closes in zip(
+            run_bounds[:-1],
+            run_bounds[1:],
+            increment[run_starts].tolist(),
+            opens_lattice,
+            closes_lattice,
+            strict=True,
+        ):
+            run = slots[a:b]
+            if opens:
+                lattice_first = len(chains)
+            first_run = chains[lattice_first] if not opens else run
+            wraps_on = n % g == 0 and int(run[-1]) + g - n == int(first_run[0])
+            if closes and not opens and wraps_on:
+                chains[lattice_first] = np.concatenate([run, first_run])
+            else:
+                chains.append(run)
         return chains
 
     def _slots(self, angles_rad: FloatArray) -> np.ndarray:

@@ -297,3 +297,20 @@ def test_observation_equals_its_slot_by_slot_definition(n_bins: int) -> None:
     ):
         observation = env.step(action)[0]
         np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)
+
+
+def test_each_observation_is_its_own_array() -> None:
+    env: Any = gym.make("SonarGym/BeaconScan-v0", temperature_c=20.0)
+    first, _ = env.reset(seed=4)
+    kept = first.copy()
+    first[:] = 0.5  # a learner may write into what it was given
+    pan = env.unwrapped.encode_action("pan", centre_deg=0, width_deg=90, increment_deg=2)
+    second, *_ = env.step(pan)
+    third, *_ = env.step(env.unwrapped.encode_action("calibrate"))
+    assert not np.shares_memory(second, third)
+    np.testing.assert_array_equal(first, np.full_like(first, 0.5))
+    steps = env.unwrapped.observation_layout["steps"]
+    assert second[steps] == pytest.approx(1 / 12) and third[steps] == pytest.approx(2 / 12)
+    assert kept[steps] == 0.0 and env.observation_space.contains(second)
+    scanned = env.unwrapped.observation_layout["bin_scanned"]
+    assert kept[scanned].sum() == 0.0 and second[scanned].sum() > 0.0

@@ -115,3 +115,66 @@ def test_full_one_degree_pan_comes_back_as_one_pan_from_minus_pi() -> None:
     (whole,) = memory.as_scans(SPEED_MPS)
     np.testing.assert_allclose(whole.angles, scan.angles, atol=1e-12)
     np.testing.assert_allclose(whole.ranges, scan.ranges, rtol=1e-12)
+
+
+def _reference_chains(memory: ScanMemory) -> list[list[int]]:
+    """The chains walked slot by slot from each head (then each ring's lowest slot)."""
+    n = memory.n_slots
+    increment = np.maximum(memory.slot_increment, 1)
+    after = np.arange(n) + increment
+    successor = after % n
+    linked = (
+        memory.scanned
+        & memory.scanned[successor]
+        & (memory.slot_increment[successor] == memory.slot_increment)
+        & ((after < n) | (n % increment == 0))
+    )
+    has_predecessor = np.zeros(n, dtype=bool)
+    has_predecessor[successor[linked]] = True
+    visited = np.zeros(n, dtype=bool)
+    chains = []
+    heads = np.flatnonzero(memory.scanned & ~has_predecessor).tolist()
+    rings = np.flatnonzero(memory.scanned & has_predecessor).tolist()
+    for head in (*heads, *rings):
+        if visited[head]:
+            continue
+        chain = [head]
+        visited[head] = True
+        slot = head
+        while linked[slot] and not visited[successor[slot]]:
+            slot = int(successor[slot])
+            visited[slot] = True
+            chain.append(slot)
+        chains.append(chain)
+    return chains
+
+
+@settings(max_examples=400, deadline=None)
+@given(pan_sequences(), st.sampled_from([1, 2, 8]), st.sampled_from([None, 7, 11]))
+def test_chains_are_those_of_a_slot_by_slot_walk(
+    sequence: list[tuple[int, int, int, int]], resolution_deg: int, odd_increment: int | None
+) -> None:
+    """On grids of 360, 180 and 45 slots; ``odd_increment`` (which leaves a remainder on the
+    1-deg grid, as do odd multiples of two slots on the 45-slot one) replaces 10 deg."""
+    memory = ScanMemory(math.radians(resolution_deg))
+    for start_deg, increment_deg, n_pings, seed in sequence:
+        if odd_increment is not None and increment_deg == 10:
+            increment_deg = odd_increment
+        start = -180 + (start_deg + 180) // resolution_deg * resolution_deg  # on the grid
+        increment = increment_deg * resolution_deg
+        pings = max(1, min(n_pings, 360 // increment))
+        memory.add(_scan(start, increment, pings, seed), SPEED_MPS)
+    fast = sorted(chain.tolist() for chain in memory._chains())
+    assert fast == sorted(_reference_chains(memory))
+
+
+def test_a_lattice_scanned_across_the_back_is_one_chain_and_a_full_one_a_ring() -> None:
+    memory = ScanMemory(math.radians(1.0))
+    memory.add(_scan(170, 2, 10, seed=4), SPEED_MPS)  # 170 .. 188 deg: crosses +-180
+    memory.add(_scan(-169, 1, 3, seed=5), SPEED_MPS)  # -169 .. -167 deg at 1 deg
+    assert sorted(c.tolist() for c in memory._chains()) == sorted(_reference_chains(memory))
+    assert [350, 352, 354, 356, 358, 0, 2, 4, 6, 8] in _reference_chains(memory)
+    ring = ScanMemory(math.radians(1.0))
+    ring.add(_scan(-179, 5, 72, seed=6), SPEED_MPS)
+    (chain,) = ring._chains()
+    assert chain.tolist() == list(range(1, 360, 5))
