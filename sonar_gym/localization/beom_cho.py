@@ -73,7 +73,7 @@ from sonar_gym.localization.beom_cho_rcd import (
     symmetry_measure,
 )
 from sonar_gym.localization.beom_cho_refine import central_range_estimate, refine_two_beacon_pose
-from sonar_gym.localization.result import OK, Localization
+from sonar_gym.localization.result import OK, OUT_OF_FLOAT_RANGE, Localization
 from sonar_gym.pose import Pose, angle_difference, wrap_angle
 from sonar_gym.sonar.scan import Scan
 
@@ -587,7 +587,7 @@ def solve_two_circles(
     )
     if not all(math.isfinite(v) for v in (*chosen, *other)):
         return TwoCircleSolution(
-            "out_of_float_range", None, None, discriminant, scaled.used_paper_formula
+            OUT_OF_FLOAT_RANGE, None, None, discriminant, scaled.used_paper_formula
         )
     return replace(scaled, position=chosen, other_position=other, discriminant=discriminant)
 

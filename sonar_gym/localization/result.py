@@ -13,6 +13,9 @@ from dataclasses import dataclass
 from sonar_gym.pose import Pose
 
 OK = "ok"
+OUT_OF_FLOAT_RANGE = "out_of_float_range"
+"""The status of a solution that exists but lies beyond the largest float (inputs near
+``1.8e308`` m); shared by every method that scales its inputs to stay finite."""
 
 
 @dataclass(frozen=True)

@@ -34,13 +34,14 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
-from sonar_gym.localization.result import OK, Localization
+from sonar_gym.localization.result import OK, OUT_OF_FLOAT_RANGE, Localization
 from sonar_gym.pose import FloatArray, Pose
 
 TRILATERATION_METHODS: tuple[str, ...] = ("paper", "least_squares")
@@ -88,7 +89,8 @@ def _frozen(array: npt.ArrayLike) -> FloatArray:
 
 @dataclass(frozen=True, eq=False)
 class TrilaterationResult(Localization):
-    """Outcome of :func:`trilaterate`.
+    """Outcome of :func:`trilaterate` (a status of ``"out_of_float_range"`` when the position
+    lies beyond the largest float).
 
     Attributes:
         position: estimated ``(x, y)`` of the sensor in {W}, metres; ``None`` unless ok.
@@ -117,8 +119,8 @@ class CalibrationResult:
     """Outcome of :func:`auto_calibrate`.
 
     Attributes:
-        status: ``"ok"``, ``"collinear_positions"``, ``"no_intersection"`` or
-            ``"missing_distance"``.
+        status: ``"ok"``, ``"collinear_positions"``, ``"no_intersection"``,
+            ``"missing_distance"`` or ``"out_of_float_range"`` (inputs near the float limit).
         position: the new beacon's ``(x, y, z)`` in {W}, metres; ``None`` unless ok.
         condition: ratio of the largest to the smallest singular value of the two
             displacements ``p2 - p1``, ``p3 - p1`` between the calibration positions
@@ -163,7 +165,15 @@ def unit_scale(*arrays: npt.ArrayLike) -> float:
         1.0, SAFE_EXPONENT
     ):
         return 1.0
-    return math.ldexp(1.0, math.frexp(largest)[1])
+    # 2**1024 is past the largest float: magnitudes that high are divided by 2**1023 (< 2 left).
+    return math.ldexp(1.0, min(math.frexp(largest)[1], sys.float_info.max_exp - 1))
+
+
+def _representable(values: FloatArray, what: str) -> FloatArray:
+    """``values`` if all finite, else a ValueError: the answer lies beyond the float range."""
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"{what} lie beyond the float range (about 1.8e308 m)")
+    return values
 
 
 def _finite_points(values: npt.ArrayLike, shape: tuple[int, ...], name: str) -> FloatArray:
@@ -208,9 +218,9 @@ def circle_intersections(
     radius_b = _radius(radius_b, "radius_b")
     scale = unit_scale(ca, cb, radius_a, radius_b)
     if scale != 1.0:
-        return scale * _circle_intersections(
-            ca / scale, radius_a / scale, cb / scale, radius_b / scale
-        )
+        scaled = _circle_intersections(ca / scale, radius_a / scale, cb / scale, radius_b / scale)
+        with np.errstate(over="ignore"):
+            return _representable(scale * scaled, "the intersection points")
     return _circle_intersections(ca, radius_a, cb, radius_b)
 
 
@@ -279,7 +289,10 @@ def linearised_least_squares(centres: npt.ArrayLike, radii: npt.ArrayLike) -> Fl
     scale = unit_scale(c, r)
     if scale != 1.0:
         solution = linearised_least_squares(c / scale, r / scale)
-        return None if solution is None else scale * solution
+        if solution is None:
+            return None
+        with np.errstate(over="ignore"):
+            return _representable(scale * solution, "the least-squares solution")
     squared_norms = np.einsum("ij,ij->i", c, c)
     design = -2.0 * (c - c.mean(axis=0))
     rhs = (r**2 - np.mean(r**2)) - (squared_norms - squared_norms.mean())
@@ -502,7 +515,14 @@ def trilaterate(
         )
         if scaled.position is None:
             return scaled
-        unscaled = scale * np.asarray(scaled.position)
+        with np.errstate(over="ignore"):
+            unscaled = scale * np.asarray(scaled.position)
+        if not np.all(np.isfinite(unscaled)):
+            return TrilaterationResult(
+                status=OUT_OF_FLOAT_RANGE,
+                method=method,
+                message="the position lies beyond the float range (about 1.8e308 m)",
+            )
         return TrilaterationResult(
             status=OK,
             pose=Pose(float(unscaled[0]), float(unscaled[1]), 0.0),
@@ -764,6 +784,15 @@ def _paper_centroids(
 
 def _scaled_back(result: CalibrationResult, scale: float) -> CalibrationResult:
     """A calibration computed on lengths divided by ``scale``, in the caller's units."""
+    if result.position is not None:
+        with np.errstate(over="ignore"):
+            position = scale * result.position
+        if not np.all(np.isfinite(position)):
+            return CalibrationResult(
+                status=OUT_OF_FLOAT_RANGE,
+                condition=result.condition,
+                message="the beacon lies beyond the float range (about 1.8e308 m)",
+            )
     return CalibrationResult(
         status=result.status,
         position=None if result.position is None else _frozen(scale * result.position),

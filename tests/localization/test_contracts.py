@@ -129,7 +129,6 @@ def test_receiver_position_refuses_non_finite_or_wrong_shape(d: list[float]) -> 
 # -- Roh ---------------------------------------------------------------------------------------
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/roh_trilateration.py")
 @fuzz_settings(300, shrink=False)
 @given(point(), positive, point(), positive)
 def test_circle_intersections_are_finite_or_a_value_error(
@@ -155,7 +154,6 @@ def test_circle_helpers_refuse_non_finite_or_wrong_shape(
         function(centre, radius, [1.0, 0.0], 1.0)
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/roh_trilateration.py")
 @fuzz_settings(300, shrink=False)
 @given(
     st.sampled_from([linearised_least_squares, radical_centre, paper_centroid]),
@@ -168,7 +166,6 @@ def test_three_circle_solvers_are_finite_or_a_value_error(
     outcome(function, centres, radii)
 
 
-@pytest.mark.xfail(strict=True, reason="fixed in sonar_gym/localization/roh_trilateration.py")
 @fuzz_settings(300, shrink=False)
 @example(  # found by a 3,000-example run: OverflowError squaring the range
     [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]], [1.0, 1.0, 1e150], 0.0, "paper"
