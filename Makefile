@@ -1,6 +1,6 @@
 # Two commands for a fresh machine (see README.md):
 #   make evaluate   installs everything into .venv on first use, then runs the main job
-#   make test       installs everything into .venv on first use, then runs the test suite
+#   make test       installs everything into .venv on first use, then runs lint and the test suite
 # Another torch (e.g. a CUDA build): make TORCH_SPEC="torch==2.14.1" evaluate
 
 PYTHON ?= python3
@@ -54,7 +54,9 @@ install-extras: $(EXTRAS_STAMP)
 evaluate: $(STAMP)
 	$(BIN)/sonar-gym evaluate
 
-test: $(STAMP)
+# The test command runs the lint gate first: ruff (rules in pyproject.toml) and mypy over the
+# four packages (envs/, agents/ and train/ are reached through sonar_gym/).
+test: lint
 	$(BIN)/python -m pytest -n 2 -q -m "not slow"
 
 test-slow: $(EXTRAS_STAMP)
@@ -62,6 +64,8 @@ test-slow: $(EXTRAS_STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy sonar_gym
 
 benchmark: $(STAMP)
 	$(BIN)/sonar-gym benchmark

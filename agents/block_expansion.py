@@ -302,8 +302,9 @@ class SpreadAgent(ScriptedAgent[BlockExpansionEnv]):
         along +-x and +-y, one shift at a time.
         """
         names = self.boundaries[boundary]
-        nominal = tuple(beacons.positions[name][:2] for name in names)
-        hypotheses = [nominal]
+        start, end_point = (beacons.positions[name][:2] for name in names)
+        nominal = (start, end_point)
+        hypotheses: list[tuple[FloatArray, FloatArray]] = [nominal]
         spread = PRIOR_HYPOTHESIS_SIGMAS * self.prior_std_m
         for end, name in enumerate(names):
             if name not in beacons.uncertain or spread == 0.0:

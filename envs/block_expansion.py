@@ -328,6 +328,7 @@ class BlockExpansionEnv(SonarEnv):
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
+    action_space: gym.spaces.Box  # d1..d3 (per boundary, or all at once) scaled to [-1, 1]
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         super().__init__(render_mode)
@@ -416,9 +417,10 @@ class BlockExpansionEnv(SonarEnv):
         gap :data:`DECREASING_GAP_M`.
         """
         values = np.asarray(distances_m, dtype=np.float64).reshape(-1)
-        if values.shape != self.action_space.shape or not np.all(np.isfinite(values)):
+        per_step = self.action_space.shape[0]
+        if values.shape != (per_step,) or not np.all(np.isfinite(values)):
             raise ValueError(
-                f"distances_m must hold {self.action_space.shape[0]} finite metres "
+                f"distances_m must hold {per_step} finite metres "
                 f"(d1, d2, d3 per boundary); got {distances_m!r}"
             )
         fractions = distances_to_fractions(

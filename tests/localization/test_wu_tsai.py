@@ -374,7 +374,7 @@ def test_paper_tables_errors_are_of_the_papers_order(z_cm: float) -> None:
     heading_deg = np.array(
         [
             math.degrees(abs(angle_difference(f.heading, math.radians(truth))))
-            for f, truth in zip(estimates, PAPER_HEADINGS_DEG)
+            for f, truth in zip(estimates, PAPER_HEADINGS_DEG, strict=True)
         ]
     )
     # A few cm and a few degrees in every experiment, as in the paper ...
@@ -400,7 +400,7 @@ def test_shorter_distances_give_more_accurate_fixes_section_5() -> None:
         horizontal = [f.x**2 + f.y**2 for fixes in fixes_by_heading for f in fixes]
         heading = [
             angle_difference(f.heading, math.radians(truth)) ** 2
-            for fixes, truth in zip(fixes_by_heading, PAPER_HEADINGS_DEG)
+            for fixes, truth in zip(fixes_by_heading, PAPER_HEADINGS_DEG, strict=True)
             for f in fixes
         ]
         rms[z_m] = (math.sqrt(np.mean(horizontal)), math.sqrt(np.mean(heading)))
@@ -435,7 +435,9 @@ def test_counter_truncation_alone_gives_bounded_deterministic_error(
     assert result == localize(_counter_distances(true_distances, None, 0.0), A_PAPER, OFFSETS_PAPER)
     assert result.fix is not None
     slack = 1e-12
-    for receiver, d, estimate in zip(receivers, true_distances, result.fix.receiver_array):
+    for receiver, d, estimate in zip(
+        receivers, true_distances, result.fix.receiver_array, strict=True
+    ):
         error = estimate - receiver
         lower_x, upper_x = -(2 * d[0] * q - q * q), 2 * d[1] * q - q * q
         lower_y, upper_y = -(2 * d[0] * q - q * q), 2 * d[2] * q - q * q
