@@ -643,11 +643,4 @@ def _binned_ranges(normalised_ranges: np.ndarray | None, n_bins: int) -> np.ndar
     return bins
 
 
-__all__ = [
-    "SECTOR_CENTRES_RAD",
-    "SECTOR_NAMES",
-    "Route",
-    "SweepLocalizationConfig",
-    "SweepLocalizationEnv",
-    "occupancy_grid_of",
-]
+__all__ = ["SECTOR_CENTRES_RAD", "SECTOR_NAMES", "SweepLocalizationConfig", "SweepLocalizationEnv"]

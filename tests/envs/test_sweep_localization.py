@@ -18,10 +18,10 @@ from sonar_gym.polyline import leg_is_free as _leg_is_free
 from sonar_gym.envs.sweep_localization import (
     HEADING_STD_SCALE_RAD,
     POSITION_STD_SCALE_M,
-    Route,
     _relative_pose,
-    occupancy_grid_of,
 )
+from sonar_gym.localization.kim_grid import occupancy_grid_of
+from sonar_gym.polyline import Route
 from sonar_gym.localization.kim import TABLE_1_ESTIMATED_POSITIONS_M, TABLE_1_TRUE_POSITIONS_M
 from sonar_gym.pose import Pose, angle_difference, wrap_angle
 from sonar_gym.scenario import load_scenario, scenario_from_dict

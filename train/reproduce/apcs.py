@@ -40,7 +40,8 @@ from rich.table import Table
 
 import sonar_gym  # noqa: F401  (registers the ids)
 from sonar_gym.agents.wall_correction import PaperAgent
-from sonar_gym.envs.wall_correction import WallCorrectionEnv, WallDetection
+from sonar_gym.apcs_route import WallDetection
+from sonar_gym.envs.wall_correction import WallCorrectionEnv
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.pose import angle_difference
 from sonar_gym.train.reproduce.common import parameters_table, ratio_flag

@@ -30,7 +30,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
-from sonar_gym.envs.beacon_scan import beacons_visible
+from sonar_gym.beacon_visibility import beacons_visible
 from sonar_gym.localization.beom_cho import BeomChoParameters, localize_scans
 from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.pose import Pose

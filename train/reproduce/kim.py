@@ -348,7 +348,7 @@ def plot_table1(result: Table1Result, out_dir: Path) -> Path:
     matplotlib.use("Agg")
     from matplotlib.figure import Figure
 
-    from sonar_gym.envs.sweep_localization import occupancy_grid_of
+    from sonar_gym.localization.kim_grid import occupancy_grid_of
     from sonar_gym.scenario import load_scenario
 
     grid = occupancy_grid_of(load_scenario("kim_arena"))
