@@ -41,7 +41,7 @@ class ActiveBeaconScanConfig(BeaconScanConfig):
 
     max_steps: int = 24
     move_distance_m: float = 0.25
-    turn_angles_deg: tuple[int, ...] = (-90, -30, 30, 90)
+    turn_angles_deg: tuple[int, ...] = (30, -30, 90, -90)
     linear_speed_mps: float = 0.2
     turn_rate_deg_per_s: float = 45.0
     fix_offset_scale_m: float = 0.5
@@ -110,7 +110,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     | 1 | sector centre, robot frame | ``k * 360 / n_sector_centres`` deg, k = 0.. |
     | 2 | sector width | ``sector_widths_deg`` (default 30, 60, 90, 180, 360 deg) |
     | 3 | angular increment | ``increments_deg`` (default 1, 2, 5 deg) |
-    | 4 | turn angle (CCW) | ``turn_angles_deg`` (default -90, -30, 30, 90 deg) |
+    | 4 | turn angle (CCW) | ``turn_angles_deg`` (default 30, -30, 90, -90 deg) |
 
     Indices 1-3 matter only for pan, index 4 only for turn; move drives ``move_distance_m``
     straight ahead. ``env.unwrapped.encode_action(...)`` builds an action.
@@ -163,7 +163,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     |---|---|---|
     | max_steps | 24 | decisions before truncation |
     | move_distance_m | 0.25 | length of a move, metres |
-    | turn_angles_deg | (-90, -30, 30, 90) | turn angles offered, degrees CCW |
+    | turn_angles_deg | (30, -30, 90, -90) | turn angles offered, degrees CCW |
     | linear_speed_mps | 0.2 | driving speed, for the time cost |
     | turn_rate_deg_per_s | 45 | turning rate, for the time cost |
     | fix_offset_scale_m | 0.5 | scale of the fix-minus-prior features, metres |
