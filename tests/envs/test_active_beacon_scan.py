@@ -72,7 +72,8 @@ def test_a_move_into_a_wall_stops_at_the_wall() -> None:
     assert x_min < true[-1, 0] < x_max and y_min < true[-1, 1] < y_max
 
 
-def _successes(env_id: str, agent_name: str) -> list[bool]:
+def _successes(env_id: str, agent_name: str) -> list[float | None]:
+    """Per seed, E_xy (metres) of a successful localization, else None."""
     env = gym.make(env_id)
     agent = make_agent(agent_name, env)
     results = []
@@ -83,18 +84,25 @@ def _successes(env_id: str, agent_name: str) -> list[bool]:
         while not done:
             obs, _, terminated, truncated, info = env.step(agent.act(obs))
             done = terminated or truncated
-        results.append(info["status"] == "ok")
+        results.append(info["position_error_m"] if info["status"] == "ok" else None)
     env.close()
     return results
 
 
 @pytest.fixture(scope="module")
-def success_counts() -> dict[str, int]:
-    return {
-        "beacon_paper": sum(_successes("SonarGym/BeaconScan-v0", "paper")),
-        "paper": sum(_successes(ENV_ID, "paper")),
-        "retry": sum(_successes(ENV_ID, "retry")),
+def errors() -> dict[str, list[float]]:
+    """E_xy of the successful episodes per agent, on the same seeds."""
+    runs = {
+        "beacon_paper": _successes("SonarGym/BeaconScan-v0", "paper"),
+        "paper": _successes(ENV_ID, "paper"),
+        "retry": _successes(ENV_ID, "retry"),
     }
+    return {name: [e for e in run if e is not None] for name, run in runs.items()}
+
+
+@pytest.fixture(scope="module")
+def success_counts(errors: dict[str, list[float]]) -> dict[str, int]:
+    return {name: len(values) for name, values in errors.items()}
 
 
 def test_paper_agent_localizes_as_often_as_on_beacon_scan(success_counts: dict[str, int]) -> None:
@@ -106,6 +114,12 @@ def test_retry_agent_localizes_at_least_as_often_as_the_paper_agent(
 ) -> None:
     assert success_counts["retry"] >= success_counts["paper"]
     assert success_counts["paper"] < len(SEEDS)  # else retrying is never exercised
+
+
+def test_fixes_after_moving_are_as_accurate_as_the_papers(errors: dict[str, list[float]]) -> None:
+    # Beom & Cho section V.C: position errors within 3 cm
+    assert float(np.median(errors["retry"])) < 0.03
+    assert float(np.median(errors["paper"])) < 0.03
 
 
 def test_bad_arguments_are_named() -> None:
