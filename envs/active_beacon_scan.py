@@ -296,7 +296,8 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         old pose and any fix there are dropped. Returns the motion's duration, seconds."""
         config = self.config
         robot = DifferentialDriveRobot(OdometryConfig(), odometry_pose=episode.prior)
-        episode.world.set_robot_pose(episode.true_pose)
+        # the world's robot body is already at the true pose (placed at reset, moved since);
+        # placing it again would refuse the contact a blocked move leaves it in
         with self._timed("motion"):
             if turn_rad:
                 result = robot.turn(episode.world, turn_rad, self.np_random)
