@@ -15,6 +15,10 @@ BUILTIN_AGENTS: dict[str, dict[str, str]] = {
         "paper": "sonar_gym.agents.beacon_scan:PaperAgent",
         "sector": "sonar_gym.agents.beacon_scan:SectorAgent",
     },
+    "SonarGym/ActiveBeaconScan-v0": {
+        "paper": "sonar_gym.agents.active_beacon_scan:PaperAgent",
+        "retry": "sonar_gym.agents.active_beacon_scan:RetryAgent",
+    },
     "SonarGym/SweepLocalization-v0": {
         "paper": "sonar_gym.agents.sweep_localization:PaperAgent",
         "covariance": "sonar_gym.agents.sweep_localization:CovarianceAgent",

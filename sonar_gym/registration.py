@@ -44,6 +44,13 @@ REGISTRATIONS: dict[str, Registration] = {
         "1000); the agent may localize earlier",
         default_episode_steps=12,
     ),
+    "SonarGym/ActiveBeaconScan-v0": Registration(
+        "sonar_gym.envs.active_beacon_scan:ActiveBeaconScanEnv",
+        max_episode_steps=1000,
+        limit_reason="the env truncates itself after max_steps decisions (default 24, at most "
+        "1000); the agent may commit earlier",
+        default_episode_steps=24,
+    ),
     "SonarGym/SweepLocalization-v0": Registration(
         "sonar_gym.envs.sweep_localization:SweepLocalizationEnv",
         max_episode_steps=1000,

@@ -163,6 +163,7 @@ def test_docstring_example_runs_as_written(env_id: str) -> None:
 # smallest invalid value just past it.
 LIMIT_ARGUMENTS = {
     "SonarGym/BeaconScan-v0": ({"max_steps": 1000}, {"max_steps": 1001}),
+    "SonarGym/ActiveBeaconScan-v0": ({"max_steps": 1000}, {"max_steps": 1001}),
     "SonarGym/SweepLocalization-v0": (
         {"route_length_m": 50.0, "decision_spacing_m": 0.05},
         {"decision_spacing_m": 0.049},
@@ -173,6 +174,7 @@ LIMIT_ARGUMENTS = {
 }
 LONGEST_EPISODE = {
     "SonarGym/BeaconScan-v0": 1000,
+    "SonarGym/ActiveBeaconScan-v0": 1000,
     "SonarGym/SweepLocalization-v0": math.ceil(50.0 / 0.05),
     "SonarGym/Trilateration-v0": 200,
     "SonarGym/BlockExpansion-v0": 3 - 1,
