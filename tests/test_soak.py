@@ -32,6 +32,7 @@ def rss_mb() -> float:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(3600)  # 1e5 steps of the slowest env take about ten minutes on one core
 @pytest.mark.parametrize("env_id", sorted(ENVIRONMENTS))
 def test_env_soaks_without_leak_nan_or_exception(env_id: str) -> None:
     env = gym.make(env_id)
