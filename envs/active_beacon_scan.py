@@ -17,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 
 from sonar_gym.envs.base import StepOutcome
-from sonar_gym.envs.beacon_scan import BeaconScanConfig, BeaconScanEnv
+from sonar_gym.envs.beacon_scan import BeaconScanConfig, BeaconScanEnv, PanCommand
 from sonar_gym.envs.config import build_config, check_choice, number_field, numbers_field
 from sonar_gym.odometry import OdometryConfig
 from sonar_gym.pose import Pose, wrap_angle
@@ -68,13 +68,9 @@ class ActiveBeaconScanConfig(BeaconScanConfig):
 
 
 @dataclass(frozen=True)
-class ActiveCommand:
-    """A decoded action: pan angles in degrees in the robot frame {R}; turn in degrees (CCW)."""
+class ActiveCommand(PanCommand):
+    """A decoded action: BeaconScan's pan angles (degrees in {R}) and a turn (degrees, CCW)."""
 
-    kind: str
-    centre_deg: int = 0
-    width_deg: int = 0
-    increment_deg: int = 0
     turn_deg: int = 0
 
 

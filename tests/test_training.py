@@ -88,6 +88,21 @@ def tiny_config(tmp_path: Path, algo: str) -> Path:
     return path
 
 
+def tiny_ppo_run(tmp_path: Path) -> Path:
+    """A 128-step PPO run on the discrete env with the tiny config, without evaluation."""
+    out = tmp_path / "run"
+    train(
+        DISCRETE_ID,
+        "ppo",
+        128,
+        out_dir=out,
+        config_path=tiny_config(tmp_path, "ppo"),
+        progress_bar=False,
+        eval_episodes=0,
+    )
+    return out
+
+
 def test_learning_curve_smoothing_is_a_trailing_moving_average():
     assert moving_average([1.0, 2.0, 3.0, 4.0], 2).tolist() == [1.0, 1.5, 2.5, 3.5]
     assert moving_average([4.0, 2.0, 0.0], 5).tolist() == [4.0, 3.0, 2.0]
@@ -209,16 +224,7 @@ def test_ppo_training_saves_a_run_that_loads_and_evaluates(tmp_path):
 
 
 def test_policy_agent_normalises_like_vecnormalize(tmp_path):
-    out = tmp_path / "run"
-    train(
-        DISCRETE_ID,
-        "ppo",
-        128,
-        out_dir=out,
-        config_path=tiny_config(tmp_path, "ppo"),
-        progress_bar=False,
-        eval_episodes=0,
-    )
+    out = tiny_ppo_run(tmp_path)
     env = gym.make(DISCRETE_ID)
     agent = load_policy_agent(out / "model.zip", env)
     reference = VecNormalize.load(str(out / "vecnormalize.pkl"), DummyVecEnv([lambda: env]))
@@ -260,16 +266,7 @@ def test_ppo_and_a2c_zips_are_told_apart_without_run_json(tmp_path):
 
 
 def test_loader_refuses_a_model_whose_normalisation_statistics_are_missing(tmp_path):
-    out = tmp_path / "run"
-    train(
-        DISCRETE_ID,
-        "ppo",
-        128,
-        out_dir=out,
-        config_path=tiny_config(tmp_path, "ppo"),
-        progress_bar=False,
-        eval_episodes=0,
-    )
+    out = tiny_ppo_run(tmp_path)
     (out / "vecnormalize.pkl").unlink()
     with pytest.raises(ValueError, match="vecnormalize.pkl is missing"):
         load_policy_agent(out / "model.zip", gym.make(DISCRETE_ID))
