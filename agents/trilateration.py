@@ -14,7 +14,7 @@ offered n from the observation's uncertainty features and takes the best:
   fixes, whose spread is the one-fix spread of the observation (``fix_*_std``, larger away
   from below the transmitters) shrunk by the averaging factor of the ranger's error model
   (quantisation error repeats at a fixed pose, so it does not fall as 1/n), and costs
-  ``measurement_cost_per_s`` times n fix durations. When fusing, the estimate keeps the
+  ``sensing_cost_per_s`` times n fix durations. When fusing, the estimate keeps the
   dead-reckoning share of an unseen slip's error, so that share of the slip cost is added.
 
 Expected errors from spreads: a 2D Gaussian position error of RMS ``s`` has mean
@@ -235,7 +235,7 @@ class AdaptiveAgent(ScriptedAgent[TrilaterationEnv]):
         return self._counts.index(best)
 
     def _measuring_cost(self, n: int) -> float:
-        return self._config.measurement_cost_per_s * n * self._fix_duration_s
+        return self._config.sensing_cost_per_s * n * self._fix_duration_s
 
     def _score(self, position_rms_m: float, heading_std_rad: float) -> float:
         config = self._config

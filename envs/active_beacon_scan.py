@@ -10,7 +10,7 @@ The method itself (RCDs, eqs (3)-(7); two-circle pose, eqs (8)-(15)) is the one 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import gymnasium as gym
@@ -166,7 +166,8 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Later, without changing any default episode: ``n_bins`` renamed
+      ``n_range_bins`` (the old name still works, with a ``DeprecationWarning``).
 
     ## Example
 
@@ -187,7 +188,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         config = build_config(ActiveBeaconScanConfig, kwargs, ENV_ID)
-        base_names = BeaconScanConfig.__dataclass_fields__
+        base_names = [f.name for f in fields(BeaconScanConfig)]
         super().__init__(render_mode, **{name: getattr(config, name) for name in base_names})
         self.config = config
         self.action_space = gym.spaces.MultiDiscrete(

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -58,6 +58,8 @@ HEADING_UNIT_RAD = math.radians(2.0)  # and their heading bound
 class BeaconScanConfig:
     """The ``gym.make`` arguments of ``SonarGym/BeaconScan-v0`` (see the env docstring)."""
 
+    RENAMED_ARGUMENTS: ClassVar[dict[str, str]] = {"n_bins": "n_range_bins"}
+
     scenario: str = "beom_cho_lab"
     temperature_c: float | None = None
     temperature_range_c: tuple[float, float] = (0.0, 40.0)
@@ -69,7 +71,7 @@ class BeaconScanConfig:
     increments_deg: tuple[int, ...] = (1, 2, 5)
     sector_widths_deg: tuple[int, ...] = (30, 60, 90, 180, 360)
     n_sector_centres: int = 36
-    n_bins: int = 72
+    n_range_bins: int = 72
     max_steps: int = 12
     start_pose: str = "beacons_visible"
     localization_method: str = "paper"
@@ -105,9 +107,9 @@ class BeaconScanConfig:
                 "argument 'n_sector_centres' must divide 360 into whole-degree steps that every "
                 f"increment divides; got {self.n_sector_centres}"
             )
-        number_field(self, "n_bins", low=4, high=360, integer=True)
-        if 360 % self.n_bins:
-            raise ValueError(f"argument 'n_bins' must divide 360; got {self.n_bins}")
+        number_field(self, "n_range_bins", low=4, high=360, integer=True)
+        if 360 % self.n_range_bins:
+            raise ValueError(f"argument 'n_range_bins' must divide 360; got {self.n_range_bins}")
         number_field(self, "max_steps", low=1, high=1000, integer=True)
         choice_field(self, "start_pose", ("beacons_visible", "any"))
         choice_field(self, "localization_method", METHODS)
@@ -116,6 +118,11 @@ class BeaconScanConfig:
         number_field(self, "prior_gate_m", low=MIN_LENGTH_M, high=10.0, optional=True)
         choice_field(self, "action_type", ("multi_discrete", "discrete"))
         number_field(self, "time_budget_s", low=MIN_DURATION_S, high=1e5)
+
+    @property
+    def n_bins(self) -> int:
+        """The deprecated name of :attr:`n_range_bins`, kept for code that still reads it."""
+        return self.n_range_bins
 
 
 def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
@@ -274,7 +281,7 @@ class BeaconScanEnv(SonarEnv):
     | increments_deg | (1, 2, 5) | pan increments offered |
     | sector_widths_deg | (30, 60, 90, 180, 360) | sector widths offered |
     | n_sector_centres | 36 | sector centres, evenly spaced |
-    | n_bins | 72 | angular bins of the observation |
+    | n_range_bins | 72 | angular bins of the observation (``n_bins`` in the formulas above) |
     | max_steps | 12 | decisions before truncation |
     | start_pose | ``"beacons_visible"`` | or ``"any"`` |
     | localization_method | ``"paper"`` | or ``"least_squares"`` (refinement beside the paper's) |
@@ -288,7 +295,8 @@ class BeaconScanEnv(SonarEnv):
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Later, without changing any default episode: ``n_bins`` renamed
+      ``n_range_bins`` (the old name still works, with a ``DeprecationWarning``).
 
     ## Example
 

@@ -9,14 +9,25 @@ same): numpy scalars are accepted and stored as Python numbers, lists are accept
 tuples are (``EnvSpec.to_json`` turns tuples into lists) and stored as tuples, so a config
 always hashes. The ``*_field`` helpers check a field of a frozen dataclass and store the
 converted value back.
+
+Renamed arguments: one concept has one argument name across the environments. A config class
+lists the names it used to accept in a ``RENAMED_ARGUMENTS`` class table (old name -> new
+name); :func:`build_config` still accepts an old name, with a ``DeprecationWarning`` that
+names the new one, and refuses the old and the new name given together.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import sys
+import warnings
 from collections.abc import Iterable, Mapping
 from pathlib import Path
+from types import FrameType
 from typing import Any, TypeVar
+
+import gymnasium
 
 from sonar_gym.validation import (
     MIN_SCALE,
@@ -32,15 +43,72 @@ MAX_SCENARIO_ARGUMENT_CHARS = 4096
 """Longest ``scenario`` argument accepted (a path longer than this is not a path)."""
 
 
+RENAMED_ARGUMENTS_ATTRIBUTE = "RENAMED_ARGUMENTS"
+"""The class attribute of a config that maps its deprecated argument names to the new ones."""
+
+
+def renamed_arguments(config_type: type) -> Mapping[str, str]:
+    """The deprecated argument names of ``config_type`` -> their new names (may be empty)."""
+    table: Mapping[str, str] = getattr(config_type, RENAMED_ARGUMENTS_ATTRIBUTE, {})
+    return table
+
+
 def build_config(config_type: type[ConfigT], kwargs: Mapping[str, Any], env_name: str) -> ConfigT:
-    """Instantiate ``config_type`` from ``kwargs``, rejecting unknown keys by name."""
+    """Instantiate ``config_type`` from ``kwargs``, rejecting unknown keys by name.
+
+    A deprecated name of the config's ``RENAMED_ARGUMENTS`` is accepted for its new name with a
+    ``DeprecationWarning``; giving both raises ``ValueError`` naming both.
+    """
     allowed = [f.name for f in dataclasses.fields(config_type)]  # type: ignore[arg-type]
-    unknown = sorted(set(kwargs) - set(allowed))
+    arguments = _with_new_names(renamed_arguments(config_type), kwargs, env_name)
+    unknown = sorted(set(arguments) - set(allowed))
     if unknown:
         raise ValueError(
             f"{env_name}: unknown argument(s) {unknown}; allowed arguments are {sorted(allowed)}"
         )
-    return config_type(**kwargs)
+    return config_type(**arguments)
+
+
+def _with_new_names(
+    renamed: Mapping[str, str], kwargs: Mapping[str, Any], env_name: str
+) -> dict[str, Any]:
+    """``kwargs`` with every deprecated name replaced by its new one (warning once per name)."""
+    arguments = dict(kwargs)
+    for old, new in renamed.items():
+        if old not in arguments:
+            continue
+        if new in arguments:
+            raise ValueError(
+                f"{env_name}: arguments {old!r} and {new!r} are the same setting ({old!r} is "
+                f"the deprecated name of {new!r}); give only {new!r}"
+            )
+        warnings.warn(
+            f"{env_name}: argument {old!r} is deprecated; use {new!r} (same meaning and units)",
+            DeprecationWarning,
+            stacklevel=_stacklevel_outside_library(),
+        )
+        arguments[new] = arguments.pop(old)
+    return arguments
+
+
+def _stacklevel_outside_library() -> int:
+    """The ``warnings.warn`` stack level of the first caller outside sonar_gym and gymnasium,
+    so the warning points at the user's ``gym.make`` (or config construction) line."""
+    module_files = (__file__, gymnasium.__file__, sys.modules["sonar_gym"].__file__)
+    library_dirs = tuple(
+        {str(Path(f).resolve().parent) + os.sep for f in module_files if f is not None}
+        | {str(Path(__file__).parent) + os.sep}
+    )
+    frame: FrameType | None = sys._getframe(1)  # the caller: _with_new_names
+    level = 1
+    while frame is not None:
+        path = frame.f_code.co_filename
+        resolved = path if path.startswith("<") else str(Path(path).resolve())
+        if not resolved.startswith(library_dirs) and not path.startswith(library_dirs):
+            return level
+        frame = frame.f_back
+        level += 1
+    return level
 
 
 def check_number(

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -65,6 +65,11 @@ _RUNNING = "running"
 class SweepLocalizationConfig:
     """The ``gym.make`` arguments of ``SonarGym/SweepLocalization-v0`` (see the env docstring)."""
 
+    RENAMED_ARGUMENTS: ClassVar[dict[str, str]] = {
+        "encoder_noise_std_m_per_sqrt_m": "encoder_std_m_per_sqrt_m",
+        "wheel_scale_error": "wheel_scale_error_bound",
+    }
+
     scenario: str = "kim_arena"
     route: str = "table1"
     route_length_m: float = 3.2
@@ -78,8 +83,8 @@ class SweepLocalizationConfig:
     heading_step_deg: float = 1.0
     sensing_cost_per_s: float = 0.1
     max_error_loss: float = 20.0
-    encoder_noise_std_m_per_sqrt_m: float = 0.005
-    wheel_scale_error: float = 0.01
+    encoder_std_m_per_sqrt_m: float = 0.005
+    wheel_scale_error_bound: float = 0.01
     slip_probability_per_m: float = 0.02
     initial_position_std_m: float = 0.02
     initial_heading_std_deg: float = 2.0
@@ -103,8 +108,8 @@ class SweepLocalizationConfig:
         number_field(self, "heading_step_deg", low=0.25, high=5.0)
         number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
         number_field(self, "max_error_loss", low=MIN_SCALE, high=1e4)
-        number_field(self, "encoder_noise_std_m_per_sqrt_m", low=0.0, high=0.1)
-        number_field(self, "wheel_scale_error", low=0.0, high=0.1)
+        number_field(self, "encoder_std_m_per_sqrt_m", low=0.0, high=0.1)
+        number_field(self, "wheel_scale_error_bound", low=0.0, high=0.1)
         number_field(self, "slip_probability_per_m", low=0.0, high=1.0)
         number_field(self, "initial_position_std_m", low=0.0, high=0.5)
         number_field(self, "initial_heading_std_deg", low=0.0, high=30.0)
@@ -120,11 +125,11 @@ class SweepLocalizationConfig:
         """``V(k)`` of the EKF, m^2 per metre rolled by a wheel (sec. 3.1; the paper gives none).
 
         The encoder's random variance plus the variance of a wheel scale error uniform in
-        ``+-wheel_scale_error`` (``e^2 / 3``, taken over one metre of travel). Wheel slips are
+        ``+-wheel_scale_error_bound`` (``e^2 / 3``, taken over one metre of travel). Wheel slips are
         left out of the filter's model: they are the rare "other errors" ``w(k)`` of sec. 3.1
         that the encoders cannot see, and only a fix corrects them.
         """
-        return self.encoder_noise_std_m_per_sqrt_m**2 + self.wheel_scale_error**2 / 3.0
+        return self.encoder_std_m_per_sqrt_m**2 + self.wheel_scale_error_bound**2 / 3.0
 
 
 @dataclass
@@ -235,7 +240,7 @@ class SweepLocalizationEnv(SonarEnv):
     starts at the truth plus Gaussian noise (``initial_position_std_m``,
     ``initial_heading_std_deg``) with that covariance ("the precise initial position of the
     mobile robot is known", sec. 3.1). Wheel scale errors are drawn uniformly in
-    ``+-wheel_scale_error`` per wheel per episode.
+    ``+-wheel_scale_error_bound`` per wheel per episode.
 
     ## Episode End
 
@@ -270,9 +275,9 @@ class SweepLocalizationEnv(SonarEnv):
     | anchor | ``"obstacle_point"`` | voting anchor; ``"cell_center"`` is the paper's reading |
     | heading_step_deg | 1 | heading candidates of the vote, deg |
     | sensing_cost_per_s | 0.1 | reward per second of sweeping |
-    | max_error_loss | 20 | cap of the error term per decision |
-    | encoder_noise_std_m_per_sqrt_m | 0.005 | encoder noise, m after 1 m |
-    | wheel_scale_error | 0.01 | per-wheel scale error bound (uniform, per episode) |
+    | max_error_loss | 20 | cap of the error term per decision (a cap only: no failure charge) |
+    | encoder_std_m_per_sqrt_m | 0.005 | encoder noise, m after 1 m |
+    | wheel_scale_error_bound | 0.01 | per-wheel scale error bound (uniform, per episode) |
     | slip_probability_per_m | 0.02 | wheel-slip probability per metre (loss up to 10 %) |
     | initial_position_std_m / initial_heading_std_deg | 0.02 / 2 | initial EKF error |
     | fix_position_std_m / fix_heading_std_deg | 0.03 / 4 | measurement covariance ``G`` |
@@ -282,7 +287,12 @@ class SweepLocalizationEnv(SonarEnv):
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Later, without changing any default episode:
+      ``encoder_noise_std_m_per_sqrt_m`` renamed ``encoder_std_m_per_sqrt_m`` (the name of
+      :class:`~sonar_gym.odometry.OdometryConfig`) and ``wheel_scale_error`` renamed
+      ``wheel_scale_error_bound`` (a uniform bound, unlike the Gaussian
+      ``wheel_scale_error_std`` of Trilateration and WallCorrection); the old names still
+      work, with a ``DeprecationWarning``.
 
     ## Example
 
@@ -374,10 +384,10 @@ class SweepLocalizationEnv(SonarEnv):
         )
         world.set_robot_pose(start)
         scale_left, scale_right = rng.uniform(
-            -config.wheel_scale_error, config.wheel_scale_error, 2
+            -config.wheel_scale_error_bound, config.wheel_scale_error_bound, 2
         )
         noise = OdometryConfig(
-            encoder_std_m_per_sqrt_m=config.encoder_noise_std_m_per_sqrt_m,
+            encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,
             scale_error_left=float(scale_left),
             scale_error_right=float(scale_right),
             slip_probability_per_m=config.slip_probability_per_m,

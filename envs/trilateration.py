@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -87,15 +87,20 @@ MIN_ROUTE_LENGTH_M = 0.01
 class TrilaterationConfig:
     """The ``gym.make`` arguments of ``SonarGym/Trilateration-v0`` (see the env docstring)."""
 
+    RENAMED_ARGUMENTS: ClassVar[dict[str, str]] = {
+        "measurement_cost_per_s": "sensing_cost_per_s",
+        "max_error_score": "max_error_loss",
+    }
+
     scenario: str | Path = "wu_tsai_room"
     fix_counts: tuple[int, ...] = DEFAULT_FIX_COUNTS
     route_length_m: float = 8.0
     n_decision_points: int = 16
     correction: str = "replace"
-    measurement_cost_per_s: float = 0.2
+    sensing_cost_per_s: float = 0.2
     position_scale_m: float = 0.05
     heading_scale_deg: float = 3.0
-    max_error_score: float = 50.0
+    max_error_loss: float = 50.0
     temperature_c: float = PAPER_TEMPERATURE_C
     counter_rate_hz: float = PAPER_COUNTER_RATE_HZ
     range_noise_std_m: float = 0.002
@@ -124,10 +129,10 @@ class TrilaterationConfig:
         number_field(self, "route_length_m", low=MIN_ROUTE_LENGTH_M, high=100.0)
         number_field(self, "n_decision_points", low=1, high=200, integer=True)
         choice_field(self, "correction", ("replace", "fuse"))
-        number_field(self, "measurement_cost_per_s", low=0.0, high=100.0)
+        number_field(self, "sensing_cost_per_s", low=0.0, high=100.0)
         number_field(self, "position_scale_m", low=MIN_SCALE, high=10.0)
         number_field(self, "heading_scale_deg", low=MIN_SCALE, high=180.0)
-        number_field(self, "max_error_score", low=MIN_SCALE, high=1e6)
+        number_field(self, "max_error_loss", low=MIN_SCALE, high=1e6)
         number_field(self, "temperature_c", low=-20.0, high=50.0)
         number_field(self, "counter_rate_hz", low=1e3, high=1e9)
         number_field(self, "range_noise_std_m", low=0.0, high=0.5)
@@ -238,15 +243,16 @@ class TrilaterationEnv(SonarEnv):
 
     At each decision point, after the chosen fixes have corrected the estimate:
 
-    ``r = -min(E_xy / position_scale_m + E_theta / heading_scale, max_error_score)
-    - measurement_cost_per_s * n * 3 * firing_interval_s``
+    ``r = -min(E_xy / position_scale_m + E_theta / heading_scale, max_error_loss)
+    - sensing_cost_per_s * n * 3 * firing_interval_s``
 
     with ``E_xy`` (metres) and ``E_theta`` (radians) the errors of the estimate against the
     true pose (Beom & Cho eq. (16), :mod:`sonar_gym.metrics`). Defaults: 0.05 m and 3 deg
     (the paper's position estimates are within a few cm, its headings within 1-3 deg, Tables
     I-II), so 5 cm of position error, 3 deg of heading error and 5 s of measuring (33 fixes)
-    each cost 1; ``measurement_cost_per_s = 0.2``. The cap on the error part
-    (``max_error_score``, 50) keeps a lost robot's reward bounded.
+    each cost 1; ``sensing_cost_per_s = 0.2``. The cap on the error part
+    (``max_error_loss``, 50) keeps a lost robot's reward bounded; there is no separate
+    failure charge (a failed fix leaves the dead-reckoned estimate, whose error is scored).
 
     ## Starting State
 
@@ -283,10 +289,10 @@ class TrilaterationEnv(SonarEnv):
     | route_length_m | 8.0 | total straight-line length of the route, m |
     | n_decision_points | 16 | decision points (legs) per episode |
     | correction | ``"replace"`` | or ``"fuse"`` (covariance weighting, not in the paper) |
-    | measurement_cost_per_s | 0.2 | reward per second of measuring |
+    | sensing_cost_per_s | 0.2 | reward per second of measuring |
     | position_scale_m | 0.05 | position error worth 1 |
     | heading_scale_deg | 3.0 | heading error worth 1 |
-    | max_error_score | 50.0 | cap of the error part of one reward |
+    | max_error_loss | 50.0 | cap of the error part of one reward |
     | temperature_c | 27.0 | air temperature (the paper's), known to the ranger |
     | counter_rate_hz | 50e3 | TOF counter rate (the paper's 8051) |
     | range_noise_std_m | 0.002 | timing jitter as a distance, m |
@@ -303,7 +309,10 @@ class TrilaterationEnv(SonarEnv):
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Later, without changing any default episode:
+      ``measurement_cost_per_s`` renamed ``sensing_cost_per_s`` and ``max_error_score``
+      renamed ``max_error_loss`` (the names the other tasks use); the old names still work,
+      with a ``DeprecationWarning``.
 
     ## Example
 
@@ -522,8 +531,8 @@ class TrilaterationEnv(SonarEnv):
             position_error / config.position_scale_m + heading_error / config.heading_scale_rad
         )
         reward = (
-            -min(error_score, config.max_error_score)
-            - config.measurement_cost_per_s * measurement_time_s
+            -min(error_score, config.max_error_loss)
+            - config.sensing_cost_per_s * measurement_time_s
         )
         done = episode.decisions >= config.n_decision_points
         info = episode_info(

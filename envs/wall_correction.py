@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -82,6 +82,10 @@ STANDOFF_CLEARANCE_M = 0.05
 class WallCorrectionConfig:
     """The ``gym.make`` arguments of ``SonarGym/WallCorrection-v0`` (see the env docstring)."""
 
+    RENAMED_ARGUMENTS: ClassVar[dict[str, str]] = {
+        "encoder_noise_m_per_sqrt_m": "encoder_std_m_per_sqrt_m",
+    }
+
     scenario: str | Path = "apcs_corridor"
     n_legs: int = 6
     route_margin_m: float = 0.5
@@ -93,7 +97,7 @@ class WallCorrectionConfig:
     n_unmapped_obstacles: int = 2
     obstacle_length_range_m: tuple[float, float] = (0.3, 1.0)
     obstacle_depth_range_m: tuple[float, float] = (0.05, 0.35)
-    encoder_noise_m_per_sqrt_m: float = 0.0005
+    encoder_std_m_per_sqrt_m: float = 0.0005
     wheel_scale_error_std: float = 0.0005
     slip_probability_per_m: float = 0.005
     slip_fraction_max: float = 0.3
@@ -137,7 +141,7 @@ class WallCorrectionConfig:
         number_field(self, "n_unmapped_obstacles", low=0, high=20, integer=True)
         _range_field(self, "obstacle_length_range_m", low=0.05, high=5.0)
         _range_field(self, "obstacle_depth_range_m", low=0.01, high=1.0)
-        number_field(self, "encoder_noise_m_per_sqrt_m", low=0.0, high=0.1)
+        number_field(self, "encoder_std_m_per_sqrt_m", low=0.0, high=0.1)
         number_field(self, "wheel_scale_error_std", low=0.0, high=0.05)
         number_field(self, "slip_probability_per_m", low=0.0, high=1.0)
         number_field(self, "slip_fraction_max", low=0.0, high=1.0)
@@ -165,12 +169,12 @@ class WallCorrectionConfig:
     def filter_variance_per_m(self) -> float:
         """Variance per metre rolled of each wheel that the pose filter assumes, m^2/m.
 
-        Default: ``encoder_noise^2 + wheel_scale_error_std^2 * 1 m``, the random encoder error
+        Default: ``encoder_std^2 + wheel_scale_error_std^2 * 1 m``, the random encoder error
         plus the wheel-radius error treated as if it were random per metre.
         """
         if self.odometry_variance_per_m is not None:
             return float(self.odometry_variance_per_m)
-        return self.encoder_noise_m_per_sqrt_m**2 + self.wheel_scale_error_std**2
+        return self.encoder_std_m_per_sqrt_m**2 + self.wheel_scale_error_std**2
 
 
 def _range_field(config: object, name: str, *, low: float, high: float) -> None:
@@ -290,7 +294,7 @@ class WallCorrectionEnv(SonarEnv):
     | n_unmapped_obstacles | 2 | random unmapped boxes per episode (besides wall B) |
     | obstacle_length_range_m | (0.3, 1.0) | their length along the wall, metres |
     | obstacle_depth_range_m | (0.05, 0.35) | how far they stand out from the wall, metres |
-    | encoder_noise_m_per_sqrt_m | 0.0005 | random encoder error after 1 m, metres |
+    | encoder_std_m_per_sqrt_m | 0.0005 | random encoder error after 1 m, metres |
     | wheel_scale_error_std | 0.0005 | std of each wheel's radius error (the drift) |
     | slip_probability_per_m | 0.005 | chance that a wheel slips within a metre |
     | slip_fraction_max | 0.3 | largest loss of travel in a slip |
@@ -311,7 +315,10 @@ class WallCorrectionEnv(SonarEnv):
 
     ## Version History
 
-    * v0: first release.
+    * v0: first release. Later, without changing any default episode:
+      ``encoder_noise_m_per_sqrt_m`` renamed ``encoder_std_m_per_sqrt_m`` (the name of
+      :class:`~sonar_gym.odometry.OdometryConfig`); the old name still works, with a
+      ``DeprecationWarning``.
 
     ## Example
 
@@ -451,7 +458,7 @@ class WallCorrectionEnv(SonarEnv):
             return float(np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4))
 
         noise = OdometryNoise(
-            encoder_std_m_per_sqrt_m=config.encoder_noise_m_per_sqrt_m,
+            encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,
             scale_error_left=scale_error(),
             scale_error_right=scale_error(),
             slip_probability_per_m=config.slip_probability_per_m,

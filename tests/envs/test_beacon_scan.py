@@ -26,7 +26,7 @@ ENV_ID = "SonarGym/BeaconScan-v0"
         ("sensing_cost_per_s", -1.0),
         ("increments_deg", (1, 4)),
         ("sector_widths_deg", (45,)),
-        ("n_bins", 7),
+        ("n_range_bins", 7),
         ("start_pose", "anywhere"),
         ("localization_method", "magic"),
         ("rcd_extraction", "guess"),
@@ -251,8 +251,8 @@ def reference_observation(env: Any) -> np.ndarray:
     layout = env.observation_layout
     observation = np.zeros(env.observation_space.shape, dtype=np.float32)
     ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
-    bins = (np.arange(memory.n_slots) * config.n_bins) // memory.n_slots
-    bin_ranges, bin_scanned = np.ones(config.n_bins), np.zeros(config.n_bins)
+    bins = (np.arange(memory.n_slots) * config.n_range_bins) // memory.n_slots
+    bin_ranges, bin_scanned = np.ones(config.n_range_bins), np.zeros(config.n_range_bins)
     for slot, bin_index in enumerate(bins):
         if np.isfinite(ranges[slot]):
             bin_ranges[bin_index] = min(bin_ranges[bin_index], min(ranges[slot] / max_range, 1.0))
@@ -284,9 +284,9 @@ def reference_observation(env: Any) -> np.ndarray:
     return observation
 
 
-@pytest.mark.parametrize("n_bins", [72, 360, 8])
-def test_observation_equals_its_slot_by_slot_definition(n_bins: int) -> None:
-    env = gym.make(ENV_ID, temperature_c=30.0, n_bins=n_bins).unwrapped
+@pytest.mark.parametrize("n_range_bins", [72, 360, 8])
+def test_observation_equals_its_slot_by_slot_definition(n_range_bins: int) -> None:
+    env = gym.make(ENV_ID, temperature_c=30.0, n_range_bins=n_range_bins).unwrapped
     observation, _ = env.reset(seed=11)
     np.testing.assert_allclose(observation, reference_observation(env), rtol=0, atol=1e-6)
     for action in (

@@ -83,7 +83,7 @@ def test_message_names_subject_bounds_and_value_and_cuts_huge_values() -> None:
 NEGATIVE_ZERO_SCALES = [
     (BEACON_SCAN, "prior_position_std_m"),
     (BEACON_SCAN, "prior_heading_std_deg"),
-    (SWEEP, "wheel_scale_error"),
+    (SWEEP, "wheel_scale_error_bound"),
     (TRILATERATION, "wheel_scale_error_std"),
     (TRILATERATION, "initial_position_std_m"),
     (TRILATERATION, "initial_heading_std_deg"),
@@ -138,7 +138,7 @@ def test_huge_integers_are_refused_by_name_in_every_float_argument(env_id: str) 
 
 NUMPY_ARGUMENTS = {
     BEACON_SCAN: {
-        "n_bins": np.int64(8),
+        "n_range_bins": np.int64(8),
         "temperature_c": np.float32(21.0),
         "allow_calibration": np.bool_(False),
     },

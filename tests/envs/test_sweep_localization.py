@@ -67,7 +67,7 @@ def _episode_return(env: gym.Env, agent: object, seed: int) -> float:
         ("heading_step_deg", 10.0),
         ("sensing_cost_per_s", -0.1),
         ("max_error_loss", 0.0),
-        ("wheel_scale_error", 0.5),
+        ("wheel_scale_error_bound", 0.5),
         ("slip_probability_per_m", 1.5),
         ("fix_position_std_m", 0.0),
         ("fix_heading_std_deg", float("nan")),
@@ -183,8 +183,8 @@ def test_heading_variance_grows_by_one_over_the_wheel_base_squared() -> None:
     scale_error = 0.01
     env = gym.make(
         ENV_ID,
-        encoder_noise_std_m_per_sqrt_m=0.0,
-        wheel_scale_error=scale_error,
+        encoder_std_m_per_sqrt_m=0.0,
+        wheel_scale_error_bound=scale_error,
         slip_probability_per_m=0.0,
     )
     _, info = env.reset(seed=9)

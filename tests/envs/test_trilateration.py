@@ -75,7 +75,7 @@ def exact_distances(pose_in_t: Pose, z_m: float) -> np.ndarray:
         ("n_decision_points", 0),
         ("n_decision_points", 2.5),
         ("correction", "average"),
-        ("measurement_cost_per_s", -0.1),
+        ("sensing_cost_per_s", -0.1),
         ("position_scale_m", 0.0),
         ("heading_scale_deg", 0.0),
         ("temperature_c", 99.0),
@@ -146,7 +146,7 @@ def test_reward_is_the_documented_error_score_minus_the_time_cost() -> None:
     cost, position_scale, heading_scale_deg = 0.7, 0.02, 2.0
     env = gym.make(
         ENV_ID,
-        measurement_cost_per_s=cost,
+        sensing_cost_per_s=cost,
         position_scale_m=position_scale,
         heading_scale_deg=heading_scale_deg,
     )

@@ -70,8 +70,8 @@ UNSTATED_PARAMETERS: tuple[tuple[str, str, str], ...] = (
     ("range noise / timer", "5 mm / 10 us", "presets.py"),
     ("short move between sweeps", "0.10 m along the route", "env sweep_spacing_m"),
     ("route between Table 1 points", "straight legs in table order", "env route='table1'"),
-    ("encoder noise", "5 mm after 1 m per wheel", "env encoder_noise_std_m_per_sqrt_m"),
-    ("wheel scale error", "uniform +-1 % per wheel, per episode", "env wheel_scale_error"),
+    ("encoder noise", "5 mm after 1 m per wheel", "env encoder_std_m_per_sqrt_m"),
+    ("wheel scale error", "uniform +-1 % per wheel, per episode", "env wheel_scale_error_bound"),
     ("wheel slip", "2 % per metre, up to 10 % of a move", "env slip_probability_per_m"),
     (
         "EKF V(k)",
