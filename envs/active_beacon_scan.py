@@ -133,7 +133,8 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     turn ``|angle| / turn_rate_deg_per_s`` (default 45 deg/s); ``try_fix`` and ``commit`` take
     no time. At commit: ``-min(E_xy / 0.03 m + E_theta / 2 deg, failure_penalty)`` (Beom & Cho
     eq 16) at the final pose, from the last successful fix there; ``-failure_penalty`` when
-    there is none, or when ``max_steps`` pass without committing.
+    there is none, or when ``max_steps`` pass without committing. ``info["rewards"]`` holds
+    the terms ``sensing_cost``, ``pose_error`` and ``failure``, as in BeaconScan.
 
     ## Starting State
 
@@ -278,15 +279,17 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
             duration_s = self._drive(episode, turn_rad=math.radians(command.turn_deg))
         elif command.kind == "move":
             duration_s = self._drive(episode, distance_m=config.move_distance_m)
-        reward = -config.sensing_cost_per_s * duration_s
+        terms = self._sensing_terms(duration_s)
         if command.kind == "commit":
             status = "ok" if episode.estimate is not None else "no_fix"
-            reward -= self._localization_loss(episode, status)
-            return StepOutcome(reward, terminated=True, info=self._full_info(status))
+            terms.update(self._localization_terms(episode, status))
+            return StepOutcome(reward_terms=terms, terminated=True, info=self._full_info(status))
         if episode.steps >= config.max_steps:
-            reward -= config.failure_penalty
-            return StepOutcome(reward, truncated=True, info=self._full_info("truncated"))
-        return StepOutcome(reward, info=self._full_info(status))
+            terms["failure"] = -config.failure_penalty
+            return StepOutcome(
+                reward_terms=terms, truncated=True, info=self._full_info("truncated")
+            )
+        return StepOutcome(reward_terms=terms, info=self._full_info(status))
 
     def _drive(self, episode: Any, distance_m: float = 0.0, turn_rad: float = 0.0) -> float:
         """Turn in place or drive straight; the prior follows the odometry, the scans of the

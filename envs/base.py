@@ -9,8 +9,9 @@ opt-in services a task switches on when it is ready for them:
 
 * reward terms: ``_apply_action`` returns ``StepOutcome(reward_terms={...})`` and the base sums
   them into the reward and copies them into ``info["rewards"]`` (HighwayEnv's ``_rewards``);
-* enforced info keys: a task that sets ``required_info_keys`` (for example :data:`INFO_KEYS`)
-  gets an error as soon as a step's ``info`` lacks one;
+  every registered task gives its reward this way, under the names of :data:`REWARD_TERMS`;
+* enforced info keys: a task that sets ``required_info_keys`` (every registered task sets
+  :data:`INFO_KEYS`) gets an error as soon as a step's ``info`` lacks one;
 * truncation: a task that sets ``max_decisions`` has its episodes truncated after that many
   steps (``info["status"]`` then reads ``"truncated"`` unless the task set it).
 
@@ -35,6 +36,14 @@ INFO_KEYS = ("position_error_m", "heading_error_rad", "sensing_time_s", "status"
 """The ``info`` keys every task reports on every step (opt in with ``required_info_keys``)."""
 REWARDS_INFO_KEY = "rewards"
 """Where the base copies a step's reward terms in ``info``."""
+REWARD_TERMS = {
+    "sensing_cost": "minus the cost of this step's sensing time (``sensing_cost_per_s`` * s)",
+    "pose_error": "minus the (capped) pose error of the estimate, in the task's error units",
+    "failure": "minus ``failure_penalty`` when the method gives no pose or time runs out",
+    "collision": "minus ``collision_penalty`` when the robot touched an obstacle",
+    "path_loss": "BlockExpansion's episode loss: path error and failure parts in one number",
+}
+"""The names tasks give their reward terms, one per concept (a task uses those it has)."""
 
 
 @dataclass
@@ -42,8 +51,14 @@ class StepOutcome:
     """What a task's ``_apply_action`` returns; the base adds the observation and checks.
 
     Give either ``reward`` or ``reward_terms`` (named parts of the reward, e.g.
-    ``{"pose_error": -0.8, "sensing_time": -0.1}``): with terms, the reward is their sum and
+    ``{"pose_error": -0.8, "sensing_cost": -0.1}``): with terms, the reward is their sum and
     ``info["rewards"]`` holds a copy of them.
+
+    The sum runs in the terms' order, left to right, as a task would write it by hand
+    (``a + b + c``, not a compensated sum), so a task that moves its arithmetic into terms
+    keeps its rewards to the bit. Terms after the first that are exactly zero are skipped, so
+    a task may report a fixed set of terms per step: a ``0.0`` placeholder cannot turn a
+    ``-0.0`` reward into ``+0.0``.
     """
 
     reward: float = 0.0
@@ -206,7 +221,10 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         for key, value in terms.items():
             self._record.reward_terms[key] = self._record.reward_terms.get(key, 0.0) + value
         outcome.info[REWARDS_INFO_KEY] = dict(terms)
-        return float(math.fsum(terms.values()))
+        reward = _sum_in_order(list(terms.values()))
+        if not math.isfinite(reward):
+            raise RuntimeError(f"{name}: reward terms {terms} overflow to {reward!r}")
+        return reward
 
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
@@ -220,6 +238,18 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         """A context that adds the wall-clock time of its block to ``self.timing[phase]``
         (seconds)."""
         return _PhaseTimer(self.timing, phase)
+
+
+def _sum_in_order(values: list[float]) -> float:
+    """``values[0] + values[1] + ...`` left to right, skipping zeros after the first (see
+    :class:`StepOutcome`); 0.0 for no values."""
+    if not values:
+        return 0.0
+    total = values[0]
+    for value in values[1:]:
+        if value != 0.0:
+            total += value
+    return total
 
 
 class _PhaseTimer:

@@ -15,7 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
-from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     bool_field,
     build_config,
@@ -245,6 +245,8 @@ class BeaconScanEnv(SonarEnv):
     calibration pings). At localize: ``-min(E_xy / 0.03 m + E_theta / 2 deg, failure_penalty)``
     (Beom & Cho eq 16, in units of their experimental bounds); ``-failure_penalty`` when no pose
     comes out (no RCD pair, D < 0) or when ``max_steps`` pass without localizing.
+    ``info["rewards"]`` holds the terms ``sensing_cost``, ``pose_error`` and ``failure``
+    (zero when they do not apply), which sum to the reward.
 
     ## Starting State
 
@@ -311,6 +313,8 @@ class BeaconScanEnv(SonarEnv):
     >>> terminated, info["status"], info["position_error_m"] < 0.03
     (True, 'ok', True)
     """
+
+    required_info_keys = INFO_KEYS
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         super().__init__(render_mode)
@@ -482,15 +486,31 @@ class BeaconScanEnv(SonarEnv):
             duration_s = self._pan(episode, command)
         elif command.kind == "calibrate":
             duration_s = self._calibrate(episode)
-        reward = -self.config.sensing_cost_per_s * duration_s
+        terms = self._sensing_terms(duration_s)
         if command.kind == "localize":
             status = self._localize(episode)
-            reward -= self._localization_loss(episode, status)
-            return StepOutcome(reward, terminated=True, info=self._info(status))
+            terms.update(self._localization_terms(episode, status))
+            return StepOutcome(reward_terms=terms, terminated=True, info=self._info(status))
         if episode.steps >= self.config.max_steps:
-            reward -= self.config.failure_penalty
-            return StepOutcome(reward, truncated=True, info=self._info("truncated"))
-        return StepOutcome(reward, info=self._info("sensing"))
+            terms["failure"] = -self.config.failure_penalty
+            return StepOutcome(reward_terms=terms, truncated=True, info=self._info("truncated"))
+        return StepOutcome(reward_terms=terms, info=self._info("sensing"))
+
+    def _sensing_terms(self, duration_s: float) -> dict[str, float]:
+        """A step's reward terms before localizing: ``sensing_cost`` for ``duration_s``
+        seconds of sensing (or motion), and ``pose_error`` and ``failure`` still zero."""
+        return {
+            "sensing_cost": -self.config.sensing_cost_per_s * duration_s,
+            "pose_error": 0.0,
+            "failure": 0.0,
+        }
+
+    def _localization_terms(self, episode: _Episode, status: str) -> dict[str, float]:
+        """The ``pose_error`` and ``failure`` terms of localizing with ``status`` (Rewards)."""
+        loss = self._localization_loss(episode, status)
+        if status != "ok" or episode.estimate is None:
+            return {"pose_error": 0.0, "failure": -loss}
+        return {"pose_error": -loss, "failure": 0.0}
 
     def _pan(self, episode: _Episode, command: PanCommand) -> float:
         centre = math.radians(command.centre_deg)

@@ -23,7 +23,7 @@ from sonar_gym.calibration_distances import (
     distances_to_fractions,
     fractions_to_distances,
 )
-from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
     check_number,
@@ -93,6 +93,7 @@ LAYOUT_JITTER_Z_M = 0.15
 """... and within +-0.15 m in height."""
 RANDOM_CURVATURE_PER_M = (-1.3, -0.5)
 """``path="random"``: range of the parabola's coefficient ``a``, 1/m (the paper-like path: -0.9)."""
+NO_HEADING_ERROR_RAD = 0.0  # Roh et al. estimate positions only (see the Info section)
 MAX_LAYOUT_TRIES = 200
 MIN_BEACON_CLEARANCE_M = 0.3
 """Every beacon stands at least this far above the receiver, metres."""
@@ -258,6 +259,9 @@ class BlockExpansionEnv(SonarEnv):
     (Sec. IV.B). Every step also costs ``sensing_cost_per_s`` per second of ranging (default 0:
     the robot ranges every 40 ms whatever the d's, so time does not depend on the choice).
     Intermediate steps (the first of two per-boundary decisions) give only that cost.
+    ``info["rewards"]`` holds the terms ``sensing_cost`` and ``path_loss`` (the bracket above
+    with the boundary part, one number: split further it would no longer add up to the same
+    float).
 
     ## Starting State
 
@@ -288,8 +292,10 @@ class BlockExpansionEnv(SonarEnv):
     ``failed_fix_fraction``; ``sensing_time_s`` (ranging time of the path so far, seconds);
     ``status``: ``"running"``, ``"ok"``, the first failed boundary's status
     (``"not_reached"``, ``"no_intersection"``, ``"collinear_positions"``,
-    ``"missing_distance"``) or ``"localization_failed"``. No heading error: trilateration
-    gives no heading.
+    ``"missing_distance"``) or ``"localization_failed"``. ``heading_error_rad`` is always 0.0:
+    trilateration gives no heading and the task scores none (a quantity a task does not
+    estimate reads 0.0, never NaN, as ``position_error_m`` does before the first fix); the key
+    is there so every env reports the same :data:`~sonar_gym.envs.base.INFO_KEYS`.
 
     ## Arguments
 
@@ -326,6 +332,8 @@ class BlockExpansionEnv(SonarEnv):
     >>> terminated, info["status"], info["sigma_prime_m"] < 0.1
     (True, 'ok', True)
     """
+
+    required_info_keys = INFO_KEYS
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
     action_space: gym.spaces.Box  # d1..d3 (per boundary, or all at once) scaled to [-1, 1]
@@ -521,16 +529,20 @@ class BlockExpansionEnv(SonarEnv):
         rounds = episode.round_durations_s[previous_until : episode.evaluated_until]
         step_time_s = float(np.sum(rounds))
         episode.sensing_time_s += step_time_s
-        reward = -config.sensing_cost_per_s * step_time_s
+        terms = {"sensing_cost": -config.sensing_cost_per_s * step_time_s, "path_loss": 0.0}
         if not final:
             errors = self._errors(result, episode.evaluated_until)
-            return StepOutcome(reward, info=self._info(position_error_m=errors[1], errors=errors))
+            return StepOutcome(
+                reward_terms=terms, info=self._info(position_error_m=errors[1], errors=errors)
+            )
         episode.done = True
         episode.status = final_status(result)
         errors = self._errors(result, len(episode.path))
-        reward -= self._loss(result, errors[1])
+        terms["path_loss"] = -self._loss(result, errors[1])
         return StepOutcome(
-            reward, terminated=True, info=self._info(position_error_m=errors[1], errors=errors)
+            reward_terms=terms,
+            terminated=True,
+            info=self._info(position_error_m=errors[1], errors=errors),
         )
 
     def _errors(self, result: BlockExpansionResult, until: int) -> tuple[float, float]:
@@ -606,6 +618,7 @@ class BlockExpansionEnv(SonarEnv):
         sigma_m, sigma_prime_m = errors if errors is not None else (0.0, 0.0)
         info: dict[str, Any] = {
             "position_error_m": float(position_error_m),
+            "heading_error_rad": NO_HEADING_ERROR_RAD,
             "sigma_m": float(sigma_m),
             "sigma_prime_m": float(sigma_prime_m),
             "calibration_errors_m": {},

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
     check_choice,
@@ -231,6 +231,7 @@ class SweepLocalizationEnv(SonarEnv):
     with ``E_xy``, ``E_theta`` the error of the EKF estimate (Beom & Cho eq. (16) metrics),
     10 cm the typical error Kim et al. report (sec. 4.1), and ``T_sweeps`` the servo and
     listening time of this decision's sweeps (1.25 s per 90 deg sweep at 5 deg).
+    ``info["rewards"]`` holds the two terms, ``pose_error`` and ``sensing_cost``.
 
     ## Starting State
 
@@ -305,6 +306,8 @@ class SweepLocalizationEnv(SonarEnv):
     >>> info["n_sweeps"], info["fix_status"], info["position_error_m"] < 0.1
     (3, 'ok', True)
     """
+
+    required_info_keys = INFO_KEYS
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         super().__init__(render_mode)
@@ -437,16 +440,17 @@ class SweepLocalizationEnv(SonarEnv):
             position_error_m(episode.estimate, true_pose) / POSITION_UNIT_M
             + heading_error_rad(episode.estimate, true_pose) / HEADING_UNIT_RAD
         )
-        reward = (
-            -min(error_loss, config.max_error_loss) - config.sensing_cost_per_s * step_sensing_s
-        )
+        terms = {
+            "pose_error": -min(error_loss, config.max_error_loss),
+            "sensing_cost": -(config.sensing_cost_per_s * step_sensing_s),
+        }
         done = episode.decisions >= len(stations)
         info = self._info("ok" if done else _RUNNING)
         info.update(fix_info)
         info.update(
             n_sweeps=n_sweeps, sector=SECTOR_NAMES[sector], step_sensing_time_s=step_sensing_s
         )
-        return StepOutcome(reward, terminated=done, info=info)
+        return StepOutcome(reward_terms=terms, terminated=done, info=info)
 
     def _sense_and_fix(
         self,

@@ -24,7 +24,7 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
     check_choice,
@@ -253,6 +253,7 @@ class TrilaterationEnv(SonarEnv):
     each cost 1; ``sensing_cost_per_s = 0.2``. The cap on the error part
     (``max_error_loss``, 50) keeps a lost robot's reward bounded; there is no separate
     failure charge (a failed fix leaves the dead-reckoned estimate, whose error is scored).
+    ``info["rewards"]`` holds the two terms, ``pose_error`` and ``sensing_cost``.
 
     ## Starting State
 
@@ -328,6 +329,8 @@ class TrilaterationEnv(SonarEnv):
     >>> info["position_error_m"] < 0.06, terminated
     (True, False)
     """
+
+    required_info_keys = INFO_KEYS
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         super().__init__(render_mode)
@@ -530,10 +533,10 @@ class TrilaterationEnv(SonarEnv):
         error_score = (
             position_error / config.position_scale_m + heading_error / config.heading_scale_rad
         )
-        reward = (
-            -min(error_score, config.max_error_loss)
-            - config.sensing_cost_per_s * measurement_time_s
-        )
+        terms = {
+            "pose_error": -min(error_score, config.max_error_loss),
+            "sensing_cost": -(config.sensing_cost_per_s * measurement_time_s),
+        }
         done = episode.decisions >= config.n_decision_points
         info = episode_info(
             episode,
@@ -547,7 +550,7 @@ class TrilaterationEnv(SonarEnv):
         )
         if not done:
             self._drive_next_leg(episode)
-        return StepOutcome(reward, terminated=done, info=info)
+        return StepOutcome(reward_terms=terms, terminated=done, info=info)
 
     def _correct(self, episode: TrilaterationEpisode, fix_pose: Pose, n_ok: int) -> None:
         """Correct the estimate with an averaged fix of ``n_ok`` fixes (see ``correction``)."""

@@ -33,7 +33,7 @@ from sonar_gym.apcs_route import (
     render_route,
     with_wall_obstacles,
 )
-from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
     check_choice,
@@ -257,7 +257,8 @@ class WallCorrectionEnv(SonarEnv):
     cost 1), minus ``sensing_cost_per_s`` times the leg's sensing time, minus
     ``collision_penalty`` after a contact. Sensing time is listening time: one MA40B8
     listening time (29 ms, for 5 m) per sampling instant, one sonar or both (they face apart,
-    fire together and listen at once).
+    fire together and listen at once). ``info["rewards"]`` holds the terms ``pose_error``,
+    ``sensing_cost`` and ``collision``.
 
     ## Starting State
 
@@ -332,6 +333,8 @@ class WallCorrectionEnv(SonarEnv):
     >>> info["status"], info["leg"], info["n_detected_walls"] > 0
     ('running', 1, True)
     """
+
+    required_info_keys = INFO_KEYS
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
 
@@ -522,10 +525,14 @@ class WallCorrectionEnv(SonarEnv):
         pose_loss = position_error_m(estimate, truth) / config.position_scale_m + heading_error_rad(
             estimate, truth
         ) / math.radians(config.heading_scale_deg)
-        reward = -pose_loss - config.sensing_cost_per_s * summary.sensing_time_s
-        if summary.collided:
-            reward -= config.collision_penalty
-        return StepOutcome(reward, terminated=done, info=self._info("ok" if done else "running"))
+        terms = {
+            "pose_error": -pose_loss,
+            "sensing_cost": -(config.sensing_cost_per_s * summary.sensing_time_s),
+            "collision": -config.collision_penalty if summary.collided else 0.0,
+        }
+        return StepOutcome(
+            reward_terms=terms, terminated=done, info=self._info("ok" if done else "running")
+        )
 
     # --- observation and info ---------------------------------------------------------------
     def _observe(self) -> np.ndarray:

@@ -34,7 +34,9 @@ from sonar_gym.agents import make_agent
 from sonar_gym.registration import ENVIRONMENTS
 
 ENV_IDS = tuple(sorted(ENVIRONMENTS))
-AGENTS = ("random", "paper")
+AGENTS = ("random", "paper", "lowest")
+"""``lowest`` (defined here) always plays the action of all-lowest indices or zeros: in
+BeaconScan and ActiveBeaconScan a pan that never localizes, so episodes end by truncation."""
 SEEDS = (0, 1, 2)
 MAX_STEPS = 60
 """Steps recorded per episode at most (enough to cross every decision kind of every task)."""
@@ -88,11 +90,33 @@ def step_digest(
     return hashlib.sha256(json.dumps(record).encode()).hexdigest()[:20]
 
 
+class LowestActionAgent:
+    """Always the action with every index at its lowest value (zeros for a Box)."""
+
+    def __init__(self, env: gym.Env) -> None:
+        space = env.action_space
+        if isinstance(space, gym.spaces.Discrete):
+            self._action: Any = int(space.start)
+        else:  # MultiDiscrete (starting at 0 here) or Box (0 lies inside every env's box)
+            self._action = np.zeros(space.shape, dtype=space.dtype)
+
+    def reset(self, seed: int | None = None) -> None:
+        """Nothing to reseed."""
+
+    def act(self, observation: np.ndarray) -> Any:
+        return self._action
+
+
+def agent_for(agent_name: str, env: gym.Env) -> Any:
+    """A built-in agent by name, or :class:`LowestActionAgent` for ``"lowest"``."""
+    return LowestActionAgent(env) if agent_name == "lowest" else make_agent(agent_name, env)
+
+
 def rollout(env_id: str, agent_name: str, seed: int) -> dict[str, Any]:
     """:data:`EPISODES` episodes (each at most :data:`MAX_STEPS` steps) as the fixture records
     them."""
     env = gym.make(env_id)
-    agent = make_agent(agent_name, env)
+    agent = agent_for(agent_name, env)
     agent.reset(seed=seed)
     episodes = [_recorded_episode(env, agent, seed)]
     episodes += [_recorded_episode(env, agent, None) for _ in range(EPISODES - 1)]
@@ -130,7 +154,7 @@ def replay_digests(env_id: str, agent_name: str, seed: int, old: dict[str, Any])
     still be there).
     """
     env = gym.make(env_id)
-    agent = make_agent(agent_name, env)
+    agent = agent_for(agent_name, env)
     agent.reset(seed=seed)
     problems: list[str] = []
     for number, episode in enumerate(old["episodes"]):
