@@ -52,6 +52,8 @@ ACTION_KINDS = ("pan", "calibrate", "localize")
 ASSUMED_TEMPERATURE_C = 20.0
 POSITION_UNIT_M = 0.03  # Beom & Cho's experimental position bound, section V.C
 HEADING_UNIT_RAD = math.radians(2.0)  # and their heading bound
+PAPER_SENSOR_PRESET = "polaroid-6500"
+"""Beom & Cho's ranger, used unless the scenario's ``[sensor]`` chooses another preset."""
 
 
 @dataclass(frozen=True)
@@ -273,7 +275,8 @@ class BeaconScanEnv(SonarEnv):
 
     | argument | default | meaning |
     |---|---|---|
-    | scenario | ``"beom_cho_lab"`` | built-in name, path to .toml/.json, or ``"random"`` |
+    | scenario | ``"beom_cho_lab"`` | built-in name, path to .toml/.json, or ``"random"``; the |
+    | | | sonar: its ``[sensor]`` preset if set, else the Polaroid 6500 |
     | temperature_c | None | air temperature in deg C; None draws from ``temperature_range_c`` |
     | temperature_range_c | (0, 40) | deg C |
     | allow_calibration | True | whether the calibrate action works (else it only costs time) |
@@ -465,9 +468,9 @@ class BeaconScanEnv(SonarEnv):
             room.world.temperature_c = temperature_c
             return room
         world = World(scenario, temperature_c=temperature_c)
-        sonar = RotatingSonar.preset(scenario.sensor.preset).with_assumed_speed(
-            speed_of_sound_mps(ASSUMED_TEMPERATURE_C)
-        )
+        sonar = RotatingSonar.preset(
+            scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
+        ).with_assumed_speed(speed_of_sound_mps(ASSUMED_TEMPERATURE_C))
         beacons = [scenario.beacon(role) for role in BEACON_ROLES]
         self._room = _Room(
             world,

@@ -11,7 +11,7 @@ and combined through dead reckoning, feed the voting localization on the known o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -38,6 +38,7 @@ from sonar_gym.polyline import Route, draw_free_route, draw_polyline, follow_rou
 from sonar_gym.pose import Pose, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.swept import SweptSonar
 from sonar_gym.validation import MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
@@ -130,6 +131,21 @@ class SweepLocalizationConfig:
         that the encoders cannot see, and only a fix corrects them.
         """
         return self.encoder_std_m_per_sqrt_m**2 + self.wheel_scale_error_bound**2 / 3.0
+
+
+PAPER_SENSOR_PRESET = "srf04"
+"""Kim et al.'s ranger, used unless the scenario's ``[sensor]`` chooses another preset."""
+
+
+def swept_sonar_for(scenario: Scenario, config: SweepLocalizationConfig) -> SweptSonar:
+    """The env's swept sonar: Kim et al.'s sweep (:meth:`SweptSonar.kim`, ``sweep_width_deg``
+    and ``sweep_step_deg`` of ``config``) with the transducer of the scenario's ``[sensor]``
+    preset when the scenario chose one, else the paper's SRF04."""
+    sonar = SweptSonar.kim(
+        wide=config.sweep_width_deg == 180, step_rad=math.radians(config.sweep_step_deg)
+    )
+    preset = scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
+    return replace(sonar, transducer=transducer_preset(preset))
 
 
 @dataclass
@@ -264,7 +280,7 @@ class SweepLocalizationEnv(SonarEnv):
 
     | argument | default | meaning |
     |---|---|---|
-    | scenario | ``"kim_arena"`` | built-in scenario name or path (the sonar is always the SRF04) |
+    | scenario | ``"kim_arena"`` | built-in name or path; its ``[sensor]`` preset, if set, else SRF04 |
     | route | ``"table1"`` | or ``"random"`` |
     | route_length_m | 3.2 | length of a random route, m |
     | decision_points | ``"spacing"`` | or ``"waypoints"`` (one decision per route vertex) |
@@ -318,9 +334,7 @@ class SweepLocalizationEnv(SonarEnv):
         except (OSError, ValueError) as error:
             raise ValueError(f"argument 'scenario': {error}") from error
         self.grid = occupancy_grid_of(self._scenario)
-        self.sonar = SweptSonar.kim(
-            wide=config.sweep_width_deg == 180, step_rad=math.radians(config.sweep_step_deg)
-        )
+        self.sonar = swept_sonar_for(self._scenario, config)
         self.action_space = gym.spaces.MultiDiscrete([config.max_sweeps + 1, len(SECTOR_NAMES)])
         names_and_sizes = [
             ("estimate_xy", 2),

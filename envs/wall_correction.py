@@ -15,7 +15,7 @@ the map, stream, verdict and record names it re-exports live in :mod:`sonar_gym.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -57,6 +57,7 @@ from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
 from sonar_gym.scenario import Scenario, load_scenario
+from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.validation import MIN_LENGTH_M, MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
@@ -177,6 +178,24 @@ class WallCorrectionConfig:
         return self.encoder_std_m_per_sqrt_m**2 + self.wheel_scale_error_std**2
 
 
+PAPER_SENSOR_PRESET = "ma40b8"
+"""The APCS robot's side sonars, used unless the scenario's ``[sensor]`` chooses a preset."""
+
+
+def side_sonars_for(scenario: Scenario, config: WallCorrectionConfig) -> SideSonars:
+    """The env's side sonars: the scenario's ``[sensor]`` preset when it chose one, else the
+    paper's MA40B8 (:meth:`SideSonars.apcs`); either with the timing jitter of
+    ``config.range_noise_std_m`` (metres of range) unless that is None."""
+    sonars = SideSonars.apcs(range_noise_std_m=config.range_noise_std_m)
+    preset = scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
+    if preset == PAPER_SENSOR_PRESET:
+        return sonars
+    transducer = transducer_preset(preset)
+    if config.range_noise_std_m is not None:
+        transducer = replace(transducer, range_noise_std_m=float(config.range_noise_std_m))
+    return replace(sonars, transducer=transducer)
+
+
 def _range_field(config: object, name: str, *, low: float, high: float) -> None:
     """A pair (low, high) with ``low <= high``, both within ``[low, high]``."""
     first, _ = numbers_field(config, name, length=2, low=low, high=high)
@@ -284,7 +303,8 @@ class WallCorrectionEnv(SonarEnv):
 
     | argument | default | meaning |
     |---|---|---|
-    | scenario | ``"apcs_corridor"`` | a scenario with a room; the route runs along its x axis |
+    | scenario | ``"apcs_corridor"`` | a scenario with a room; the route runs along its x axis; |
+    | | | the sonars: its ``[sensor]`` preset if set, else the MA40B8 |
     | n_legs | 6 | legs of the route |
     | route_margin_m | 0.5 | distance kept from the room's ends, metres |
     | transition_m | 0.5 | travel over which a leg reaches its stand-off, metres |
@@ -375,7 +395,7 @@ class WallCorrectionEnv(SonarEnv):
             config.temperature_c,
             route_margin_m=config.route_margin_m,
         )
-        self.sonars = SideSonars.apcs(range_noise_std_m=config.range_noise_std_m)
+        self.sonars = side_sonars_for(self.scenario, config)
         self._map_ahead = map_ahead_features(
             self.wall_map,
             self.leg_starts_x,

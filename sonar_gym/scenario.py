@@ -159,9 +159,21 @@ class RobotSpec:
 
 @dataclass(frozen=True)
 class SensorSpec:
-    """Which transducer preset the scenario's rotating sonar uses."""
+    """Which transducer preset the scenario's pulse-echo sonar uses.
+
+    Attributes:
+        preset: one of :data:`SENSOR_PRESETS`.
+        given: whether the scenario chose the preset (``sensor.preset`` in the file) rather
+            than leaving the default; a task built around its paper's own sensor keeps that
+            sensor unless the scenario chose one (:meth:`preset_or`).
+    """
 
     preset: str = "polaroid-6500"
+    given: bool = False
+
+    def preset_or(self, task_default: str) -> str:
+        """The scenario's preset if it chose one, else ``task_default``."""
+        return self.preset if self.given else task_default
 
 
 @dataclass(frozen=True)
@@ -444,7 +456,7 @@ def scenario_from_dict(
         cylinders=tuple(cylinders),
         emitters=tuple(emitters),
         robot=robot,
-        sensor=SensorSpec(preset),
+        sensor=SensorSpec(preset, given="preset" in sensor_data),
         reflector=reflector,
         description=reader.text("meta.description", meta.get("description", "")),
         source=reader.text("meta.source", meta.get("source", source)),
