@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -39,10 +39,13 @@ class ActiveBeaconScanConfig(BeaconScanConfig):
     BeaconScan's arguments, plus the motion ones; ``max_steps`` defaults to 24 here.
     """
 
+    RENAMED_ARGUMENTS: ClassVar[dict[str, str]] = BeaconScanConfig.RENAMED_ARGUMENTS | {
+        "linear_speed_mps": "robot_speed_mps",
+    }
     max_steps: int = 24
     move_distance_m: float = 0.25
     turn_angles_deg: tuple[int, ...] = (30, -30, 90, -90)
-    linear_speed_mps: float = 0.2
+    robot_speed_mps: float = 0.2
     turn_rate_deg_per_s: float = 45.0
     fix_offset_scale_m: float = 0.5
 
@@ -62,7 +65,7 @@ class ActiveBeaconScanConfig(BeaconScanConfig):
                 "argument 'turn_angles_deg' must be distinct non-zero whole degrees in "
                 f"[-180, 180]; got {values!r}"
             )
-        number_field(self, "linear_speed_mps", low=0.01, high=5.0)
+        number_field(self, "robot_speed_mps", low=0.01, high=5.0)
         number_field(self, "turn_rate_deg_per_s", low=1.0, high=720.0)
         number_field(self, "fix_offset_scale_m", low=0.01, high=10.0)
 
@@ -129,7 +132,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     ## Rewards
 
     Every step costs ``-sensing_cost_per_s * duration``: pans and calibrations as in
-    BeaconScan, a move ``move_distance_m / linear_speed_mps`` (default 0.25 m at 0.2 m/s), a
+    BeaconScan, a move ``move_distance_m / robot_speed_mps`` (default 0.25 m at 0.2 m/s), a
     turn ``|angle| / turn_rate_deg_per_s`` (default 45 deg/s); ``try_fix`` and ``commit`` take
     no time. At commit: ``-min(E_xy / 0.03 m + E_theta / 2 deg, failure_penalty)`` (Beom & Cho
     eq 16) at the final pose, from the last successful fix there; ``-failure_penalty`` when
@@ -161,14 +164,15 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     | max_steps | 24 | decisions before truncation |
     | move_distance_m | 0.25 | length of a move, metres |
     | turn_angles_deg | (30, -30, 90, -90) | turn angles offered, degrees CCW |
-    | linear_speed_mps | 0.2 | driving speed, for the time cost |
+    | robot_speed_mps | 0.2 | driving speed, for the time cost |
     | turn_rate_deg_per_s | 45 | turning rate, for the time cost |
     | fix_offset_scale_m | 0.5 | scale of the fix-minus-prior features, metres |
 
     ## Version History
 
     * v0: first release. Later, without changing any default episode: ``n_bins`` renamed
-      ``n_range_bins`` (the old name still works, with a ``DeprecationWarning``).
+      ``n_range_bins`` and ``linear_speed_mps`` renamed ``robot_speed_mps`` (Trilateration's
+      name); the old names still work, with a ``DeprecationWarning``.
 
     ## Example
 
@@ -320,7 +324,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         self._fix = _FixState()
         self._collided = result.collided
         duration_s = (
-            abs(distance_m) / config.linear_speed_mps
+            abs(distance_m) / config.robot_speed_mps
             + math.degrees(abs(turn_rad)) / config.turn_rate_deg_per_s
         )
         self._motion_time_s += duration_s

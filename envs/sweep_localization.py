@@ -280,7 +280,8 @@ class SweepLocalizationEnv(SonarEnv):
 
     | argument | default | meaning |
     |---|---|---|
-    | scenario | ``"kim_arena"`` | built-in name or path; its ``[sensor]`` preset, if set, else SRF04 |
+    | scenario | ``"kim_arena"`` | built-in name or path; the sonar: its ``[sensor]`` preset |
+    | | | if set, else the SRF04 |
     | route | ``"table1"`` | or ``"random"`` |
     | route_length_m | 3.2 | length of a random route, m |
     | decision_points | ``"spacing"`` | or ``"waypoints"`` (one decision per route vertex) |

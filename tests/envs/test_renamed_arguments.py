@@ -18,6 +18,7 @@ from sonar_gym.registration import ENVIRONMENTS
 RENAMES = [
     ("SonarGym/BeaconScan-v0", "n_bins", "n_range_bins", 36),
     ("SonarGym/ActiveBeaconScan-v0", "n_bins", "n_range_bins", 36),
+    ("SonarGym/ActiveBeaconScan-v0", "linear_speed_mps", "robot_speed_mps", 0.3),
     (
         "SonarGym/SweepLocalization-v0",
         "encoder_noise_std_m_per_sqrt_m",
@@ -75,3 +76,4 @@ def test_one_name_per_concept_across_the_envs() -> None:
     }
     assert not fields & {old for _, old, _, _ in RENAMES}
     assert {"sensing_cost_per_s", "max_error_loss", "encoder_std_m_per_sqrt_m"} <= fields
+    assert {"robot_speed_mps", "n_range_bins", "wheel_scale_error_bound"} <= fields
