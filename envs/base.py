@@ -95,12 +95,16 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         observation_layout: the name of each observation feature group -> its slice of the
             observation vector.
         required_info_keys: keys every step's ``info`` must hold (none unless a task opts in).
+        unestimated_info_keys: required keys whose quantity the task does not estimate (for
+            example a heading error where the method gives no heading): they read 0.0, never
+            NaN, and summaries such as ``sonar-gym evaluate`` leave them out.
         max_decisions: steps after which the base truncates an episode (None: never).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 4}
     observation_space: gym.spaces.Box  # every task observes a flat float32 vector
     required_info_keys: ClassVar[tuple[str, ...]] = ()
+    unestimated_info_keys: ClassVar[tuple[str, ...]] = ()
     max_decisions: int | None = None
     config: Any
     observation_layout: dict[str, slice]

@@ -295,7 +295,8 @@ class BlockExpansionEnv(SonarEnv):
     ``"missing_distance"``) or ``"localization_failed"``. ``heading_error_rad`` is always 0.0:
     trilateration gives no heading and the task scores none (a quantity a task does not
     estimate reads 0.0, never NaN, as ``position_error_m`` does before the first fix); the key
-    is there so every env reports the same :data:`~sonar_gym.envs.base.INFO_KEYS`.
+    is there so every env reports the same :data:`~sonar_gym.envs.base.INFO_KEYS`, and
+    ``unestimated_info_keys`` names it so evaluation summaries leave it out.
 
     ## Arguments
 
@@ -334,6 +335,7 @@ class BlockExpansionEnv(SonarEnv):
     """
 
     required_info_keys = INFO_KEYS
+    unestimated_info_keys = ("heading_error_rad",)
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 2}
     action_space: gym.spaces.Box  # d1..d3 (per boundary, or all at once) scaled to [-1, 1]

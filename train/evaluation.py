@@ -4,8 +4,8 @@ Episode ``i`` of an evaluation uses the seed ``seed + i`` for the environment's 
 for the agent's ``reset``, for every agent alike, so agents are compared on the same episodes
 (paired comparisons). Each episode becomes an :class:`EpisodeRecord` built from the ``info``
 the environment returns at the episode's end: ``position_error_m`` (E_xy of Beom & Cho
-eq. (16), metres), ``heading_error_rad`` (E_theta of eq. (16), radians; absent where the task
-has no heading), ``sensing_time_s`` (cumulative, seconds) and ``status`` (``"ok"`` when the
+eq. (16), metres), ``heading_error_rad`` (E_theta of eq. (16), radians; left out where the
+task has no heading: absent, or named in the env's ``unestimated_info_keys``), ``sensing_time_s`` (cumulative, seconds) and ``status`` (``"ok"`` when the
 localization succeeded, otherwise the reason it failed).
 
 The summary per agent (:class:`AgentSummary`) gives the success rate, the median and 95th
@@ -450,11 +450,16 @@ def run_episode(
         status = TRUNCATED_STATUS
     else:
         status = STEP_LIMIT_STATUS
+    unestimated = getattr(env.unwrapped, "unestimated_info_keys", ())
     return EpisodeRecord(
         seed=seed,
         reward=total_reward,
         position_error_m=_optional_float(info.get("position_error_m")),
-        heading_error_rad=_optional_float(info.get("heading_error_rad")),
+        heading_error_rad=(
+            None
+            if "heading_error_rad" in unestimated
+            else _optional_float(info.get("heading_error_rad"))
+        ),
         sensing_time_s=_optional_float(info.get("sensing_time_s")),
         status=status,
         steps=steps,

@@ -18,8 +18,10 @@ from hypothesis import strategies as st
 
 import sonar_gym  # noqa: F401  (registers the ids)
 from sonar_gym.envs.base import INFO_KEYS, REWARD_TERMS, SonarEnv, StepOutcome
+from sonar_gym.agents import make_agent
 from sonar_gym.envs.block_expansion import BlockExpansionEnv
 from sonar_gym.registration import ENVIRONMENTS
+from sonar_gym.train.evaluation import run_episode
 from tests.fuzzing import fuzz_settings
 from tests.test_fuzz_actions import action_in
 
@@ -92,6 +94,20 @@ def test_block_expansion_reports_a_zero_heading_error_since_it_estimates_no_head
     assert info["heading_error_rad"] == 0.0
     _, _, _, _, info = env.step(env.action_space.sample())
     assert info["heading_error_rad"] == 0.0 and info["position_error_m"] > 0.0
+    assert env.unwrapped.unestimated_info_keys == ("heading_error_rad",)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "has_heading"),
+    [("SonarGym/BlockExpansion-v0", False), ("SonarGym/Trilateration-v0", True)],
+)
+def test_evaluation_leaves_out_a_heading_error_the_task_does_not_estimate(
+    env_id: str, has_heading: bool
+) -> None:
+    env = gym.make(env_id)
+    record = run_episode(env, make_agent("paper", env), seed=0)
+    assert (record.heading_error_rad is not None) == has_heading
+    assert record.position_error_m is not None
 
 
 class _ForgetfulBlockExpansion(BlockExpansionEnv):
