@@ -5,8 +5,9 @@ for the agent's ``reset``, for every agent alike, so agents are compared on the 
 (paired comparisons). Each episode becomes an :class:`EpisodeRecord` built from the ``info``
 the environment returns at the episode's end: ``position_error_m`` (E_xy of Beom & Cho
 eq. (16), metres), ``heading_error_rad`` (E_theta of eq. (16), radians; left out where the
-task has no heading: absent, or named in the env's ``unestimated_info_keys``), ``sensing_time_s`` (cumulative, seconds) and ``status`` (``"ok"`` when the
-localization succeeded, otherwise the reason it failed).
+task has no heading: absent, or named in the env's ``unestimated_info_keys``),
+``sensing_time_s`` (cumulative, seconds) and ``status`` (``"ok"`` when the localization
+succeeded, otherwise the reason it failed).
 
 The summary per agent (:class:`AgentSummary`) gives the success rate, the median and 95th
 percentile of E_xy and E_theta over the successful episodes, the mean sensing time over all
