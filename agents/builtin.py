@@ -10,7 +10,10 @@ GENERIC = "*"
 """The key of the agents that serve every environment."""
 
 BUILTIN_AGENTS: dict[str, dict[str, str]] = {
-    GENERIC: {"random": "sonar_gym.agents.random_agent:RandomAgent"},
+    GENERIC: {
+        "random": "sonar_gym.agents.random_agent:RandomAgent",
+        "learned": "sonar_gym.agents.learned:shipped_policy_agent",
+    },
     "SonarGym/BeaconScan-v0": {
         "paper": "sonar_gym.agents.beacon_scan:PaperAgent",
         "sector": "sonar_gym.agents.beacon_scan:SectorAgent",
@@ -36,3 +39,9 @@ BUILTIN_AGENTS: dict[str, dict[str, str]] = {
         "both_walls": "sonar_gym.agents.wall_correction:BothWallsAgent",
     },
 }
+
+AVAILABILITY: dict[str, str] = {"learned": "sonar_gym.pretrained:has_policy"}
+"""Agents offered only where a predicate ``(env_id) -> bool`` (an entry point) holds: the
+``learned`` agent lists for an env only when a policy ships for it. Such agents load files
+when made, so they may not fit an env; making one where the predicate fails raises a
+``ValueError`` saying why."""
