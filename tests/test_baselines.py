@@ -313,3 +313,23 @@ def test_baselines_pretrained_names_the_envs_without_a_shipped_policy(
     argv = ["baselines", "--pretrained", "--env", BEACON_SCAN, "SonarGym/WallCorrection-v0"]
     assert cli.main([*argv, "--out", str(tmp_path / "o")]) == 2
     assert "no shipped policy for ['SonarGym/WallCorrection-v0']" in capsys.readouterr().err
+
+
+def test_the_default_folder_is_named_after_the_arguments():
+    assert baselines.output_folder_name([BEACON_SCAN], 3, True) == "BeaconScan-v0_3ep_pretrained"
+    assert baselines.output_folder_name(["all"], 200, False) == "all_200ep_trained"
+
+
+def test_retraining_without_the_training_module_points_to_pretrained(tmp_path, monkeypatch):
+    import importlib
+
+    real_import = importlib.import_module
+
+    def without_training(name, *args):
+        if name == baselines.TRAINING_MODULE:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return real_import(name, *args)
+
+    monkeypatch.setattr(importlib, "import_module", without_training)
+    with pytest.raises(UsageError, match="--pretrained"):
+        baselines.train_policies([BEACON_SCAN], tmp_path, progress=False)

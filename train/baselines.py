@@ -24,6 +24,7 @@ and the figures (:mod:`sonar_gym.train.baselines_plots`) are written by
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import time
@@ -40,7 +41,9 @@ from sonar_gym.train.evaluation import (
     ConfidenceInterval,
     EpisodeCallback,
     EpisodeRecord,
+    env_selection_label,
     evaluate_agents,
+    name_from_arguments,
     resolve_env_ids,
     t_confidence_interval,
 )
@@ -60,6 +63,7 @@ JSON_FILE = "baselines.json"
 REWARDS_PLOT_FILE = "baselines_rewards.png"
 LEARNING_CURVES_PLOT_FILE = "baselines_learning_curves.png"
 MISSING = "–"
+TRAINING_MODULE = "sonar_gym.train.baseline_training"
 
 HELD_OUT_ROOMS: dict[str, dict[str, Any] | None] = {
     "SonarGym/BeaconScan-v0": {"scenario": "random"},
@@ -217,8 +221,16 @@ def train_policies(
         UsageError: the trainer returned no policy for some env.
     """
     if trainer is None:
-        from sonar_gym.train import baseline_training
-
+        # imported by name, lazily: training pulls in torch and is not needed for --pretrained
+        try:
+            baseline_training = importlib.import_module(TRAINING_MODULE)
+        except ModuleNotFoundError as error:
+            if error.name != TRAINING_MODULE:
+                raise
+            raise UsageError(
+                f"training the baselines needs {TRAINING_MODULE}, which this installation "
+                "lacks; evaluate the shipped policies with --pretrained"
+            ) from error
         if on_budget is not None:
             on_budget(baseline_training.training_budget(list(env_ids)))
         trainer = baseline_training.train_baselines
@@ -532,3 +544,16 @@ def replace_readme_block(readme: Path, table: str) -> None:
 def resolve_baseline_envs(selection: Sequence[str] | None) -> list[str]:
     """The env ids of ``--env`` (default and ``"all"``: every registered SonarGym/ id)."""
     return resolve_env_ids(list(selection or ["all"]))
+
+
+def output_folder_name(
+    env_selection: Sequence[str], episodes: int, pretrained_policies: bool
+) -> str:
+    """``<envs>_<episodes>ep_<pretrained|trained>``: the default folder of a baselines run,
+    named after its arguments (envs as given, without the ``SonarGym/`` namespace).
+
+    >>> output_folder_name(["all"], 200, True)
+    'all_200ep_pretrained'
+    """
+    source = "pretrained" if pretrained_policies else "trained"
+    return name_from_arguments([env_selection_label(env_selection), f"{episodes}ep", source])

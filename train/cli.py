@@ -282,10 +282,11 @@ def _add_baselines_parser(commands: Any) -> None:
     baselines.add_argument(
         "--out",
         type=Path,
-        default=DEFAULT_BASELINES_DIR,
+        default=None,
         metavar="DIR",
-        help=f"output directory (default {DEFAULT_BASELINES_DIR}); trained policies go to "
-        "DIR/policies",
+        help=f"output directory (default {DEFAULT_BASELINES_DIR}/<envs>_<N>ep_<pretrained|"
+        f"trained>, e.g. {DEFAULT_BASELINES_DIR}/all_200ep_pretrained); trained policies go "
+        "to DIR/policies",
     )
     baselines.add_argument(
         "--update-readme",
@@ -615,6 +616,9 @@ def _baselines(arguments: argparse.Namespace, console: Console) -> None:
 
     started = time.perf_counter()
     env_ids = baselines.resolve_baseline_envs(arguments.env)
+    out_dir = arguments.out or DEFAULT_BASELINES_DIR / baselines.output_folder_name(
+        arguments.env, arguments.episodes, arguments.pretrained
+    )
     if arguments.update_readme:  # a missing marker should stop the run before it starts
         baselines.check_readme_markers(arguments.readme)
     if arguments.pretrained:
@@ -622,7 +626,7 @@ def _baselines(arguments: argparse.Namespace, console: Console) -> None:
     else:
         policy_dirs = baselines.train_policies(
             env_ids,
-            arguments.out / "policies",
+            out_dir / "policies",
             progress=True,
             on_budget=lambda budget: console.print(f"Training budget: {budget}", markup=False),
         )
@@ -641,7 +645,7 @@ def _baselines(arguments: argparse.Namespace, console: Console) -> None:
         "pretrained": arguments.pretrained,
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    written = baselines.write_outputs(report, arguments.out, meta)
+    written = baselines.write_outputs(report, out_dir, meta)
     if arguments.update_readme:
         baselines.replace_readme_block(arguments.readme, table)
         written.append(arguments.readme)
