@@ -10,10 +10,7 @@ GENERIC = "*"
 """The key of the agents that serve every environment."""
 
 BUILTIN_AGENTS: dict[str, dict[str, str]] = {
-    GENERIC: {
-        "random": "sonar_gym.agents.random_agent:RandomAgent",
-        "learned": "sonar_gym.agents.learned:shipped_policy_agent",
-    },
+    GENERIC: {"random": "sonar_gym.agents.random_agent:RandomAgent"},
     "SonarGym/BeaconScan-v0": {
         "paper": "sonar_gym.agents.beacon_scan:PaperAgent",
         "sector": "sonar_gym.agents.beacon_scan:SectorAgent",
@@ -40,8 +37,10 @@ BUILTIN_AGENTS: dict[str, dict[str, str]] = {
     },
 }
 
-AVAILABILITY: dict[str, str] = {"learned": "sonar_gym.pretrained:has_policy"}
-"""Agents offered only where a predicate ``(env_id) -> bool`` (an entry point) holds: the
-``learned`` agent lists for an env only when a policy ships for it. Such agents load files
-when made, so they may not fit an env; making one where the predicate fails raises a
-``ValueError`` saying why."""
+CONDITIONAL_AGENTS: dict[str, tuple[str, str]] = {
+    "learned": ("sonar_gym.agents.learned:shipped_policy_agent", "sonar_gym.pretrained:has_policy"),
+}
+"""Agents of every environment that are offered only where a predicate holds: name ->
+(factory entry point, predicate ``(env_id) -> bool`` entry point). The ``learned`` agent lists
+for an env only when a policy ships for its id. Such agents load files when made, so they may
+not fit an env; making one where the predicate fails raises a ``ValueError`` saying why."""
