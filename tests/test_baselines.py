@@ -15,7 +15,7 @@ import torch
 from sonar_gym import pretrained
 from sonar_gym.agents.base import agent_names, make_agent
 from sonar_gym.agents.learned import PolicyAgent
-from sonar_gym.train import UsageError, baselines, cli
+from sonar_gym.train import UsageError, baselines, baselines_plots, cli
 from sonar_gym.train.evaluation import EpisodeRecord
 from sonar_gym.train.training import train
 from tests.cli_fakes import BOX_ID, DISCRETE_ID
@@ -333,3 +333,35 @@ def test_retraining_without_the_training_module_points_to_pretrained(tmp_path, m
     monkeypatch.setattr(importlib, "import_module", without_training)
     with pytest.raises(UsageError, match="--pretrained"):
         baselines.train_policies([BEACON_SCAN], tmp_path, progress=False)
+
+
+T_975_DF1 = 12.706204736174698
+"""Student-t quantile t_{0.975} with 1 degree of freedom (statistical tables)."""
+
+
+def test_learning_curve_band_is_the_student_t_interval_over_training_seeds(tmp_path):
+    (tmp_path / pretrained.LEARNING_CURVE_FILE).write_text(
+        "training_seed,timesteps,wall_time_s,mean_reward,ci95\n"
+        "1,64,2.0,-11.0,0.5\n0,0,0.0,-15.0,1.0\n0,64,1.0,-12.0,1.0\n1,0,0.0,-16.0,1.0\n"
+        "0,128,3.0,-10.0,1.0\n"  # only seed 0 reached 128 steps: not in the mean
+    )
+    (tmp_path / pretrained.TRAINING_FILE).write_text(json.dumps({"levels": {"paper": -11}}))
+    curves = baselines_plots.read_learning_curves(tmp_path, BEACON_SCAN)
+    assert curves is not None and curves.levels == {"paper": -11.0}
+    assert curves.by_seed == {
+        0: [(0, -15.0), (64, -12.0), (128, -10.0)],
+        1: [(0, -16.0), (64, -11.0)],
+    }
+    timesteps, means, lows, highs = baselines_plots.mean_over_seeds(curves)
+    assert timesteps.tolist() == [0, 64]
+    assert means.tolist() == [-15.5, -11.5]
+    half_width = T_975_DF1 * math.sqrt(0.5) / math.sqrt(2)  # s of two values 1 apart
+    np.testing.assert_allclose(highs - means, [half_width, half_width], rtol=1e-9)
+    np.testing.assert_allclose(means - lows, [half_width, half_width], rtol=1e-9)
+
+
+def test_a_learning_curve_without_its_columns_is_refused(tmp_path):
+    (tmp_path / pretrained.LEARNING_CURVE_FILE).write_text("timesteps,mean_reward\n0,1\n")
+    with pytest.raises(ValueError, match="lacks the columns"):
+        baselines_plots.read_learning_curves(tmp_path, BEACON_SCAN)
+    assert baselines_plots.read_learning_curves(tmp_path / "none", BEACON_SCAN) is None
