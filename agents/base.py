@@ -21,7 +21,7 @@ from typing import Any, Generic, Protocol, TypeVar, cast, runtime_checkable
 
 import gymnasium as gym
 
-from sonar_gym.agents.builtin import BUILTIN_AGENTS, GENERIC
+from sonar_gym.agents.builtin import BUILTIN_AGENTS, CONDITIONAL_AGENTS, GENERIC
 from sonar_gym.envs.base import SonarEnv, unwrap_sonar_env
 
 
@@ -91,6 +91,9 @@ AgentFactory = Callable[..., Agent]
 _REGISTRY: dict[str, dict[str, AgentFactory | str]] = {
     env_id: dict(agents) for env_id, agents in BUILTIN_AGENTS.items()
 }
+_REGISTRY.setdefault(GENERIC, {}).update(
+    {name: factory for name, (factory, _) in CONDITIONAL_AGENTS.items()}
+)
 
 
 def register_agent(name: str, factory: AgentFactory | str, env_id: str = GENERIC) -> None:
@@ -111,12 +114,27 @@ def register_agent(name: str, factory: AgentFactory | str, env_id: str = GENERIC
 
 
 def agent_names(env_id: str) -> list[str]:
-    """Names of the agents available for ``env_id`` (imports no agent module)."""
-    return sorted(set(_REGISTRY.get(env_id, {})) | set(_REGISTRY.get(GENERIC, {})))
+    """Names of the agents available for ``env_id`` (imports no agent module); an agent of
+    :data:`~sonar_gym.agents.builtin.CONDITIONAL_AGENTS` only where its predicate holds."""
+    names = set(_REGISTRY.get(env_id, {})) | set(_REGISTRY.get(GENERIC, {}))
+    return sorted(name for name in names if not is_conditional(name) or _available(name, env_id))
+
+
+def is_conditional(name: str) -> bool:
+    """True for an agent offered only where a file it loads exists (e.g. ``learned``): it can
+    be made for any env, and then fails with a ``ValueError`` when it does not fit."""
+    return name in CONDITIONAL_AGENTS
+
+
+def _available(name: str, env_id: str) -> bool:
+    module_name, attribute = _split_entry_point(CONDITIONAL_AGENTS[name][1])
+    predicate: Callable[[str], bool] = getattr(importlib.import_module(module_name), attribute)
+    return bool(predicate(env_id))
 
 
 def make_agent(name: str, env: gym.Env[Any, Any], **options: Any) -> Agent:
-    """Build agent ``name`` for ``env``; a path to a saved model loads a learned policy.
+    """Build agent ``name`` for ``env``; a path to a saved model loads a learned policy, and
+    ``"learned"`` the policy shipped for the env's id (:mod:`sonar_gym.pretrained`).
 
     Args:
         name: a registered agent name, or the path of a saved model (``.zip`` or run dir).

@@ -36,3 +36,11 @@ BUILTIN_AGENTS: dict[str, dict[str, str]] = {
         "both_walls": "sonar_gym.agents.wall_correction:BothWallsAgent",
     },
 }
+
+CONDITIONAL_AGENTS: dict[str, tuple[str, str]] = {
+    "learned": ("sonar_gym.agents.learned:shipped_policy_agent", "sonar_gym.pretrained:has_policy"),
+}
+"""Agents of every environment that are offered only where a predicate holds: name ->
+(factory entry point, predicate ``(env_id) -> bool`` entry point). The ``learned`` agent lists
+for an env only when a policy ships for its id. Such agents load files when made, so they may
+not fit an env; making one where the predicate fails raises a ``ValueError`` saying why."""

@@ -184,3 +184,21 @@ def load_policy_agent(path: str | Path, env: gym.Env) -> PolicyAgent:
             f"{model_path} was trained on normalised observations, but {stats_path} is missing"
         )
     return PolicyAgent(f"{algo}:{model_path}", model, env.action_space, normalizer)
+
+
+LEARNED_AGENT = "learned"
+
+
+def shipped_policy_agent(env: gym.Env) -> PolicyAgent:
+    """The ``learned`` agent: the policy shipped for ``env``'s id
+    (:func:`sonar_gym.pretrained.find_policy`), acting deterministically.
+
+    Raises:
+        ValueError: no policy ships for the env's id, or its spaces differ from ``env``'s.
+    """
+    from sonar_gym import pretrained
+
+    env_id = env.spec.id if env.spec is not None else ""
+    agent = load_policy_agent(pretrained.find_policy(env_id), env)
+    agent.name = LEARNED_AGENT
+    return agent

@@ -1,10 +1,12 @@
-"""The ``sonar-gym`` command line: ``evaluate``, ``train``, ``benchmark``, ``reproduce``.
+"""The ``sonar-gym`` command line: ``evaluate``, ``train``, ``benchmark``, ``reproduce``,
+``baselines``.
 
 Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`,
-:mod:`sonar_gym.train.training`, :mod:`sonar_gym.train.benchmark` and
-:mod:`sonar_gym.train.report`. A request the user can fix (unknown env or agent, bad
-``--env-arg``, an algorithm the action space does not allow) prints one line naming the
-allowed values and exits with status 2. ``python -m sonar_gym`` runs the same command line.
+:mod:`sonar_gym.train.training`, :mod:`sonar_gym.train.benchmark`,
+:mod:`sonar_gym.train.baselines` and :mod:`sonar_gym.train.report`. A request the user can
+fix (unknown env or agent, bad ``--env-arg``, an algorithm the action space does not allow)
+prints one line naming the allowed values and exits with status 2. ``python -m sonar_gym``
+runs the same command line.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ DEFAULT_EVALUATE_ROOT = Path("results/evaluate")
 DEFAULT_BENCHMARK_ROOT = Path("results/benchmark")
 DEFAULT_BENCHMARK_SECONDS = 20.0
 DEFAULT_REPRODUCE_DIR = Path("results/reproduce")
+DEFAULT_BASELINES_DIR = Path("results/baselines")
 REPRODUCIBLE_PAPERS = ("beom-cho", "beom-cho-map", "kim", "wu-tsai", "roh", "apcs")
 PIPED_WIDTH = 160
 
@@ -242,7 +245,62 @@ def build_parser() -> argparse.ArgumentParser:
         "<out>/<paper>/report.txt either way)",
     )
     reproduce.set_defaults(handler=_reproduce)
+    _add_baselines_parser(commands)
     return parser
+
+
+def _add_baselines_parser(commands: Any) -> None:
+    from sonar_gym import pretrained
+
+    baselines = commands.add_parser(
+        "baselines",
+        help="learned policies against the paper, the heuristic and random: table and plots",
+        description="Evaluate, per env, the learned policy, the paper's procedure, the env's "
+        "heuristic and random actions on the same evaluation seeds (from "
+        f"{pretrained.EVALUATION_SEED_START}), in the rooms the policy trained in and in "
+        "held-out random rooms; paired differences with 95% Student-t intervals. Writes "
+        "baselines.md, baselines.json and plots. Without --pretrained the policies are "
+        "trained first (the budget is printed before).",
+    )
+    baselines.add_argument(
+        "--pretrained",
+        action="store_true",
+        help="evaluate the shipped policies (sonar_gym/pretrained/, or $"
+        f"{pretrained.ROOT_VARIABLE}) instead of training new ones",
+    )
+    baselines.add_argument(
+        "--env", nargs="+", default=["all"], metavar="ID", help="env ids or 'all' (default)"
+    )
+    baselines.add_argument(
+        "--episodes",
+        type=_positive_int,
+        default=pretrained.DEFAULT_EVALUATION_EPISODES,
+        metavar="N",
+        help=f"episodes per agent, env and kind of room "
+        f"(default {pretrained.DEFAULT_EVALUATION_EPISODES})",
+    )
+    baselines.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help=f"output directory (default {DEFAULT_BASELINES_DIR}/<envs>_<N>ep_<pretrained|"
+        f"trained>, e.g. {DEFAULT_BASELINES_DIR}/all_200ep_pretrained); trained policies go "
+        "to DIR/policies",
+    )
+    baselines.add_argument(
+        "--update-readme",
+        action="store_true",
+        help="put the table between the baselines markers of README.md (see --readme)",
+    )
+    baselines.add_argument(
+        "--readme",
+        type=Path,
+        default=Path("README.md"),
+        metavar="PATH",
+        help="the file --update-readme edits (default README.md)",
+    )
+    baselines.set_defaults(handler=_baselines)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -550,6 +608,61 @@ def benchmark_file_name(
         name_from_arguments([env_selection_label(env_selection), f"{seconds:g}s"], env_kwargs)
         + ".json"
     )
+
+
+def _baselines(arguments: argparse.Namespace, console: Console) -> None:
+    from sonar_gym.train import baselines
+    from sonar_gym.train.progress import episode_progress
+
+    started = time.perf_counter()
+    env_ids = baselines.resolve_baseline_envs(arguments.env)
+    out_dir = arguments.out or DEFAULT_BASELINES_DIR / baselines.output_folder_name(
+        arguments.env, arguments.episodes, arguments.pretrained
+    )
+    if arguments.update_readme:  # a missing marker should stop the run before it starts
+        baselines.check_readme_markers(arguments.readme)
+    if arguments.pretrained:
+        policy_dirs = baselines.shipped_policy_dirs(env_ids)
+    else:
+        policy_dirs = baselines.train_policies(
+            env_ids,
+            out_dir / "policies",
+            progress=True,
+            on_budget=lambda budget: console.print(f"Training budget: {budget}", markup=False),
+        )
+    total = baselines.count_baseline_episodes(policy_dirs, arguments.episodes)
+    console.print(
+        f"Evaluating {total} episodes (seeds {pretrained_seed_range(arguments.episodes)} for "
+        f"every agent) on {', '.join(env_ids)}",
+        markup=False,
+    )
+    with episode_progress(console, total) as advance:
+        report = baselines.run_baselines(policy_dirs, arguments.episodes, on_episode=advance)
+    table = baselines.markdown_table(report)
+    console.print(table, markup=False, highlight=False, soft_wrap=True)
+    meta = {
+        "command": arguments.command_line,
+        "pretrained": arguments.pretrained,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    written = baselines.write_outputs(report, out_dir, meta)
+    if arguments.update_readme:
+        baselines.replace_readme_block(arguments.readme, table)
+        written.append(arguments.readme)
+    console.print(
+        f"{total} episodes; total time {time.perf_counter() - started:.1f} s. Wrote "
+        + ", ".join(map(str, written)),
+        markup=False,
+        soft_wrap=True,
+    )
+
+
+def pretrained_seed_range(episodes: int) -> str:
+    """``first..last`` of the evaluation seeds of ``episodes`` episodes."""
+    from sonar_gym import pretrained
+
+    start = pretrained.EVALUATION_SEED_START
+    return f"{start}..{start + episodes - 1}"
 
 
 def reproduce_module_name(name: str) -> str:

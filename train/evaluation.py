@@ -263,8 +263,8 @@ def resolve_agent_names(
             plan[env_id] = list(available)
             continue
         for name in requested:
-            if name in available:
-                continue
+            if name in available or agent_registry.is_conditional(name):
+                continue  # a conditional agent that does not fit says why when it is made
             if _looks_like_model(name):
                 if not Path(name).exists():
                     raise UsageError(f"no saved model at {name!r}")
@@ -373,7 +373,7 @@ def make_named_agent(name: str, env: gym.Env) -> agent_registry.Agent:
     """:func:`sonar_gym.agents.base.make_agent`, with a saved model that does not fit ``env``
     (or is not a model at all) reported as a :class:`train.UsageError`."""
     env_id = env.spec.id if env.spec is not None else ""
-    if name in agent_registry.agent_names(env_id):
+    if name in agent_registry.agent_names(env_id) and not agent_registry.is_conditional(name):
         return agent_registry.make_agent(name, env)
     try:
         return agent_registry.make_agent(name, env)
@@ -392,7 +392,9 @@ def validate_plan(plan: Mapping[str, Sequence[str]], env_kwargs: Mapping[str, An
         env = make_env(env_id, env_kwargs)
         try:
             for name in names:
-                if name not in agent_registry.agent_names(env_id):
+                if name not in agent_registry.agent_names(env_id) or (
+                    agent_registry.is_conditional(name)
+                ):
                     make_named_agent(name, env)
         finally:
             env.close()
