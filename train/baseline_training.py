@@ -40,7 +40,14 @@ from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
 from sonar_gym.agents.learned import MODEL_FILE, RUN_FILE, VECNORMALIZE_FILE, PolicyAgent
-from sonar_gym.pretrained import VALIDATION_SEED_START
+from sonar_gym.pretrained import (
+    DEFAULT_VALIDATION_EPISODES,
+    LEARNING_CURVE_COLUMNS,
+    LEARNING_CURVE_FILE,
+    TRAINING_FILE,
+    TRAINING_SEEDS,
+    VALIDATION_SEED_START,
+)
 from sonar_gym.train.evaluation import (
     make_env,
     make_named_agent,
@@ -51,8 +58,6 @@ from sonar_gym.train.evaluation import (
 from sonar_gym.train.training import load_config, make_training_vec_env
 
 ALGO = "ppo"
-LEARNING_CURVE_FILE = "learning_curve.csv"
-TRAINING_FILE = "training.json"
 TEACHER_SEED_STRIDE = 100_000
 """Teacher episodes of training seed ``s`` use the seeds ``s * stride + i``."""
 
@@ -80,8 +85,8 @@ class BaselineRecipe:
     demo_episodes: int = 300
     clone_epochs: int = 30
     eval_every: int = 4096
-    validation_episodes: int = 100
-    training_seeds: tuple[int, ...] = (0, 1, 2)
+    validation_episodes: int = DEFAULT_VALIDATION_EPISODES
+    training_seeds: tuple[int, ...] = TRAINING_SEEDS
     hyperparameters: Mapping[str, Any] = field(default_factory=dict)
     env_kwargs: Mapping[str, Any] = field(default_factory=dict)
 
@@ -415,7 +420,7 @@ def write_shipped(
     (out_dir / RUN_FILE).write_text(json.dumps(run_info, indent=2) + "\n")
     with (out_dir / LEARNING_CURVE_FILE).open("w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["training_seed", "timesteps", "wall_time_s", "mean_reward", "ci95"])
+        writer.writerow(LEARNING_CURVE_COLUMNS)
         for run in runs:
             for point in run.curve:
                 writer.writerow(
