@@ -9,7 +9,7 @@ TORCH_SPEC ?= torch==2.13.0
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install install-extras evaluate test test-slow lint benchmark reproduce clean
+.PHONY: install install-extras evaluate test test-slow lint benchmark baselines reproduce clean
 
 # The slow group also covers the optional extras (RLlib on Ray, RL Zoo, video), installed in an
 # environment of their own: ray[rllib] pins an older gymnasium than the main set-up installs.
@@ -69,6 +69,11 @@ lint: $(STAMP)
 
 benchmark: $(STAMP)
 	$(BIN)/sonar-gym benchmark
+
+# The shipped policies against the papers' procedures, the heuristics and random, on evaluation
+# seeds no training saw; rewrites README's table. Without --pretrained it trains them again.
+baselines: $(STAMP)
+	$(BIN)/sonar-gym baselines --pretrained --update-readme
 
 reproduce: $(STAMP)
 	$(BIN)/sonar-gym reproduce all
