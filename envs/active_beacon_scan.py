@@ -16,6 +16,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import StepOutcome
 from sonar_gym.envs.beacon_scan import BeaconScanConfig, BeaconScanEnv, PanCommand
 from sonar_gym.envs.config import build_config, check_choice, number_field, numbers_field
@@ -190,15 +191,19 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         base_names = BeaconScanConfig.__dataclass_fields__
         super().__init__(render_mode, **{name: getattr(config, name) for name in base_names})
         self.config = config
-        self.action_space = gym.spaces.MultiDiscrete(
-            [
-                len(ACTION_KINDS),
-                config.n_sector_centres,
-                len(config.sector_widths_deg),
-                len(config.increments_deg),
-                len(config.turn_angles_deg),
-            ]
+        self.action_type = make_action_type(
+            "multi_discrete",
+            DiscreteChoices(
+                (
+                    len(ACTION_KINDS),
+                    config.n_sector_centres,
+                    len(config.sector_widths_deg),
+                    len(config.increments_deg),
+                    len(config.turn_angles_deg),
+                )
+            ),
         )
+        self.action_space = self.action_type.space
         base = 2 * config.n_bins + 15
         self.observation_layout = {
             **self.observation_layout,
@@ -227,20 +232,20 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         ``turn_deg`` must be one of ``turn_angles_deg`` (default: the first)."""
         check_choice("kind", kind, ACTION_KINDS)
         config = self.config
-        action = np.zeros(5, dtype=np.int64)
-        action[0] = ACTION_KINDS.index(kind)
+        pan, turn = (0, 0, 0), 0
         if kind == "pan":
-            pan = super().encode_action("pan", centre_deg, width_deg, increment_deg)
-            action[1:4] = np.asarray(pan)[1:4]
+            pan = self._pan_indices(centre_deg, width_deg, increment_deg)
         elif kind == "turn" and turn_deg is not None:
             check_choice("turn_deg", turn_deg, config.turn_angles_deg)
-            action[4] = config.turn_angles_deg.index(turn_deg)
-        return action
+            turn = config.turn_angles_deg.index(turn_deg)
+        return self.action_type.encode((ACTION_KINDS.index(kind), *pan, turn))
 
     def decode_action(self, action: Any) -> ActiveCommand:  # type: ignore[override]
         """The command an action stands for."""
         config = self.config
-        kind, centre_index, width_index, increment_index, turn_index = (int(v) for v in action)
+        kind, centre_index, width_index, increment_index, turn_index = self.action_type.decode(
+            action
+        )
         if kind == PAN:
             return ActiveCommand(
                 "pan",

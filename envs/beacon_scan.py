@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     bool_field,
@@ -319,20 +320,19 @@ class BeaconScanEnv(SonarEnv):
         self._centres_deg = [
             k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)
         ]
-        n_pans = (
-            config.n_sector_centres * len(config.sector_widths_deg) * len(config.increments_deg)
-        )
-        if config.action_type == "multi_discrete":
-            self.action_space = gym.spaces.MultiDiscrete(
-                [
-                    3,
+        self.action_type = make_action_type(
+            config.action_type,
+            DiscreteChoices(
+                (
+                    len(ACTION_KINDS),
                     config.n_sector_centres,
                     len(config.sector_widths_deg),
                     len(config.increments_deg),
-                ]
-            )
-        else:
-            self.action_space = gym.spaces.Discrete(2 + n_pans)
+                ),
+                parameterless_kinds=(CALIBRATE, LOCALIZE),
+            ),
+        )
+        self.action_space = self.action_type.space
         n = config.n_bins
         self.observation_layout = {
             "bin_ranges": slice(0, n),
@@ -366,42 +366,33 @@ class BeaconScanEnv(SonarEnv):
     ) -> np.ndarray | int:
         """The action for a command; a pan's centre snaps to the nearest offered centre."""
         check_choice("kind", kind, ACTION_KINDS)
-        config = self.config
         if kind != "pan":
-            code = ACTION_KINDS.index(kind)
-            if config.action_type == "discrete":
-                return code - 1
-            return np.array([code, 0, 0, 0], dtype=np.int64)
+            return self.action_type.encode((ACTION_KINDS.index(kind), 0, 0, 0))
+        return self.action_type.encode(
+            (PAN, *self._pan_indices(centre_deg, width_deg, increment_deg))
+        )
+
+    def _pan_indices(
+        self, centre_deg: float, width_deg: int, increment_deg: int
+    ) -> tuple[int, int, int]:
+        """The (centre, width, increment) indices of a pan; the centre snaps to the nearest."""
+        config = self.config
         check_choice("width_deg", width_deg, config.sector_widths_deg)
         check_choice("increment_deg", increment_deg, config.increments_deg)
         step = 360 / config.n_sector_centres
         centre_index = int(round((centre_deg % 360) / step)) % config.n_sector_centres
-        width_index = config.sector_widths_deg.index(width_deg)
-        increment_index = config.increments_deg.index(increment_deg)
-        if config.action_type == "multi_discrete":
-            return np.array([PAN, centre_index, width_index, increment_index], dtype=np.int64)
-        n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
-        return 2 + (centre_index * n_width + width_index) * n_inc + increment_index
+        return (
+            centre_index,
+            config.sector_widths_deg.index(width_deg),
+            config.increments_deg.index(increment_deg),
+        )
 
     def decode_action(self, action: Any) -> PanCommand:
         """The command an action stands for."""
+        kind, centre_index, width_index, increment_index = self.action_type.decode(action)
+        if kind != PAN:
+            return PanCommand(ACTION_KINDS[kind])
         config = self.config
-        if config.action_type == "discrete":
-            code = int(action)
-            if code < 2:
-                return PanCommand(ACTION_KINDS[code + 1])
-            n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
-            rest, increment_index = divmod(code - 2, n_inc)
-            centre_index, width_index = divmod(rest, n_width)
-        else:
-            values = (
-                action.tolist()
-                if type(action) is np.ndarray and action.dtype.kind in "iu"
-                else [int(v) for v in action]
-            )
-            kind, centre_index, width_index, increment_index = values
-            if kind != PAN:
-                return PanCommand(ACTION_KINDS[kind])
         return PanCommand(
             "pan",
             self._centres_deg[centre_index],

@@ -23,6 +23,7 @@ from sonar_gym.calibration_distances import (
     distances_to_fractions,
     fractions_to_distances,
 )
+from sonar_gym.envs.action_types import ContinuousRange, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -353,7 +354,8 @@ class BlockExpansionEnv(SonarEnv):
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(per_step,), dtype=np.float32)
+        self.action_type = make_action_type("box", ContinuousRange.unit(per_step))
+        self.action_space = self.action_type.space  # type: ignore[assignment]
         self.observation_layout = {
             "beacons": slice(0, 4 * MAX_BEACON_SLOTS),
             "path": slice(20, 27),
@@ -401,12 +403,7 @@ class BlockExpansionEnv(SonarEnv):
     # --- actions ---------------------------------------------------------------------------
     def decode_action(self, action: npt.ArrayLike) -> tuple[tuple[float, float, float], ...]:
         """The (d1, d2, d3) triples, metres, an action stands for (one per boundary it covers)."""
-        values = np.asarray(action, dtype=np.float64).reshape(-1)
-        if values.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape}; got {values.shape}"
-            )
-        fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
+        fractions = self.action_type.decode(action)
         return fractions_to_distances(fractions, self.config.distance_range_m, self.config.ordering)
 
     def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
@@ -426,7 +423,8 @@ class BlockExpansionEnv(SonarEnv):
         fractions = distances_to_fractions(
             values, self.config.distance_range_m, self.config.ordering
         )
-        return (2.0 * fractions - 1.0).astype(np.float32)
+        action: np.ndarray = self.action_type.encode(fractions)
+        return action
 
     # --- episode ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:

@@ -17,6 +17,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -308,7 +309,10 @@ class SweepLocalizationEnv(SonarEnv):
         self.sonar = SweptSonar.kim(
             wide=config.sweep_width_deg == 180, step_rad=math.radians(config.sweep_step_deg)
         )
-        self.action_space = gym.spaces.MultiDiscrete([config.max_sweeps + 1, len(SECTOR_NAMES)])
+        self.action_type = make_action_type(
+            "multi_discrete", DiscreteChoices((config.max_sweeps + 1, len(SECTOR_NAMES)))
+        )
+        self.action_space = self.action_type.space
         names_and_sizes = [
             ("estimate_xy", 2),
             ("estimate_heading", 2),
@@ -356,7 +360,7 @@ class SweepLocalizationEnv(SonarEnv):
             check_choice("sector", sector, SECTOR_NAMES)
             sector = SECTOR_NAMES.index(sector)
         check_number("sector", sector, low=0, high=len(SECTOR_NAMES) - 1, integer=True)
-        return np.array([n_sweeps, sector], dtype=np.int64)
+        return self.action_type.encode((n_sweeps, sector))
 
     # --- episode -----------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
@@ -408,7 +412,7 @@ class SweepLocalizationEnv(SonarEnv):
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
         config = self.config
-        n_sweeps, sector = int(action[0]), int(action[1])
+        n_sweeps, sector = self.action_type.decode(action)
         stations = episode.decision_stations_m
         next_station = (
             float(stations[episode.decisions + 1])

@@ -24,6 +24,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -342,7 +343,8 @@ class TrilaterationEnv(SonarEnv):
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self.scenario, temperature_c=config.temperature_c)
         self._check_route_fits()
-        self.action_space = gym.spaces.Discrete(len(config.fix_counts))
+        self.action_type = make_action_type("discrete", DiscreteChoices((len(config.fix_counts),)))
+        self.action_space = self.action_type.space
         self.observation_layout = dict(OBSERVATION_LAYOUT)
         self.observation_space = gym.spaces.Box(
             -1.0, 1.0, shape=(OBSERVATION_SIZE,), dtype=np.float32
@@ -361,12 +363,14 @@ class TrilaterationEnv(SonarEnv):
     # --- actions -----------------------------------------------------------------------
     def fix_count(self, action: Any) -> int:
         """The number of repeated fixes an action takes."""
-        return self.config.fix_counts[int(action)]
+        (index,) = self.action_type.decode(action)
+        return self.config.fix_counts[index]
 
     def action_for(self, n_fixes: int) -> int:
         """The action that takes ``n_fixes`` fixes (one of ``fix_counts``)."""
         check_choice("n_fixes", n_fixes, self.config.fix_counts)
-        return self.config.fix_counts.index(n_fixes)
+        action: int = self.action_type.encode((self.config.fix_counts.index(n_fixes),))
+        return action
 
     @property
     def paper_action(self) -> int:

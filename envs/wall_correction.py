@@ -33,6 +33,7 @@ from sonar_gym.apcs_route import (
     render_route,
     with_wall_obstacles,
 )
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -375,11 +376,11 @@ class WallCorrectionEnv(SonarEnv):
             self.sonars.transducer.max_range_m,
         )
 
-        n_spacings, n_standoffs = len(config.sample_spacings_cm), len(config.standoffs_m)
-        if config.action_type == "multi_discrete":
-            self.action_space = gym.spaces.MultiDiscrete([len(SIDES), n_spacings, n_standoffs])
-        else:
-            self.action_space = gym.spaces.Discrete(len(SIDES) * n_spacings * n_standoffs)
+        self.action_type = make_action_type(
+            config.action_type,
+            DiscreteChoices((len(SIDES), len(config.sample_spacings_cm), len(config.standoffs_m))),
+        )
+        self.action_space = self.action_type.space
         self.observation_layout = {
             "progress": slice(0, 1),
             "estimate_xy": slice(1, 3),
@@ -410,22 +411,14 @@ class WallCorrectionEnv(SonarEnv):
         check_choice("side", side, SIDES)
         check_choice("spacing_cm", spacing_cm, self.config.sample_spacings_cm)
         check_number("standoff_m", standoff_m, low=-10.0, high=10.0)
-        side_index = SIDES.index(side)
         spacing_index = self.config.sample_spacings_cm.index(spacing_cm)
         standoff_index = int(np.argmin(np.abs(np.asarray(self.config.standoffs_m) - standoff_m)))
-        if self.config.action_type == "multi_discrete":
-            return np.array([side_index, spacing_index, standoff_index], dtype=np.int64)
-        n_spacings, n_standoffs = len(self.config.sample_spacings_cm), len(self.config.standoffs_m)
-        return (side_index * n_spacings + spacing_index) * n_standoffs + standoff_index
+        return self.action_type.encode((SIDES.index(side), spacing_index, standoff_index))
 
     def decode_action(self, action: Any) -> LegCommand:
         """The command an action stands for."""
         config = self.config
-        if config.action_type == "discrete":
-            rest, standoff_index = divmod(int(action), len(config.standoffs_m))
-            side_index, spacing_index = divmod(rest, len(config.sample_spacings_cm))
-        else:
-            side_index, spacing_index, standoff_index = (int(v) for v in action)
+        side_index, spacing_index, standoff_index = self.action_type.decode(action)
         return LegCommand(
             SIDES[side_index],
             config.sample_spacings_cm[spacing_index],
