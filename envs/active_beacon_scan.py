@@ -13,11 +13,11 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 
 from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import StepOutcome
+from sonar_gym.envs.features import Feature, Flag
 from sonar_gym.envs.beacon_scan import BeaconScanConfig, BeaconScanEnv, PanCommand
 from sonar_gym.envs.config import build_config, check_choice, number_field, numbers_field
 from sonar_gym.odometry import OdometryConfig
@@ -30,7 +30,14 @@ __all__ = ["ActiveBeaconScanConfig", "ActiveBeaconScanEnv", "ActiveCommand"]
 ENV_ID = "SonarGym/ActiveBeaconScan-v0"
 ACTION_KINDS = ("pan", "calibrate", "try_fix", "turn", "move", "commit")
 PAN, CALIBRATE, TRY_FIX, TURN, MOVE, COMMIT = range(len(ACTION_KINDS))
-N_FIX_FEATURES = 5
+FIX_FEATURES = (
+    Flag("fix_tried"),
+    Flag("fix_ok"),
+    Feature("fix_offset_xy", 2),
+    Feature("fix_offset_heading"),
+)
+"""The features about the fix at the current pose, after BeaconScan's."""
+N_FIX_FEATURES = sum(feature.size for feature in FIX_FEATURES)
 
 
 @dataclass(frozen=True)
@@ -204,17 +211,9 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
             ),
         )
         self.action_space = self.action_type.space
-        base = 2 * config.n_bins + 15
-        self.observation_layout = {
-            **self.observation_layout,
-            "fix_tried": slice(base, base + 1),
-            "fix_ok": slice(base + 1, base + 2),
-            "fix_offset_xy": slice(base + 2, base + 4),
-            "fix_offset_heading": slice(base + 4, base + 5),
-        }
-        self.observation_space = gym.spaces.Box(
-            -1.0, 1.0, shape=(base + N_FIX_FEATURES,), dtype=np.float32
-        )
+        self.observation_spec = self.observation_spec.extended(FIX_FEATURES)
+        self.observation_layout = self.observation_spec.observation_layout()
+        self.observation_space = self.observation_spec.space
         self._fix = _FixState()
         self._motion_time_s = 0.0
         self._collided = False

@@ -25,6 +25,7 @@ from sonar_gym.calibration_distances import (
 )
 from sonar_gym.envs.action_types import ContinuousRange, make_action_type
 from sonar_gym.envs.base import SonarEnv, StepOutcome
+from sonar_gym.envs.features import Feature, Flag, Fraction, ObservationSpec
 from sonar_gym.envs.config import (
     build_config,
     check_number,
@@ -107,6 +108,18 @@ NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
 
 STATUS_RUNNING = "running"
+OBSERVATION = ObservationSpec(
+    [
+        Feature("beacons", 4 * MAX_BEACON_SLOTS),
+        Feature("path", 7),
+        Flag("boundary", 2),
+        Flag("three_areas"),
+        Fraction("progress"),
+        Feature("previous_calibration", 3),
+        Fraction("sensor", 2),
+    ]
+)
+"""The observation's features (see the env docstring, Observation Space)."""
 
 
 @dataclass(frozen=True)
@@ -356,16 +369,9 @@ class BlockExpansionEnv(SonarEnv):
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
         self.action_type = make_action_type("box", ContinuousRange.unit(per_step))
         self.action_space = self.action_type.space  # type: ignore[assignment]
-        self.observation_layout = {
-            "beacons": slice(0, 4 * MAX_BEACON_SLOTS),
-            "path": slice(20, 27),
-            "boundary": slice(27, 29),
-            "three_areas": slice(29, 30),
-            "progress": slice(30, 31),
-            "previous_calibration": slice(31, 34),
-            "sensor": slice(34, 36),
-        }
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
+        self.observation_spec = OBSERVATION
+        self.observation_layout = OBSERVATION.observation_layout()
+        self.observation_space = OBSERVATION.space
         self._episode: _Episode | None = None
 
     @property
@@ -423,8 +429,7 @@ class BlockExpansionEnv(SonarEnv):
         fractions = distances_to_fractions(
             values, self.config.distance_range_m, self.config.ordering
         )
-        action: np.ndarray = self.action_type.encode(fractions)
-        return action
+        return self.action_type.encode(fractions)
 
     # --- episode ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
@@ -558,8 +563,7 @@ class BlockExpansionEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
         config = self.config
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float64)
+        observation = OBSERVATION.writer()
         calibrated = self._calibrated_positions(episode)
         slots: list[tuple[npt.ArrayLike, float]] = []
         for index, name in enumerate(self._slot_names):
@@ -570,26 +574,22 @@ class BlockExpansionEnv(SonarEnv):
             else:
                 slots.append((episode.prior_m[name], PRIOR_ONLY))
         positions, statuses = zip(*slots, strict=True)
-        observation[layout["beacons"]] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
+        observation["beacons"] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
         route = episode.path_parameters
-        observation[layout["path"]] = self._features_of_route.get(
-            route, lambda: route_features(route)
-        )
+        observation["path"] = self._features_of_route.get(route, lambda: route_features(route))
         decided = len(episode.chosen)
+        observation["three_areas"] = float(config.n_areas == 3)
         if not episode.done:
-            observation[layout["boundary"].start + decided] = 1.0
-        observation[layout["three_areas"]] = float(config.n_areas == 3)
-        if not episode.done:
-            last_index = max(len(episode.path) - 1, 1)
-            observation[layout["progress"]] = episode.evaluated_until / last_index
+            observation.one_hot("boundary", decided)
+            observation["progress"] = episode.evaluated_until / max(len(episode.path) - 1, 1)
         if episode.result is not None and decided > 0:
             last = episode.result.calibrations[decided - 1]
-            observation[layout["previous_calibration"]] = calibration_features(last)
-        observation[layout["sensor"]] = [
+            observation["previous_calibration"] = calibration_features(last)
+        observation["sensor"] = [
             config.range_noise_std_m / NOISE_SCALE_M,
             config.timer_period_s / TIMER_SCALE_S,
         ]
-        return observation.astype(np.float32)
+        return observation.vector
 
     def _calibrated_positions(self, episode: _Episode) -> dict[str, FloatArray]:
         """New beacons calibrated in the boundaries decided so far."""
