@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -34,6 +34,8 @@ from sonar_gym.validation import checked_array, checked_positive
 Integration = Literal["euler", "midpoint", "arc"]
 INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
 FilterIntegration = Literal["paper", "midpoint"]
+Wheels = Any
+"""One wheel's value as a float, or many wheels' as a float array (see the wheel-error model)."""
 
 
 @dataclass(frozen=True)
@@ -95,6 +97,32 @@ class OdometryConfig:
     def none(cls) -> OdometryConfig:
         """No noise at all: odometry equals the truth unless the robot is blocked."""
         return cls(0.0, 0.0, 0.0, 0.0, 0.0)
+
+    # The two methods below are the one model of the wheel errors. They take one wheel's
+    # numbers as Python floats (DifferentialDriveRobot.drive) or many as arrays (a run of
+    # commands, sonar_gym.straight_drive). ``abs`` and ``**`` stay Python's on floats and
+    # NumPy's on arrays, so each caller keeps its arithmetic bit for bit (NumPy's vectorised
+    # power can differ from the scalar one in the last bit).
+
+    def encoder_increments(self, commanded_m: Wheels, normals: Wheels) -> Wheels:
+        """What the encoders report for wheels commanded ``commanded_m`` metres: the command
+        plus Gaussian noise of standard deviation ``encoder_std_m_per_sqrt_m * sqrt(|d|)``,
+        from standard normal draws ``normals`` (same shape), metres."""
+        return commanded_m + self.encoder_std_m_per_sqrt_m * np.sqrt(abs(commanded_m)) * normals
+
+    def ground_travel(
+        self, commanded_m: Wheels, scale_errors: Wheels, slip_draws: Wheels, size_draws: Wheels
+    ) -> Wheels:
+        """How far wheels commanded ``commanded_m`` metres roll on the ground, metres: scaled
+        by ``1 + scale_errors`` (their radius errors), less any slip. A wheel slips when its
+        uniform draw ``slip_draws`` falls below ``1 - (1 - p)^|d|`` (``p`` per metre) and then
+        loses the fraction ``size_draws * slip_fraction_max`` of the command (``size_draws``
+        uniform in [0, 1))."""
+        slip_probability = 1.0 - (1.0 - self.slip_probability_per_m) ** abs(commanded_m)
+        slip_loss = np.where(
+            slip_draws < slip_probability, size_draws * self.slip_fraction_max, 0.0
+        )
+        return commanded_m * (1.0 + scale_errors) * (1.0 - slip_loss)
 
 
 def integrate_substeps(

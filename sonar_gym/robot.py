@@ -234,15 +234,19 @@ class DifferentialDriveRobot:
 
         # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
         encoder = (
-            _encoder_reading(d_left_m, noise.encoder_std_m_per_sqrt_m, float(normals[0])),
-            _encoder_reading(d_right_m, noise.encoder_std_m_per_sqrt_m, float(normals[1])),
+            float(noise.encoder_increments(d_left_m, float(normals[0]))),
+            float(noise.encoder_increments(d_right_m, float(normals[1]))),
         )
         ground = (
-            _ground_travel(
-                d_left_m, noise.scale_error_left, noise, float(uniforms[0]), float(uniforms[2])
+            float(
+                noise.ground_travel(
+                    d_left_m, noise.scale_error_left, float(uniforms[0]), float(uniforms[2])
+                )
             ),
-            _ground_travel(
-                d_right_m, noise.scale_error_right, noise, float(uniforms[1]), float(uniforms[3])
+            float(
+                noise.ground_travel(
+                    d_right_m, noise.scale_error_right, float(uniforms[1]), float(uniforms[3])
+                )
             ),
         )
 
@@ -350,28 +354,6 @@ class DifferentialDriveRobot:
             encoder_right_m=sum(p.encoder_right_m for p in parts),
             parts=tuple(parts),
         )
-
-
-def _encoder_reading(commanded_m: float, std_m_per_sqrt_m: float, normal: float) -> float:
-    """One wheel's encoder increment: the command plus noise of std ``std * sqrt(|d|)``, m."""
-    return commanded_m + std_m_per_sqrt_m * math.sqrt(abs(commanded_m)) * normal
-
-
-def _ground_travel(
-    commanded_m: float,
-    scale_error: float,
-    noise: OdometryConfig,
-    slip_draw: float,
-    slip_size_draw: float,
-) -> float:
-    """One wheel's travel on the ground: scaled by its radius error, less any slip, metres.
-
-    The wheel slips with probability ``1 - (1 - p)^|d|`` (``p`` per metre) and then loses the
-    fraction ``slip_size_draw * slip_fraction_max`` of the command (both draws uniform in [0, 1)).
-    """
-    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** abs(commanded_m)
-    slip_loss = slip_size_draw * noise.slip_fraction_max if slip_draw < slip_probability else 0.0
-    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
 
 
 def _path_is_clear(
