@@ -354,6 +354,8 @@ class BeaconScanEnv(SonarEnv):
         )
         self.observation_layout = self.observation_spec.observation_layout()
         self.observation_space = self.observation_spec.space
+        # the progress features run from sensing_time to the end of the vector
+        self._progress_start = self.observation_spec.layout["sensing_time"].start
         self._episode: _Episode | None = None
         self._room: _Room | None = None
         # bin_ranges and bin_scanned before the first pan: no echo, nothing scanned
@@ -545,8 +547,7 @@ class BeaconScanEnv(SonarEnv):
             episode.scan_features = self._scan_features(episode)
             episode.coverage = episode.memory.coverage
             observation[: 2 * config.n_bins] = episode.scan_features
-        # the progress features, from sensing_time to the end
-        observation[self.observation_layout["sensing_time"].start :] = (
+        observation[self._progress_start :] = (
             min(episode.sensing_time_s / config.time_budget_s, 1.0),
             float(episode.calibrated),
             min(episode.steps / config.max_steps, 1.0),
