@@ -38,6 +38,20 @@ Wheels = Any
 """One wheel's value as a float, or many wheels' as a float array (see the wheel-error model)."""
 
 
+def sinc(x: float) -> float:
+    """``sin(x) / x`` with its limit 1 at 0 (the series ``1 - x^2 / 6`` below 1e-4 rad)."""
+    if abs(x) < 1e-4:
+        return 1.0 - x * x / 6.0
+    return math.sin(x) / x
+
+
+def sinc_of_array(x: FloatArray) -> FloatArray:
+    """:func:`sinc` of every entry (NumPy's vectorised sine may differ from it in the last bit)."""
+    small = np.abs(x) < 1e-4
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
+
+
 @dataclass(frozen=True)
 class OdometryConfig:
     """Odometry and wheel-ground errors of a small indoor differential-drive robot.
@@ -160,8 +174,7 @@ def integrate_substeps(
         )
     lead = 0.0 if integration == "euler" else 0.5
     if integration == "arc":
-        half = 0.5 * delta
-        distance *= 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+        distance *= sinc(0.5 * delta)
     # sum_k cos(theta + (k + lead) delta) = sin(n delta / 2) / sin(delta / 2) cos(theta + c delta)
     # with c = lead + (n - 1) / 2 (the Dirichlet kernel; the same for sin)
     half = 0.5 * delta
@@ -188,12 +201,11 @@ def arc_displacements(
     distance = 0.5 * (d_left_m + d_right_m) * fractions
     turned = (d_right_m - d_left_m) / wheel_base_m * fractions
     half = 0.5 * turned
-    small = np.abs(half) < 1e-4
-    safe = np.where(small, 1.0, half)
-    sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
+    shortening = sinc_of_array(half)
     direction = pose.theta + half
     points = np.stack(
-        [distance * sinc * np.cos(direction), distance * sinc * np.sin(direction)], axis=1
+        [distance * shortening * np.cos(direction), distance * shortening * np.sin(direction)],
+        axis=1,
     )
     displacements = np.empty((n, 3))
     displacements[:, :2] = np.diff(points, axis=0)
@@ -439,5 +451,7 @@ __all__ = [
     "predict_run",
     "predict_step",
     "propagate_covariance",
+    "sinc",
+    "sinc_of_array",
     "wheel_increment_covariance",
 ]

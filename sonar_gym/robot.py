@@ -27,17 +27,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 import pymunk
 
-from sonar_gym.odometry import OdometryConfig, arc_displacements, integrate_substeps
+from sonar_gym.odometry import (
+    INTEGRATIONS,
+    Integration,
+    OdometryConfig,
+    arc_displacements,
+    integrate_substeps,
+    sinc,
+)
 from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.world import STATIC_ONLY, World
-
-Integration = Literal["euler", "midpoint", "arc"]
-INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
 
 
 def unicycle_step(
@@ -82,19 +85,12 @@ def unicycle_step(
         direction, length = pose.theta, distance
     else:
         direction = pose.theta + 0.5 * dtheta
-        length = distance * (_sinc(0.5 * dtheta) if integration == "arc" else 1.0)
+        length = distance * (sinc(0.5 * dtheta) if integration == "arc" else 1.0)
     return Pose(
         pose.x + length * math.cos(direction),
         pose.y + length * math.sin(direction),
         pose.theta + dtheta,
     )
-
-
-def _sinc(x: float) -> float:
-    """``sin(x)/x`` with its limit 1 at 0 (series below 1e-4 rad)."""
-    if abs(x) < 1e-4:
-        return 1.0 - x * x / 6.0
-    return math.sin(x) / x
 
 
 OdometryNoise = OdometryConfig
@@ -435,12 +431,7 @@ def _free_motion(
     pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
     world.place_robot_on_clear_path(pose)  # _path_is_clear has shown the end free
     half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
-    sinc = (
-        1.0 - half_turn * half_turn / 6.0
-        if abs(half_turn) < 1e-4
-        else math.sin(half_turn) / half_turn
-    )
-    path_length = abs(0.5 * (left + right)) * abs(sinc)
+    path_length = abs(0.5 * (left + right)) * abs(sinc(half_turn))
     return pose, False, path_length
 
 

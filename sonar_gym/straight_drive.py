@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from sonar_gym.geometry import StaticGeometry
+from sonar_gym.odometry import sinc_of_array
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
@@ -48,13 +49,6 @@ class StraightRun:
     true_poses: FloatArray
     odometry_poses: FloatArray
     collided: np.ndarray
-
-
-def _sinc(x: FloatArray) -> FloatArray:
-    """``sin(x)/x`` with its series below 1e-4 rad, as :func:`sonar_gym.robot.unicycle_step`."""
-    small = np.abs(x) < 1e-4
-    safe = np.where(small, 1.0, x)
-    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
 
 
 def _clearance(geometry: StaticGeometry, points: FloatArray) -> FloatArray:
@@ -250,7 +244,7 @@ def _free_commands(
     distance = 0.5 * (ground[:, 0] + ground[:, 1])
     thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
     half_turn = 0.5 * ground_turn
-    step = distance * _sinc(half_turn)
+    step = distance * sinc_of_array(half_turn)
     ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
     ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
     # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
