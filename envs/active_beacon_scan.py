@@ -13,10 +13,11 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import StepOutcome
+from sonar_gym.envs.features import Feature, Flag
 from sonar_gym.envs.beacon_scan import BeaconScanConfig, BeaconScanEnv, PanCommand
 from sonar_gym.envs.config import build_config, check_choice, number_field, numbers_field
 from sonar_gym.odometry import OdometryConfig
@@ -29,7 +30,14 @@ __all__ = ["ActiveBeaconScanConfig", "ActiveBeaconScanEnv", "ActiveCommand"]
 ENV_ID = "SonarGym/ActiveBeaconScan-v0"
 ACTION_KINDS = ("pan", "calibrate", "try_fix", "turn", "move", "commit")
 PAN, CALIBRATE, TRY_FIX, TURN, MOVE, COMMIT = range(len(ACTION_KINDS))
-N_FIX_FEATURES = 5
+FIX_FEATURES = (
+    Flag("fix_tried"),
+    Flag("fix_ok"),
+    Feature("fix_offset_xy", 2),
+    Feature("fix_offset_heading"),
+)
+"""The features about the fix at the current pose, after BeaconScan's."""
+N_FIX_FEATURES = sum(feature.size for feature in FIX_FEATURES)
 
 
 @dataclass(frozen=True)
@@ -196,26 +204,22 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         base_names = [f.name for f in fields(BeaconScanConfig)]
         super().__init__(render_mode, **{name: getattr(config, name) for name in base_names})
         self.config = config
-        self.action_space = gym.spaces.MultiDiscrete(
-            [
-                len(ACTION_KINDS),
-                config.n_sector_centres,
-                len(config.sector_widths_deg),
-                len(config.increments_deg),
-                len(config.turn_angles_deg),
-            ]
+        self.action_type = make_action_type(
+            "multi_discrete",
+            DiscreteChoices(
+                (
+                    len(ACTION_KINDS),
+                    config.n_sector_centres,
+                    len(config.sector_widths_deg),
+                    len(config.increments_deg),
+                    len(config.turn_angles_deg),
+                )
+            ),
         )
-        base = 2 * config.n_bins + 15
-        self.observation_layout = {
-            **self.observation_layout,
-            "fix_tried": slice(base, base + 1),
-            "fix_ok": slice(base + 1, base + 2),
-            "fix_offset_xy": slice(base + 2, base + 4),
-            "fix_offset_heading": slice(base + 4, base + 5),
-        }
-        self.observation_space = gym.spaces.Box(
-            -1.0, 1.0, shape=(base + N_FIX_FEATURES,), dtype=np.float32
-        )
+        self.action_space = self.action_type.space
+        self.observation_spec = self.observation_spec.extended(FIX_FEATURES)
+        self.observation_layout = self.observation_spec.observation_layout()
+        self.observation_space = self.observation_spec.space
         self._fix = _FixState()
         self._motion_time_s = 0.0
         self._collided = False
@@ -233,20 +237,20 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         ``turn_deg`` must be one of ``turn_angles_deg`` (default: the first)."""
         check_choice("kind", kind, ACTION_KINDS)
         config = self.config
-        action = np.zeros(5, dtype=np.int64)
-        action[0] = ACTION_KINDS.index(kind)
+        pan, turn = (0, 0, 0), 0
         if kind == "pan":
-            pan = super().encode_action("pan", centre_deg, width_deg, increment_deg)
-            action[1:4] = np.asarray(pan)[1:4]
+            pan = self._pan_indices(centre_deg, width_deg, increment_deg)
         elif kind == "turn" and turn_deg is not None:
             check_choice("turn_deg", turn_deg, config.turn_angles_deg)
-            action[4] = config.turn_angles_deg.index(turn_deg)
-        return action
+            turn = config.turn_angles_deg.index(turn_deg)
+        return self.action_type.encode((ACTION_KINDS.index(kind), *pan, turn))
 
     def decode_action(self, action: Any) -> ActiveCommand:  # type: ignore[override]
         """The command an action stands for."""
         config = self.config
-        kind, centre_index, width_index, increment_index, turn_index = (int(v) for v in action)
+        kind, centre_index, width_index, increment_index, turn_index = self.action_type.decode(
+            action
+        )
         if kind == PAN:
             return ActiveCommand(
                 "pan",
@@ -319,7 +323,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         episode.prior_features = self._prior_features(
             episode.room, episode.prior, episode.sonar.transducer.max_range_m
         )
-        start = 2 * config.n_bins
+        start = 2 * config.n_range_bins
         episode.observation[start : start + 10] = episode.prior_features
         self._fix = _FixState()
         self._collided = result.collided

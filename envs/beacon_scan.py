@@ -11,11 +11,21 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
 from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
+from sonar_gym.envs.features import (
+    Feature,
+    Flag,
+    Fraction,
+    Heading,
+    ObservationSpec,
+    RangeBins,
+    ScaledPosition,
+    ScannedBins,
+)
 from sonar_gym.envs.config import (
     bool_field,
     build_config,
@@ -120,19 +130,6 @@ class BeaconScanConfig:
         number_field(self, "prior_gate_m", low=MIN_LENGTH_M, high=10.0, optional=True)
         choice_field(self, "action_type", ("multi_discrete", "discrete"))
         number_field(self, "time_budget_s", low=MIN_DURATION_S, high=1e5)
-
-    @property
-    def n_bins(self) -> int:
-        """The deprecated name of :attr:`n_range_bins`, kept for code that still reads it."""
-        return self.n_range_bins
-
-
-def _per_bin(values: np.ndarray, n_bins: int, reduce: np.ufunc) -> np.ndarray:
-    """Reduce ``values`` over ``n_bins`` equal, consecutive angular bins (``reduce``: a ufunc).
-
-    The scan memory has 360 slots and ``n_bins`` divides 360 (checked by the config).
-    """
-    return reduce.reduce(values.reshape(n_bins, len(values) // n_bins), axis=1)
 
 
 def _degree_set_field(config: object, name: str, allowed: tuple[int, ...] | None) -> None:
@@ -334,35 +331,41 @@ class BeaconScanEnv(SonarEnv):
         self._centres_deg = [
             k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)
         ]
-        n_pans = (
-            config.n_sector_centres * len(config.sector_widths_deg) * len(config.increments_deg)
-        )
-        if config.action_type == "multi_discrete":
-            self.action_space = gym.spaces.MultiDiscrete(
-                [
-                    3,
+        self.action_type = make_action_type(
+            config.action_type,
+            DiscreteChoices(
+                (
+                    len(ACTION_KINDS),
                     config.n_sector_centres,
                     len(config.sector_widths_deg),
                     len(config.increments_deg),
-                ]
-            )
-        else:
-            self.action_space = gym.spaces.Discrete(2 + n_pans)
-        n = config.n_bins
-        self.observation_layout = {
-            "bin_ranges": slice(0, n),
-            "bin_scanned": slice(n, 2 * n),
-            "prior_xy": slice(2 * n, 2 * n + 2),
-            "prior_heading": slice(2 * n + 2, 2 * n + 4),
-            "small_beacon": slice(2 * n + 4, 2 * n + 7),
-            "large_beacon": slice(2 * n + 7, 2 * n + 10),
-            "sensing_time": slice(2 * n + 10, 2 * n + 11),
-            "calibrated": slice(2 * n + 11, 2 * n + 12),
-            "steps": slice(2 * n + 12, 2 * n + 13),
-            "calibration_allowed": slice(2 * n + 13, 2 * n + 14),
-            "coverage": slice(2 * n + 14, 2 * n + 15),
-        }
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(2 * n + 15,), dtype=np.float32)
+                ),
+                parameterless_kinds=(CALIBRATE, LOCALIZE),
+            ),
+        )
+        self.action_space = self.action_type.space
+        n = config.n_range_bins
+        self._range_bins = RangeBins("bin_ranges", n)
+        self._scanned_bins = ScannedBins("bin_scanned", n)
+        self.observation_spec = ObservationSpec(
+            [
+                self._range_bins,
+                self._scanned_bins,
+                ScaledPosition("prior_xy"),
+                Heading("prior_heading"),
+                Feature("small_beacon", 3),
+                Feature("large_beacon", 3),
+                Fraction("sensing_time"),
+                Flag("calibrated"),
+                Fraction("steps"),
+                Flag("calibration_allowed"),
+                Fraction("coverage"),
+            ]
+        )
+        self.observation_layout = self.observation_spec.observation_layout()
+        self.observation_space = self.observation_spec.space
+        # the progress features run from sensing_time to the end of the vector
+        self._progress_start = self.observation_spec.layout["sensing_time"].start
         self._episode: _Episode | None = None
         self._room: _Room | None = None
         # bin_ranges and bin_scanned before the first pan: no echo, nothing scanned
@@ -381,42 +384,33 @@ class BeaconScanEnv(SonarEnv):
     ) -> np.ndarray | int:
         """The action for a command; a pan's centre snaps to the nearest offered centre."""
         check_choice("kind", kind, ACTION_KINDS)
-        config = self.config
         if kind != "pan":
-            code = ACTION_KINDS.index(kind)
-            if config.action_type == "discrete":
-                return code - 1
-            return np.array([code, 0, 0, 0], dtype=np.int64)
+            return self.action_type.encode((ACTION_KINDS.index(kind), 0, 0, 0))
+        return self.action_type.encode(
+            (PAN, *self._pan_indices(centre_deg, width_deg, increment_deg))
+        )
+
+    def _pan_indices(
+        self, centre_deg: float, width_deg: int, increment_deg: int
+    ) -> tuple[int, int, int]:
+        """The (centre, width, increment) indices of a pan; the centre snaps to the nearest."""
+        config = self.config
         check_choice("width_deg", width_deg, config.sector_widths_deg)
         check_choice("increment_deg", increment_deg, config.increments_deg)
         step = 360 / config.n_sector_centres
         centre_index = int(round((centre_deg % 360) / step)) % config.n_sector_centres
-        width_index = config.sector_widths_deg.index(width_deg)
-        increment_index = config.increments_deg.index(increment_deg)
-        if config.action_type == "multi_discrete":
-            return np.array([PAN, centre_index, width_index, increment_index], dtype=np.int64)
-        n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
-        return 2 + (centre_index * n_width + width_index) * n_inc + increment_index
+        return (
+            centre_index,
+            config.sector_widths_deg.index(width_deg),
+            config.increments_deg.index(increment_deg),
+        )
 
     def decode_action(self, action: Any) -> PanCommand:
         """The command an action stands for."""
+        kind, centre_index, width_index, increment_index = self.action_type.decode(action)
+        if kind != PAN:
+            return PanCommand(ACTION_KINDS[kind])
         config = self.config
-        if config.action_type == "discrete":
-            code = int(action)
-            if code < 2:
-                return PanCommand(ACTION_KINDS[code + 1])
-            n_inc, n_width = len(config.increments_deg), len(config.sector_widths_deg)
-            rest, increment_index = divmod(code - 2, n_inc)
-            centre_index, width_index = divmod(rest, n_width)
-        else:
-            values = (
-                action.tolist()
-                if type(action) is np.ndarray and action.dtype.kind in "iu"
-                else [int(v) for v in action]
-            )
-            kind, centre_index, width_index, increment_index = values
-            if kind != PAN:
-                return PanCommand(ACTION_KINDS[kind])
         return PanCommand(
             "pan",
             self._centres_deg[centre_index],
@@ -575,12 +569,11 @@ class BeaconScanEnv(SonarEnv):
         episode = self._require_episode()
         config = self.config
         observation = episode.observation
-        scan_end = 2 * config.n_bins
         if episode.scan_features is None:  # pans and calibrations change it, nothing else
             episode.scan_features = self._scan_features(episode)
             episode.coverage = episode.memory.coverage
-            observation[:scan_end] = episode.scan_features
-        observation[scan_end + 10 :] = (
+            observation[: 2 * config.n_range_bins] = episode.scan_features
+        observation[self._progress_start :] = (
             min(episode.sensing_time_s / config.time_budget_s, 1.0),
             float(episode.calibrated),
             min(episode.steps / config.max_steps, 1.0),
@@ -591,33 +584,23 @@ class BeaconScanEnv(SonarEnv):
 
     def _scan_features(self, episode: _Episode) -> np.ndarray:
         """``bin_ranges`` and ``bin_scanned`` of the observation (float32)."""
-        n_bins = self.config.n_bins
         memory = episode.memory
         max_range = episode.sonar.transducer.max_range_m
         ranges = memory.ranges(episode.sonar.assumed_speed_of_sound_mps)
-        normalised = np.where(np.isfinite(ranges), np.clip(ranges / max_range, 0.0, 1.0), 1.0)
-        features = np.empty(2 * n_bins, dtype=np.float32)
-        features[:n_bins] = _per_bin(normalised, n_bins, np.minimum)
-        features[n_bins:] = _per_bin(memory.scanned, n_bins, np.logical_or)
-        return features
+        return np.concatenate(
+            [self._range_bins.values(ranges / max_range), self._scanned_bins.values(memory.scanned)]
+        ).astype(np.float32)
 
     def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
         """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
-        x_min, y_min, x_max, y_max = (float(v) for v in room.bounds.ravel())
         features = [
-            min(max(2.0 * (prior.x - x_min) / (x_max - x_min) - 1.0, -1.0), 1.0),
-            min(max(2.0 * (prior.y - y_min) / (y_max - y_min) - 1.0, -1.0), 1.0),
-            math.cos(prior.theta),
-            math.sin(prior.theta),
+            *ScaledPosition.values((prior.x, prior.y), room.bounds[0], room.bounds[1]).tolist(),
+            *Heading.values(prior.theta),
         ]
         for x, y in room.beacon_centres.tolist():
             dx, dy = x - prior.x, y - prior.y
             bearing = wrap_angle(math.atan2(dy, dx) - prior.theta)
-            features += [
-                math.cos(bearing),
-                math.sin(bearing),
-                min(math.hypot(dx, dy) / max_range, 1.0),
-            ]
+            features += [*Heading.values(bearing), min(math.hypot(dx, dy) / max_range, 1.0)]
         return np.array(features, dtype=np.float32)
 
     def _info(self, status: str) -> dict[str, Any]:

@@ -23,7 +23,9 @@ from sonar_gym.calibration_distances import (
     distances_to_fractions,
     fractions_to_distances,
 )
+from sonar_gym.envs.action_types import ContinuousRange, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
+from sonar_gym.envs.features import Feature, Flag, Fraction, ObservationSpec
 from sonar_gym.envs.config import (
     build_config,
     check_number,
@@ -107,6 +109,18 @@ NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
 
 STATUS_RUNNING = "running"
+OBSERVATION = ObservationSpec(
+    [
+        Feature("beacons", 4 * MAX_BEACON_SLOTS),
+        Feature("path", 7),
+        Flag("boundary", 2),
+        Flag("three_areas"),
+        Fraction("progress"),
+        Feature("previous_calibration", 3),
+        Fraction("sensor", 2),
+    ]
+)
+"""The observation's features (see the env docstring, Observation Space)."""
 
 
 @dataclass(frozen=True)
@@ -363,17 +377,11 @@ class BlockExpansionEnv(SonarEnv):
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
-        self.action_space = gym.spaces.Box(-1.0, 1.0, shape=(per_step,), dtype=np.float32)
-        self.observation_layout = {
-            "beacons": slice(0, 4 * MAX_BEACON_SLOTS),
-            "path": slice(20, 27),
-            "boundary": slice(27, 29),
-            "three_areas": slice(29, 30),
-            "progress": slice(30, 31),
-            "previous_calibration": slice(31, 34),
-            "sensor": slice(34, 36),
-        }
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(36,), dtype=np.float32)
+        self.action_type = make_action_type("box", ContinuousRange.unit(per_step))
+        self.action_space = self.action_type.space  # type: ignore[assignment]
+        self.observation_spec = OBSERVATION
+        self.observation_layout = OBSERVATION.observation_layout()
+        self.observation_space = OBSERVATION.space
         self._episode: _Episode | None = None
 
     @property
@@ -411,12 +419,7 @@ class BlockExpansionEnv(SonarEnv):
     # --- actions ---------------------------------------------------------------------------
     def decode_action(self, action: npt.ArrayLike) -> tuple[tuple[float, float, float], ...]:
         """The (d1, d2, d3) triples, metres, an action stands for (one per boundary it covers)."""
-        values = np.asarray(action, dtype=np.float64).reshape(-1)
-        if values.shape != self.action_space.shape:
-            raise ValueError(
-                f"action must have shape {self.action_space.shape}; got {values.shape}"
-            )
-        fractions = (np.clip(values, -1.0, 1.0) + 1.0) / 2.0
+        fractions = self.action_type.decode(action)
         return fractions_to_distances(fractions, self.config.distance_range_m, self.config.ordering)
 
     def encode_distances(self, distances_m: npt.ArrayLike) -> np.ndarray:
@@ -436,7 +439,7 @@ class BlockExpansionEnv(SonarEnv):
         fractions = distances_to_fractions(
             values, self.config.distance_range_m, self.config.ordering
         )
-        return (2.0 * fractions - 1.0).astype(np.float32)
+        return self.action_type.encode(fractions)
 
     # --- episode ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
@@ -574,8 +577,7 @@ class BlockExpansionEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
         config = self.config
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float64)
+        observation = OBSERVATION.writer()
         calibrated = self._calibrated_positions(episode)
         slots: list[tuple[npt.ArrayLike, float]] = []
         for index, name in enumerate(self._slot_names):
@@ -586,26 +588,22 @@ class BlockExpansionEnv(SonarEnv):
             else:
                 slots.append((episode.prior_m[name], PRIOR_ONLY))
         positions, statuses = zip(*slots, strict=True)
-        observation[layout["beacons"]] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
+        observation["beacons"] = beacon_slot_features(positions, statuses, MAX_BEACON_SLOTS)
         route = episode.path_parameters
-        observation[layout["path"]] = self._features_of_route.get(
-            route, lambda: route_features(route)
-        )
+        observation["path"] = self._features_of_route.get(route, lambda: route_features(route))
         decided = len(episode.chosen)
+        observation["three_areas"] = float(config.n_areas == 3)
         if not episode.done:
-            observation[layout["boundary"].start + decided] = 1.0
-        observation[layout["three_areas"]] = float(config.n_areas == 3)
-        if not episode.done:
-            last_index = max(len(episode.path) - 1, 1)
-            observation[layout["progress"]] = episode.evaluated_until / last_index
+            observation.one_hot("boundary", decided)
+            observation["progress"] = episode.evaluated_until / max(len(episode.path) - 1, 1)
         if episode.result is not None and decided > 0:
             last = episode.result.calibrations[decided - 1]
-            observation[layout["previous_calibration"]] = calibration_features(last)
-        observation[layout["sensor"]] = [
+            observation["previous_calibration"] = calibration_features(last)
+        observation["sensor"] = [
             config.range_noise_std_m / NOISE_SCALE_M,
             config.timer_period_s / TIMER_SCALE_S,
         ]
-        return observation.astype(np.float32)
+        return observation.vector
 
     def _calibrated_positions(self, episode: _Episode) -> dict[str, FloatArray]:
         """New beacons calibrated in the boundaries decided so far."""

@@ -14,10 +14,18 @@ import math
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
+from sonar_gym.envs.features import (
+    Flag,
+    Fraction,
+    Heading,
+    ObservationSpec,
+    RangeBins,
+    ScaledPosition,
+)
 from sonar_gym.envs.config import (
     build_config,
     check_choice,
@@ -336,25 +344,27 @@ class SweepLocalizationEnv(SonarEnv):
             raise ValueError(f"argument 'scenario': {error}") from error
         self.grid = occupancy_grid_of(self._scenario)
         self.sonar = swept_sonar_for(self._scenario, config)
-        self.action_space = gym.spaces.MultiDiscrete([config.max_sweeps + 1, len(SECTOR_NAMES)])
-        names_and_sizes = [
-            ("estimate_xy", 2),
-            ("estimate_heading", 2),
-            ("estimate_std", 3),
-            ("distance_since_fix", 1),
-            ("route_progress", 1),
-            ("last_sweep_ranges", config.n_range_bins),
-            ("last_sweep_sector", 2),
-            ("last_fix_ok", 1),
-            ("route_heading", 2),
-            ("steps_remaining", 1),
-        ]
-        self.observation_layout: dict[str, slice] = {}
-        start = 0
-        for name, size in names_and_sizes:
-            self.observation_layout[name] = slice(start, start + size)
-            start += size
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(start,), dtype=np.float32)
+        self.action_type = make_action_type(
+            "multi_discrete", DiscreteChoices((config.max_sweeps + 1, len(SECTOR_NAMES)))
+        )
+        self.action_space = self.action_type.space
+        self._sweep_bins = RangeBins("last_sweep_ranges", config.n_range_bins)
+        self.observation_spec = ObservationSpec(
+            [
+                ScaledPosition("estimate_xy"),
+                Heading("estimate_heading"),
+                Fraction("estimate_std", 3),
+                Fraction("distance_since_fix"),
+                Fraction("route_progress"),
+                self._sweep_bins,
+                Heading("last_sweep_sector"),
+                Flag("last_fix_ok"),
+                Heading("route_heading"),
+                Fraction("steps_remaining"),
+            ]
+        )
+        self.observation_layout = self.observation_spec.observation_layout()
+        self.observation_space = self.observation_spec.space
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self._scenario, temperature_c=config.temperature_c)
@@ -384,7 +394,7 @@ class SweepLocalizationEnv(SonarEnv):
             check_choice("sector", sector, SECTOR_NAMES)
             sector = SECTOR_NAMES.index(sector)
         check_number("sector", sector, low=0, high=len(SECTOR_NAMES) - 1, integer=True)
-        return np.array([n_sweeps, sector], dtype=np.int64)
+        return self.action_type.encode((n_sweeps, sector))
 
     # --- episode -----------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
@@ -436,7 +446,7 @@ class SweepLocalizationEnv(SonarEnv):
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
         config = self.config
-        n_sweeps, sector = int(action[0]), int(action[1])
+        n_sweeps, sector = self.action_type.decode(action)
         stations = episode.decision_stations_m
         next_station = (
             float(stations[episode.decisions + 1])
@@ -557,47 +567,34 @@ class SweepLocalizationEnv(SonarEnv):
     # --- observation and info ---------------------------------------------------------
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
-        config = self.config
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+        observation = self.observation_spec.writer()
         estimate = episode.estimate
         (x_min, y_min), (x_max, y_max) = self._scenario.bounds
-        observation[layout["estimate_xy"]] = np.clip(
-            [
-                2.0 * (estimate.x - x_min) / (x_max - x_min) - 1.0,
-                2.0 * (estimate.y - y_min) / (y_max - y_min) - 1.0,
-            ],
-            -1.0,
-            1.0,
+        observation["estimate_xy"] = ScaledPosition.values(
+            (estimate.x, estimate.y), (x_min, y_min), (x_max, y_max)
         )
-        observation[layout["estimate_heading"]] = [
-            math.cos(estimate.theta),
-            math.sin(estimate.theta),
-        ]
+        observation["estimate_heading"] = Heading.values(estimate.theta)
         std = np.sqrt(np.clip(np.diag(episode.covariance), 0.0, None))
-        observation[layout["estimate_std"]] = np.clip(
+        observation["estimate_std"] = np.clip(
             std / [POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD], 0.0, 1.0
         )
-        observation[layout["distance_since_fix"]] = min(
+        observation["distance_since_fix"] = min(
             episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0
         )
-        observation[layout["route_progress"]] = min(
+        observation["route_progress"] = min(
             episode.progress_m / max(episode.route.length_m, 1e-9), 1.0
         )
-        observation[layout["last_sweep_ranges"]] = _binned_ranges(
-            episode.last_ranges, config.n_range_bins
-        )
-        centre = SECTOR_CENTRES_RAD[episode.last_sector]
-        observation[layout["last_sweep_sector"]] = [math.cos(centre), math.sin(centre)]
-        observation[layout["last_fix_ok"]] = float(episode.last_fix_ok)
+        observation["last_sweep_ranges"] = self._sweep_bins.values(episode.last_ranges)
+        observation["last_sweep_sector"] = Heading.values(SECTOR_CENTRES_RAD[episode.last_sector])
+        observation["last_fix_ok"] = float(episode.last_fix_ok)
         ahead = self._next_station_point(episode) - estimate.position
         bearing = (
             wrap_angle(math.atan2(ahead[1], ahead[0]) - estimate.theta) if np.any(ahead) else 0.0
         )
-        observation[layout["route_heading"]] = [math.cos(bearing), math.sin(bearing)]
+        observation["route_heading"] = Heading.values(bearing)
         remaining = len(episode.decision_stations_m) - episode.decisions
-        observation[layout["steps_remaining"]] = remaining / len(episode.decision_stations_m)
-        return np.clip(observation, -1.0, 1.0)
+        observation["steps_remaining"] = remaining / len(episode.decision_stations_m)
+        return np.clip(observation.vector, -1.0, 1.0)
 
     def _next_station_point(self, episode: _Episode) -> np.ndarray:
         stations = episode.decision_stations_m
@@ -659,17 +656,6 @@ def _relative_pose(reference: Pose, pose: Pose) -> Pose:
     dx, dy = pose.x - reference.x, pose.y - reference.y
     c, s = math.cos(reference.theta), math.sin(reference.theta)
     return Pose(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
-
-
-def _binned_ranges(normalised_ranges: np.ndarray | None, n_bins: int) -> np.ndarray:
-    """Nearest normalised range per bin of consecutive pings; 1 for no echo or no sweep."""
-    bins = np.ones(n_bins)
-    if normalised_ranges is None or normalised_ranges.size == 0:
-        return bins
-    values = np.where(np.isfinite(normalised_ranges), np.clip(normalised_ranges, 0.0, 1.0), 1.0)
-    bin_of_ping = (np.arange(values.size) * n_bins) // values.size
-    np.minimum.at(bins, bin_of_ping, values)
-    return bins
 
 
 __all__ = ["SECTOR_CENTRES_RAD", "SECTOR_NAMES", "SweepLocalizationConfig", "SweepLocalizationEnv"]

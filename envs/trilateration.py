@@ -21,9 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.config import (
     build_config,
@@ -34,8 +34,7 @@ from sonar_gym.envs.config import (
     scenario_field,
 )
 from sonar_gym.envs.trilateration_observation import (
-    OBSERVATION_LAYOUT,
-    OBSERVATION_SIZE,
+    OBSERVATION,
     TIME_SINCE_FIX_SCALE_S,
     FeatureScales,
     TrilaterationEpisode,
@@ -354,11 +353,11 @@ class TrilaterationEnv(SonarEnv):
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self.scenario, temperature_c=config.temperature_c)
         self._check_route_fits()
-        self.action_space = gym.spaces.Discrete(len(config.fix_counts))
-        self.observation_layout = dict(OBSERVATION_LAYOUT)
-        self.observation_space = gym.spaces.Box(
-            -1.0, 1.0, shape=(OBSERVATION_SIZE,), dtype=np.float32
-        )
+        self.action_type = make_action_type("discrete", DiscreteChoices((len(config.fix_counts),)))
+        self.action_space = self.action_type.space
+        self.observation_spec = OBSERVATION
+        self.observation_layout = OBSERVATION.observation_layout()
+        self.observation_space = OBSERVATION.space
         self._feature_scales = FeatureScales(
             centre_xy=self._centre,
             half_size_xy=self._half_size,
@@ -373,12 +372,13 @@ class TrilaterationEnv(SonarEnv):
     # --- actions -----------------------------------------------------------------------
     def fix_count(self, action: Any) -> int:
         """The number of repeated fixes an action takes."""
-        return self.config.fix_counts[int(action)]
+        (index,) = self.action_type.decode(action)
+        return self.config.fix_counts[index]
 
     def action_for(self, n_fixes: int) -> int:
         """The action that takes ``n_fixes`` fixes (one of ``fix_counts``)."""
         check_choice("n_fixes", n_fixes, self.config.fix_counts)
-        return self.config.fix_counts.index(n_fixes)
+        return self.action_type.encode((self.config.fix_counts.index(n_fixes),))
 
     @property
     def paper_action(self) -> int:

@@ -8,12 +8,12 @@ The table of features, their mappings and bounds is in the ``TrilaterationEnv`` 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from sonar_gym.envs.features import Feature, Fraction, Heading, ObservationSpec, ScaledPosition
 from sonar_gym.localization.wu_tsai import Fix
 from sonar_gym.localization.wu_tsai_models import heading_std_rad, position_std_m
 from sonar_gym.metrics import heading_error_rad, position_error_m
@@ -23,21 +23,25 @@ from sonar_gym.world import World
 
 TIME_SINCE_FIX_SCALE_S = 10.0
 """Time that maps to 0.5 in the ``time_since_fix`` feature, seconds."""
-OBSERVATION_LAYOUT: dict[str, slice] = {
-    "estimated_xy": slice(0, 2),
-    "estimated_heading": slice(2, 4),
-    "time_since_fix": slice(4, 5),
-    "distance_since_fix": slice(5, 6),
-    "dead_reckoning_position_std": slice(6, 7),
-    "dead_reckoning_heading_std": slice(7, 8),
-    "transmitter_offset": slice(8, 10),
-    "transmitter_distance": slice(10, 11),
-    "fix_position_std": slice(11, 12),
-    "fix_heading_std": slice(12, 13),
-    "progress": slice(13, 14),
-    "steps_remaining": slice(14, 15),
-}
-OBSERVATION_SIZE = 15
+OBSERVATION = ObservationSpec(
+    [
+        ScaledPosition("estimated_xy"),
+        Heading("estimated_heading"),
+        Fraction("time_since_fix"),
+        Fraction("distance_since_fix"),
+        Fraction("dead_reckoning_position_std"),
+        Fraction("dead_reckoning_heading_std"),
+        Feature("transmitter_offset", 2),
+        Fraction("transmitter_distance"),
+        Fraction("fix_position_std"),
+        Fraction("fix_heading_std"),
+        Fraction("progress"),
+        Fraction("steps_remaining"),
+    ]
+)
+"""The observation's features (see the env docstring, Observation Space)."""
+OBSERVATION_LAYOUT: dict[str, slice] = OBSERVATION.observation_layout()
+OBSERVATION_SIZE = OBSERVATION.size
 
 
 @dataclass
@@ -101,40 +105,32 @@ def trilateration_observation(
         time_since_fix_s, distance_since_fix_m: driving since the last fix (or the start).
         decisions: decision points already passed.
     """
-    layout = OBSERVATION_LAYOUT
-    observation = np.zeros(OBSERVATION_SIZE, dtype=np.float32)
-    observation[layout["estimated_xy"]] = np.clip(
-        (estimate.position - scales.centre_xy) / scales.half_size_xy, -1.0, 1.0
+    observation = OBSERVATION.writer()
+    # the room's centre and half size, not its corners: the env's own form of the scaling
+    observation["estimated_xy"] = ScaledPosition.centred_values(
+        estimate.position, scales.centre_xy, scales.half_size_xy
     )
-    observation[layout["estimated_heading"]] = [math.cos(estimate.theta), math.sin(estimate.theta)]
-    observation[layout["time_since_fix"]] = time_since_fix_s / (
-        time_since_fix_s + TIME_SINCE_FIX_SCALE_S
-    )
-    observation[layout["distance_since_fix"]] = min(
-        distance_since_fix_m / scales.route_length_m, 1.0
-    )
+    observation["estimated_heading"] = Heading.values(estimate.theta)
+    observation["time_since_fix"] = time_since_fix_s / (time_since_fix_s + TIME_SINCE_FIX_SCALE_S)
+    observation["distance_since_fix"] = min(distance_since_fix_m / scales.route_length_m, 1.0)
     position_scale, heading_scale = scales.position_scale_m, scales.heading_scale_rad
-    observation[layout["dead_reckoning_position_std"]] = saturate(
+    observation["dead_reckoning_position_std"] = saturate(
         position_std_m(covariance), position_scale
     )
-    observation[layout["dead_reckoning_heading_std"]] = saturate(
-        heading_std_rad(covariance), heading_scale
-    )
+    observation["dead_reckoning_heading_std"] = saturate(heading_std_rad(covariance), heading_scale)
     offset = estimate.position - scales.transmitter_centroid_xy
-    observation[layout["transmitter_offset"]] = np.clip(offset / scales.half_size_xy, -1.0, 1.0)
-    observation[layout["transmitter_distance"]] = min(
+    observation["transmitter_offset"] = np.clip(offset / scales.half_size_xy, -1.0, 1.0)
+    observation["transmitter_distance"] = min(
         float(np.linalg.norm(offset)) / float(np.linalg.norm(scales.half_size_xy)), 1.0
     )
-    observation[layout["fix_position_std"]] = saturate(
+    observation["fix_position_std"] = saturate(
         position_std_m(single_fix_covariance), position_scale
     )
-    observation[layout["fix_heading_std"]] = saturate(
-        heading_std_rad(single_fix_covariance), heading_scale
-    )
+    observation["fix_heading_std"] = saturate(heading_std_rad(single_fix_covariance), heading_scale)
     n = scales.n_decision_points
-    observation[layout["progress"]] = decisions / n
-    observation[layout["steps_remaining"]] = (n - decisions) / n
-    return observation
+    observation["progress"] = decisions / n
+    observation["steps_remaining"] = (n - decisions) / n
+    return observation.vector
 
 
 def episode_info(
@@ -183,6 +179,7 @@ def saturate(value: float, scale: float) -> float:
 
 
 __all__ = [
+    "OBSERVATION",
     "OBSERVATION_LAYOUT",
     "OBSERVATION_SIZE",
     "TIME_SINCE_FIX_SCALE_S",

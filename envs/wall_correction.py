@@ -19,7 +19,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
-import gymnasium as gym
 import numpy as np
 
 from sonar_gym.apcs_route import (
@@ -33,7 +32,9 @@ from sonar_gym.apcs_route import (
     render_route,
     with_wall_obstacles,
 )
+from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
+from sonar_gym.envs.features import Flag, Fraction, Heading, ObservationSpec, ScaledPosition
 from sonar_gym.envs.config import (
     build_config,
     check_choice,
@@ -73,6 +74,22 @@ HEADING_STD_SCALE_RAD = math.radians(2.0)
 """Standard deviation (radians) that fills the heading-uncertainty feature."""
 COUNT_SCALE = 10.0
 """Wall count that fills a last-leg count feature."""
+OBSERVATION = ObservationSpec(
+    [
+        Fraction("progress"),
+        ScaledPosition("estimate_xy"),
+        Heading("estimate_heading"),
+        Fraction("position_std", 2),
+        Fraction("heading_std"),
+        Fraction("map_ahead", 4),
+        Fraction("last_leg_walls", 6),
+        Fraction("last_leg_dropped"),
+        Flag("collided"),
+        Fraction("sensing_time"),
+        Fraction("samples"),
+    ]
+)
+"""The observation's features (see the env docstring, Observation Space)."""
 MAP_PROFILE_STEP_M = 0.02
 """Spacing of the map look-up along a leg for the map-ahead features (metres)."""
 STANDOFF_CLEARANCE_M = 0.05
@@ -405,25 +422,14 @@ class WallCorrectionEnv(SonarEnv):
             self.sonars.transducer.max_range_m,
         )
 
-        n_spacings, n_standoffs = len(config.sample_spacings_cm), len(config.standoffs_m)
-        if config.action_type == "multi_discrete":
-            self.action_space = gym.spaces.MultiDiscrete([len(SIDES), n_spacings, n_standoffs])
-        else:
-            self.action_space = gym.spaces.Discrete(len(SIDES) * n_spacings * n_standoffs)
-        self.observation_layout = {
-            "progress": slice(0, 1),
-            "estimate_xy": slice(1, 3),
-            "estimate_heading": slice(3, 5),
-            "position_std": slice(5, 7),
-            "heading_std": slice(7, 8),
-            "map_ahead": slice(8, 12),
-            "last_leg_walls": slice(12, 18),
-            "last_leg_dropped": slice(18, 19),
-            "collided": slice(19, 20),
-            "sensing_time": slice(20, 21),
-            "samples": slice(21, 22),
-        }
-        self.observation_space = gym.spaces.Box(-1.0, 1.0, shape=(22,), dtype=np.float32)
+        self.action_type = make_action_type(
+            config.action_type,
+            DiscreteChoices((len(SIDES), len(config.sample_spacings_cm), len(config.standoffs_m))),
+        )
+        self.action_space = self.action_type.space
+        self.observation_spec = OBSERVATION
+        self.observation_layout = OBSERVATION.observation_layout()
+        self.observation_space = OBSERVATION.space
         steps_per_leg = math.ceil(self.leg_length_m / config.motion_step_m) + 2
         instants_per_leg = steps_per_leg * config.motion_step_cm // min(config.sample_spacings_cm)
         self._max_samples_per_leg = 2 * instants_per_leg
@@ -440,22 +446,14 @@ class WallCorrectionEnv(SonarEnv):
         check_choice("side", side, SIDES)
         check_choice("spacing_cm", spacing_cm, self.config.sample_spacings_cm)
         check_number("standoff_m", standoff_m, low=-10.0, high=10.0)
-        side_index = SIDES.index(side)
         spacing_index = self.config.sample_spacings_cm.index(spacing_cm)
         standoff_index = int(np.argmin(np.abs(np.asarray(self.config.standoffs_m) - standoff_m)))
-        if self.config.action_type == "multi_discrete":
-            return np.array([side_index, spacing_index, standoff_index], dtype=np.int64)
-        n_spacings, n_standoffs = len(self.config.sample_spacings_cm), len(self.config.standoffs_m)
-        return (side_index * n_spacings + spacing_index) * n_standoffs + standoff_index
+        return self.action_type.encode((SIDES.index(side), spacing_index, standoff_index))
 
     def decode_action(self, action: Any) -> LegCommand:
         """The command an action stands for."""
         config = self.config
-        if config.action_type == "discrete":
-            rest, standoff_index = divmod(int(action), len(config.standoffs_m))
-            side_index, spacing_index = divmod(rest, len(config.sample_spacings_cm))
-        else:
-            side_index, spacing_index, standoff_index = (int(v) for v in action)
+        side_index, spacing_index, standoff_index = self.action_type.decode(action)
         return LegCommand(
             SIDES[side_index],
             config.sample_spacings_cm[spacing_index],
@@ -558,32 +556,29 @@ class WallCorrectionEnv(SonarEnv):
     def _observe(self) -> np.ndarray:
         route = self._require_episode()
         config = self.config
-        layout = self.observation_layout
-        observation = np.zeros(self.observation_space.shape, dtype=np.float32)
+        observation = OBSERVATION.writer()
         room = self.scenario.room
         assert room is not None
         estimate = route.tracker.estimate
-        observation[layout["progress"]] = route.leg / config.n_legs
-        low, high = np.asarray(room.min, dtype=np.float64), np.asarray(room.max, dtype=np.float64)
-        xy = 2.0 * (estimate.position - low) / (high - low) - 1.0
-        observation[layout["estimate_xy"]] = np.clip(xy, -1.0, 1.0)
-        observation[layout["estimate_heading"]] = math.cos(estimate.theta), math.sin(estimate.theta)
+        observation["progress"] = route.leg / config.n_legs
+        observation["estimate_xy"] = ScaledPosition.values(estimate.position, room.min, room.max)
+        observation["estimate_heading"] = Heading.values(estimate.theta)
         variances = np.maximum(np.diag(route.tracker.covariance), 0.0)
         position_std, heading_std = np.sqrt(variances[:2]), math.sqrt(variances[2])
-        observation[layout["position_std"]] = np.minimum(position_std / POSITION_STD_SCALE_M, 1.0)
-        observation[layout["heading_std"]] = min(heading_std / HEADING_STD_SCALE_RAD, 1.0)
+        observation["position_std"] = np.minimum(position_std / POSITION_STD_SCALE_M, 1.0)
+        observation["heading_std"] = min(heading_std / HEADING_STD_SCALE_RAD, 1.0)
         if route.leg < config.n_legs:
-            observation[layout["map_ahead"]] = self._map_ahead[route.leg]
+            observation["map_ahead"] = self._map_ahead[route.leg]
         last = route.last_leg
         tallies = (last.detected, last.matched, last.rejected)
         counts = [tally[side] for side in SIDE_NAMES for tally in tallies]
-        observation[layout["last_leg_walls"]] = np.minimum(np.asarray(counts) / COUNT_SCALE, 1.0)
-        observation[layout["last_leg_dropped"]] = min(last.dropped_groups / COUNT_SCALE, 1.0)
-        observation[layout["collided"]] = float(last.collided)
+        observation["last_leg_walls"] = np.minimum(np.asarray(counts) / COUNT_SCALE, 1.0)
+        observation["last_leg_dropped"] = min(last.dropped_groups / COUNT_SCALE, 1.0)
+        observation["collided"] = float(last.collided)
         sensing_fraction = route.sensing_time_s / self._max_sensing_time_s
-        observation[layout["sensing_time"]] = min(sensing_fraction, 1.0)
-        observation[layout["samples"]] = min(last.samples / self._max_samples_per_leg, 1.0)
-        return observation
+        observation["sensing_time"] = min(sensing_fraction, 1.0)
+        observation["samples"] = min(last.samples / self._max_samples_per_leg, 1.0)
+        return observation.vector
 
     def _info(self, status: str) -> dict[str, Any]:
         route = self._require_episode()

@@ -8,7 +8,8 @@ sampling period the wheels roll ``d_l`` and ``d_r`` (metres) and
 with ``l`` the wheel base. A command of :class:`~sonar_gym.robot.DifferentialDriveRobot` is
 ``n`` equal substeps; the functions here integrate all of them in one call (closed forms over
 arrays, no per-substep Python), and :func:`predict_over_motion` carries the EKF prediction of
-sec. 3.1 eqs. (5)-(6) over the elementary commands of a motion.
+sec. 3.1 eqs. (5)-(6) over the elementary commands of a motion (:func:`predict_run`: the same
+prediction, midpoint integration, over a whole run of commands in closed form).
 
 :class:`OdometryConfig` is the one vocabulary of the odometry's errors (encoder noise per
 square-root metre, wheel scale errors, slip); :func:`wheel_increment_covariance` is the one
@@ -22,15 +23,33 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
+import numpy.typing as npt
 
-from sonar_gym.pose import FloatArray, Pose, wrap_angle
+from sonar_gym.pose import FloatArray, Pose, wrap_angle, wrap_angles
+from sonar_gym.validation import checked_array, checked_positive
 
 Integration = Literal["euler", "midpoint", "arc"]
 INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
 FilterIntegration = Literal["paper", "midpoint"]
+Wheels = Any
+"""One wheel's value as a float, or many wheels' as a float array (see the wheel-error model)."""
+
+
+def sinc(x: float) -> float:
+    """``sin(x) / x`` with its limit 1 at 0 (the series ``1 - x^2 / 6`` below 1e-4 rad)."""
+    if abs(x) < 1e-4:
+        return 1.0 - x * x / 6.0
+    return math.sin(x) / x
+
+
+def sinc_of_array(x: FloatArray) -> FloatArray:
+    """:func:`sinc` of every entry (NumPy's vectorised sine may differ from it in the last bit)."""
+    small = np.abs(x) < 1e-4
+    safe = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
 
 
 @dataclass(frozen=True)
@@ -93,6 +112,32 @@ class OdometryConfig:
         """No noise at all: odometry equals the truth unless the robot is blocked."""
         return cls(0.0, 0.0, 0.0, 0.0, 0.0)
 
+    # The two methods below are the one model of the wheel errors. They take one wheel's
+    # numbers as Python floats (DifferentialDriveRobot.drive) or many as arrays (a run of
+    # commands, sonar_gym.straight_drive). ``abs`` and ``**`` stay Python's on floats and
+    # NumPy's on arrays, so each caller keeps its arithmetic bit for bit (NumPy's vectorised
+    # power can differ from the scalar one in the last bit).
+
+    def encoder_increments(self, commanded_m: Wheels, normals: Wheels) -> Wheels:
+        """What the encoders report for wheels commanded ``commanded_m`` metres: the command
+        plus Gaussian noise of standard deviation ``encoder_std_m_per_sqrt_m * sqrt(|d|)``,
+        from standard normal draws ``normals`` (same shape), metres."""
+        return commanded_m + self.encoder_std_m_per_sqrt_m * np.sqrt(abs(commanded_m)) * normals
+
+    def ground_travel(
+        self, commanded_m: Wheels, scale_errors: Wheels, slip_draws: Wheels, size_draws: Wheels
+    ) -> Wheels:
+        """How far wheels commanded ``commanded_m`` metres roll on the ground, metres: scaled
+        by ``1 + scale_errors`` (their radius errors), less any slip. A wheel slips when its
+        uniform draw ``slip_draws`` falls below ``1 - (1 - p)^|d|`` (``p`` per metre) and then
+        loses the fraction ``size_draws * slip_fraction_max`` of the command (``size_draws``
+        uniform in [0, 1))."""
+        slip_probability = 1.0 - (1.0 - self.slip_probability_per_m) ** abs(commanded_m)
+        slip_loss = np.where(
+            slip_draws < slip_probability, size_draws * self.slip_fraction_max, 0.0
+        )
+        return commanded_m * (1.0 + scale_errors) * (1.0 - slip_loss)
+
 
 def integrate_substeps(
     pose: Pose,
@@ -129,8 +174,7 @@ def integrate_substeps(
         )
     lead = 0.0 if integration == "euler" else 0.5
     if integration == "arc":
-        half = 0.5 * delta
-        distance *= 1.0 - half * half / 6.0 if abs(half) < 1e-4 else math.sin(half) / half
+        distance *= sinc(0.5 * delta)
     # sum_k cos(theta + (k + lead) delta) = sin(n delta / 2) / sin(delta / 2) cos(theta + c delta)
     # with c = lead + (n - 1) / 2 (the Dirichlet kernel; the same for sin)
     half = 0.5 * delta
@@ -157,12 +201,11 @@ def arc_displacements(
     distance = 0.5 * (d_left_m + d_right_m) * fractions
     turned = (d_right_m - d_left_m) / wheel_base_m * fractions
     half = 0.5 * turned
-    small = np.abs(half) < 1e-4
-    safe = np.where(small, 1.0, half)
-    sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(safe) / safe)
+    shortening = sinc_of_array(half)
     direction = pose.theta + half
     points = np.stack(
-        [distance * sinc * np.cos(direction), distance * sinc * np.sin(direction)], axis=1
+        [distance * shortening * np.cos(direction), distance * shortening * np.sin(direction)],
+        axis=1,
     )
     displacements = np.empty((n, 3))
     displacements[:, :2] = np.diff(points, axis=0)
@@ -261,6 +304,114 @@ def predict_over_motion(
     return pose, p, poses
 
 
+def predict_run(
+    pose: Pose,
+    covariance: npt.ArrayLike,
+    encoder_left_m: npt.ArrayLike,
+    encoder_right_m: npt.ArrayLike,
+    wheel_base_m: float,
+    variance_per_m: float,
+) -> tuple[FloatArray, FloatArray]:
+    """The estimate and its covariance after each of a run of encoder increments, as arrays.
+
+    Kim et al. sec. 3.1, eqs (5)-(6), with the midpoint integration: for the increments
+    ``d_l, d_r`` of command ``k``, ``d = (d_r + d_l)/2``, ``dtheta = (d_r - d_l)/l``,
+    ``x += d cos(theta + dtheta/2)``, ``y += d sin(theta + dtheta/2)``, ``theta += dtheta`` and
+    ``P = A P A^T + F V F^T`` with ``V = diag(k |d_r|, k |d_l|)``. It is
+    :func:`sonar_gym.localization.kim.predict` (``integration="midpoint"``,
+    ``encoder_noise=proportional_encoder_noise(...)``) over every command at once, and
+    :func:`predict_over_motion` (``integration="midpoint"``, no scale variance) in closed form:
+    O(K) array operations instead of K matrix products, equal to it to rounding.
+
+    Args:
+        pose: the estimate before the first command ({W}; metres, radians).
+        covariance: its 3x3 covariance over ``[x, y, theta]``.
+        encoder_left_m, encoder_right_m: ``(K,)`` encoder increments of each command, metres.
+        wheel_base_m: wheel base ``l``, metres.
+        variance_per_m: ``k``, each wheel's variance per metre rolled, m^2/m (>= 0).
+
+    Returns:
+        ``(poses, covariances)``: ``(K + 1, 3)`` rows ``[x, y, theta]`` (theta wrapped to
+        (-pi, pi]) and ``(K + 1, 3, 3)``; row 0 is the input.
+    """
+    left = checked_array(encoder_left_m, "encoder_left_m", (None,))
+    right = checked_array(encoder_right_m, "encoder_right_m", (len(left),))
+    start_covariance = checked_array(covariance, "covariance", (3, 3))
+    base = checked_positive(wheel_base_m, "wheel_base_m")
+    k = float(variance_per_m)
+    if not (math.isfinite(k) and k >= 0.0):
+        raise ValueError(
+            f"argument 'variance_per_m' must be finite and >= 0; got {variance_per_m!r}"
+        )
+    distance = 0.5 * (right + left)
+    turn = (right - left) / base
+    thetas = pose.theta + np.concatenate([[0.0], np.cumsum(turn)])
+    heading = thetas[:-1] + 0.5 * turn
+    cos_h, sin_h = np.cos(heading), np.sin(heading)
+    poses = np.empty((len(left) + 1, 3))
+    poses[0] = pose.x, pose.y, pose.theta
+    poses[1:, 0] = pose.x + np.cumsum(distance * cos_h)
+    poses[1:, 1] = pose.y + np.cumsum(distance * sin_h)
+    poses[1:, 2] = wrap_angles(thetas[1:])
+    # F V F^T for every command: F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|).
+    lever = distance / (2.0 * base)
+    wheels = np.empty((len(left), 3, 2))
+    wheels[:, 0, 0] = 0.5 * cos_h - lever * sin_h
+    wheels[:, 0, 1] = 0.5 * cos_h + lever * sin_h
+    wheels[:, 1, 0] = 0.5 * sin_h + lever * cos_h
+    wheels[:, 1, 1] = 0.5 * sin_h - lever * cos_h
+    wheels[:, 2, 0] = 1.0 / base
+    wheels[:, 2, 1] = -1.0 / base
+    variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
+    encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
+    # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
+    # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
+    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's. For symmetric X,
+    # (I + w e3^T) X (I + w e3^T)^T = X + w x^T + x w^T + X_33 w w^T with x = X e3; with
+    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K).
+    count = len(left)
+    sums = np.zeros((count + 1, 3))
+    sums[1:, 0] = np.cumsum(-distance * sin_h)
+    sums[1:, 1] = np.cumsum(distance * cos_h)
+
+    def before(values: FloatArray) -> FloatArray:  # [k] = sum over i < k
+        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
+
+    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
+        return a[:, :, None] * b[:, None, :]
+
+    column = start_covariance[:, 2]
+    covariances = (
+        start_covariance
+        + outer(sums, np.broadcast_to(column, sums.shape))
+        + outer(np.broadcast_to(column, sums.shape), sums)
+        + start_covariance[2, 2] * outer(sums, sums)
+    )
+    if count:
+        q = encoder_terms[:, :, 2]
+        q33 = encoder_terms[:, 2, 2]
+        later = sums[1:]  # U_(i+1)
+        total = before(encoder_terms)
+        q_sum = before(q)
+        cross = before(outer(later, q))
+        weight = before(q33)
+        weighted = before(q33[:, None] * later)
+        second = before(q33[:, None, None] * outer(later, later))
+        covariances += (
+            total
+            + outer(sums, q_sum)
+            + outer(q_sum, sums)
+            - cross
+            - cross.transpose(0, 2, 1)
+            + weight[:, None, None] * outer(sums, sums)
+            - outer(sums, weighted)
+            - outer(weighted, sums)
+            + second
+        )
+    covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
+    return poses, covariances
+
+
 def propagate_covariance(
     linearisation_poses: Sequence[Pose],
     increments_m: Sequence[tuple[float, float]],
@@ -297,7 +448,10 @@ __all__ = [
     "arc_displacements",
     "integrate_substeps",
     "predict_over_motion",
+    "predict_run",
     "predict_step",
     "propagate_covariance",
+    "sinc",
+    "sinc_of_array",
     "wheel_increment_covariance",
 ]

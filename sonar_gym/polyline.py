@@ -95,13 +95,23 @@ def draw_free_route(world: World, rng: np.random.Generator, length_m: float) -> 
     )
 
 
-def leg_is_free(world: World, start: np.ndarray, stop: np.ndarray) -> bool:
-    """Whether the robot disc (plus a margin) can drive straight from ``start`` to ``stop``."""
-    length = float(np.linalg.norm(stop - start))
-    count = max(2, math.ceil(length / 0.02) + 1)
-    radius = world.robot_radius + ROUTE_CLEARANCE_M
+def leg_is_free(
+    world: World,
+    start: FloatArray,
+    stop: FloatArray,
+    margin_m: float | None = None,
+    step_m: float = 0.02,
+) -> bool:
+    """Whether the robot can drive straight from ``start`` to ``stop`` ({W}, metres) keeping
+    ``margin_m`` from every obstacle (default: its radius plus :data:`ROUTE_CLEARANCE_M`).
+
+    Checks points every ``step_m`` metres or closer along the leg, both ends included.
+    """
+    if margin_m is None:
+        margin_m = world.robot_radius + ROUTE_CLEARANCE_M
+    count = max(2, math.ceil(float(np.linalg.norm(stop - start)) / step_m) + 1)
     return all(
-        world.is_free(start + f * (stop - start), radius) for f in np.linspace(0.0, 1.0, count)
+        world.is_free(start + f * (stop - start), margin_m) for f in np.linspace(0.0, 1.0, count)
     )
 
 
@@ -147,7 +157,7 @@ def draw_equal_legs(
         for _ in range(tries):
             direction = float(rng.uniform(-math.pi, math.pi))
             candidate = here + leg_length_m * np.array([math.cos(direction), math.sin(direction)])
-            if _straight_leg_is_free(world, here, candidate, margin):
+            if leg_is_free(world, here, candidate, margin, step_m=0.1):
                 break
         else:
             towards = fallback_towards - here
@@ -155,15 +165,6 @@ def draw_equal_legs(
             candidate = here + leg_length_m * towards
         points.append(candidate)
     return np.array(points)
-
-
-def _straight_leg_is_free(
-    world: World, start: FloatArray, end: FloatArray, margin_m: float
-) -> bool:
-    samples = max(2, math.ceil(float(np.linalg.norm(end - start)) / 0.1) + 1)
-    return all(
-        world.is_free(start + t * (end - start), margin_m) for t in np.linspace(0.0, 1.0, samples)
-    )
 
 
 def densify(points: FloatArray, spacing_m: float) -> list[tuple[float, float]]:

@@ -27,17 +27,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Literal
 
 import numpy as np
 import pymunk
 
-from sonar_gym.odometry import OdometryConfig, arc_displacements, integrate_substeps
+from sonar_gym.odometry import (
+    INTEGRATIONS,
+    Integration,
+    OdometryConfig,
+    arc_displacements,
+    integrate_substeps,
+    sinc,
+)
 from sonar_gym.pose import Pose, angle_difference
 from sonar_gym.world import STATIC_ONLY, World
-
-Integration = Literal["euler", "midpoint", "arc"]
-INTEGRATIONS: tuple[str, ...] = ("euler", "midpoint", "arc")
 
 
 def unicycle_step(
@@ -82,19 +85,12 @@ def unicycle_step(
         direction, length = pose.theta, distance
     else:
         direction = pose.theta + 0.5 * dtheta
-        length = distance * (_sinc(0.5 * dtheta) if integration == "arc" else 1.0)
+        length = distance * (sinc(0.5 * dtheta) if integration == "arc" else 1.0)
     return Pose(
         pose.x + length * math.cos(direction),
         pose.y + length * math.sin(direction),
         pose.theta + dtheta,
     )
-
-
-def _sinc(x: float) -> float:
-    """``sin(x)/x`` with its limit 1 at 0 (series below 1e-4 rad)."""
-    if abs(x) < 1e-4:
-        return 1.0 - x * x / 6.0
-    return math.sin(x) / x
 
 
 OdometryNoise = OdometryConfig
@@ -234,15 +230,19 @@ class DifferentialDriveRobot:
 
         # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
         encoder = (
-            _encoder_reading(d_left_m, noise.encoder_std_m_per_sqrt_m, float(normals[0])),
-            _encoder_reading(d_right_m, noise.encoder_std_m_per_sqrt_m, float(normals[1])),
+            float(noise.encoder_increments(d_left_m, float(normals[0]))),
+            float(noise.encoder_increments(d_right_m, float(normals[1]))),
         )
         ground = (
-            _ground_travel(
-                d_left_m, noise.scale_error_left, noise, float(uniforms[0]), float(uniforms[2])
+            float(
+                noise.ground_travel(
+                    d_left_m, noise.scale_error_left, float(uniforms[0]), float(uniforms[2])
+                )
             ),
-            _ground_travel(
-                d_right_m, noise.scale_error_right, noise, float(uniforms[1]), float(uniforms[3])
+            float(
+                noise.ground_travel(
+                    d_right_m, noise.scale_error_right, float(uniforms[1]), float(uniforms[3])
+                )
             ),
         )
 
@@ -352,28 +352,6 @@ class DifferentialDriveRobot:
         )
 
 
-def _encoder_reading(commanded_m: float, std_m_per_sqrt_m: float, normal: float) -> float:
-    """One wheel's encoder increment: the command plus noise of std ``std * sqrt(|d|)``, m."""
-    return commanded_m + std_m_per_sqrt_m * math.sqrt(abs(commanded_m)) * normal
-
-
-def _ground_travel(
-    commanded_m: float,
-    scale_error: float,
-    noise: OdometryConfig,
-    slip_draw: float,
-    slip_size_draw: float,
-) -> float:
-    """One wheel's travel on the ground: scaled by its radius error, less any slip, metres.
-
-    The wheel slips with probability ``1 - (1 - p)^|d|`` (``p`` per metre) and then loses the
-    fraction ``slip_size_draw * slip_fraction_max`` of the command (both draws uniform in [0, 1)).
-    """
-    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** abs(commanded_m)
-    slip_loss = slip_size_draw * noise.slip_fraction_max if slip_draw < slip_probability else 0.0
-    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
-
-
 def _path_is_clear(
     world: World, start: Pose, ground: tuple[float, float], wheel_base_m: float
 ) -> bool:
@@ -453,12 +431,7 @@ def _free_motion(
     pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
     world.place_robot_on_clear_path(pose)  # _path_is_clear has shown the end free
     half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
-    sinc = (
-        1.0 - half_turn * half_turn / 6.0
-        if abs(half_turn) < 1e-4
-        else math.sin(half_turn) / half_turn
-    )
-    path_length = abs(0.5 * (left + right)) * abs(sinc)
+    path_length = abs(0.5 * (left + right)) * abs(sinc(half_turn))
     return pose, False, path_length
 
 

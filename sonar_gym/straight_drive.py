@@ -5,7 +5,8 @@ command at a time. Where the robot's disc stays clear of every static shape, pym
 the planned displacements exactly (no contact, no impulse), so the true path is the planned
 one: the circular arc of each command's ground increments (:func:`~sonar_gym.robot.unicycle_step`
 with ``"arc"``). :func:`drive_straight_run` computes a run of commands that way, with the very
-same random draws per command as ``drive`` (two standard normals, then four uniforms), checks
+same random draws per command as ``drive`` (two standard normals, then four uniforms) and the
+same wheel-error model (:meth:`~sonar_gym.odometry.OdometryConfig.ground_travel`), checks
 the clearance of the whole planned path against the world's static geometry, and hands every
 command from the first one that comes near a shape to ``drive`` itself (pymunk), so contacts
 are resolved exactly as before. The odometry integrates the encoder increments per physics
@@ -22,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from sonar_gym.geometry import StaticGeometry
+from sonar_gym.odometry import sinc_of_array
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
@@ -47,13 +49,6 @@ class StraightRun:
     true_poses: FloatArray
     odometry_poses: FloatArray
     collided: np.ndarray
-
-
-def _sinc(x: FloatArray) -> FloatArray:
-    """``sin(x)/x`` with its series below 1e-4 rad, as :func:`sonar_gym.robot.unicycle_step`."""
-    small = np.abs(x) < 1e-4
-    safe = np.where(small, 1.0, x)
-    return np.where(small, 1.0 - x * x / 6.0, np.sin(safe) / safe)
 
 
 def _clearance(geometry: StaticGeometry, points: FloatArray) -> FloatArray:
@@ -167,15 +162,6 @@ class CommandDraws:
             rng.random(4)
 
 
-def encoder_increments(
-    robot: DifferentialDriveRobot, commanded: FloatArray, normals: FloatArray
-) -> FloatArray:
-    """``(K, 2)`` encoder increments of commands ``(K, 2)`` ``[d_left, d_right]`` (metres):
-    the commanded travel plus the encoder noise of ``drive``."""
-    noise = robot.noise.encoder_std_m_per_sqrt_m
-    return commanded + noise * np.sqrt(np.abs(commanded)) * normals
-
-
 def drive_commands(
     robot: DifferentialDriveRobot,
     world: World,
@@ -200,13 +186,9 @@ def drive_commands(
     noise = robot.noise
     normals = np.array(draws.normals)
     uniforms = np.array(draws.uniforms)
-    encoder = encoder_increments(robot, commanded, normals)
-    slip_probability = 1.0 - (1.0 - noise.slip_probability_per_m) ** np.abs(commanded)
-    slip_loss = np.where(
-        uniforms[:, :2] < slip_probability, uniforms[:, 2:] * noise.slip_fraction_max, 0.0
-    )
-    scale = np.array([1.0 + noise.scale_error_left, 1.0 + noise.scale_error_right])
-    ground = commanded * scale * (1.0 - slip_loss)  # (K, 2)
+    encoder = noise.encoder_increments(commanded, normals)  # (K, 2)
+    scale_errors = np.array([noise.scale_error_left, noise.scale_error_right])
+    ground = noise.ground_travel(commanded, scale_errors, uniforms[:, :2], uniforms[:, 2:])
     travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
     ground_turn = (ground[:, 1] - ground[:, 0]) / base
     substeps = np.maximum.reduce(
@@ -262,7 +244,7 @@ def _free_commands(
     distance = 0.5 * (ground[:, 0] + ground[:, 1])
     thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
     half_turn = 0.5 * ground_turn
-    step = distance * _sinc(half_turn)
+    step = distance * sinc_of_array(half_turn)
     ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
     ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
     # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
@@ -286,6 +268,5 @@ __all__ = [
     "drive_commands",
     "drive_run",
     "drive_straight_run",
-    "encoder_increments",
     "turn_run",
 ]

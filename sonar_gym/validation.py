@@ -22,6 +22,7 @@ import numbers
 from collections.abc import Sequence
 
 import numpy as np
+import numpy.typing as npt
 
 MIN_SCALE = 1e-6
 """Least value of a positive scale, standard deviation, gate or interval, in its own unit."""
@@ -98,6 +99,33 @@ def checked_number(
         number = as_float + 0.0  # -0.0 + 0.0 == +0.0
     if (low is not None and number < low) or (high is not None and number > high):
         raise error(f"{subject} must be {allowed}; got {shown(value)}")
+    return number
+
+
+def checked_array(
+    value: npt.ArrayLike, name: str, shape: tuple[int | None, ...]
+) -> npt.NDArray[np.float64]:
+    """``value`` as a float64 array of ``shape`` (``None``: any length), all finite; else a
+    ``ValueError`` naming argument ``name``."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"argument {name!r} must be a numeric array; got {value!r}") from error
+    if array.ndim != len(shape) or any(
+        want is not None and got != want for got, want in zip(array.shape, shape, strict=True)
+    ):
+        wanted = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
+        raise ValueError(f"argument {name!r} must have shape {wanted}; got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"argument {name!r} must be finite; got {array!r}")
+    return array
+
+
+def checked_positive(value: float, name: str) -> float:
+    """``value`` as a float if finite and > 0; else a ``ValueError`` naming argument ``name``."""
+    number = float(value)
+    if not (math.isfinite(number) and number > 0.0):
+        raise ValueError(f"argument {name!r} must be a finite positive number; got {value!r}")
     return number
 
 

@@ -14,6 +14,7 @@ from sonar_gym.odometry import (
     arc_displacements,
     integrate_substeps,
     predict_over_motion,
+    predict_run,
     wheel_increment_covariance,
 )
 from sonar_gym.pose import Pose
@@ -165,3 +166,23 @@ def test_covariance_linearised_at_given_poses_matches_the_ekf_per_command() -> N
         poses, COMMANDS, np.diag([1e-4, 1e-4, 1e-3]), 0.4, 3e-5, 1e-6, "midpoint"
     )
     np.testing.assert_allclose(propagated, expected, rtol=1e-13, atol=1e-18)
+
+
+@pytest.mark.parametrize("count", [1, 5, 250])
+def test_the_run_prediction_in_closed_form_matches_the_per_command_prediction(count: int) -> None:
+    rng = np.random.default_rng(100 + count)
+    left = 0.02 + rng.normal(0.0, 0.003, count)
+    right = 0.02 + rng.normal(0.0, 0.003, count)
+    spins = rng.random(count) < 0.25  # turns in place among the straight steps
+    left[spins], right[spins] = -0.05, 0.05
+    start = Pose(-0.5, 2.0, -3.0)  # near -pi: the heading wraps on the way
+    covariance = np.array([[2e-4, 1e-5, 3e-6], [1e-5, 1e-4, -1e-6], [3e-6, -1e-6, 4e-5]])
+    poses, covariances = predict_run(start, covariance, left, right, 0.25, 2e-6)
+    end, end_covariance, reference = predict_over_motion(
+        start, covariance, np.stack([left, right], axis=1), 0.25, 2e-6, integration="midpoint"
+    )
+    for row, pose in zip(poses[1:], reference, strict=True):
+        assert row[:2] == pytest.approx(pose.position, abs=1e-12)
+        assert math.remainder(row[2] - pose.theta, 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
+    assert (poses[-1, 0], poses[-1, 1]) == pytest.approx((end.x, end.y), abs=1e-12)
+    np.testing.assert_allclose(covariances[-1], end_covariance, rtol=1e-9, atol=1e-18)

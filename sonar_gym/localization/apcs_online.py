@@ -7,9 +7,6 @@ group as a flat wall (sec. 4.2.2-4.2.3), matches it to the map (sec. 4.3) and, o
 match, corrects the estimate by maximum likelihood (eqs 7-14). After a correction the stored
 readings and ERPs move with the estimate's frame.
 
-- :func:`dead_reckon`: the estimate and covariance over a run of encoder increments (Kim et al.
-  sec. 3.1, :func:`sonar_gym.localization.kim.predict` with the midpoint integration and
-  :func:`~sonar_gym.localization.kim.proportional_encoder_noise`), as arrays.
 - :class:`WallStream`: the ERPs and ERP groups of one side sonar.
 - :class:`APCSTracker`: the whole loop over a run of motion commands and the readings taken
   along it, consuming the run's readings as arrays and re-doing only what a correction changes.
@@ -44,7 +41,9 @@ from sonar_gym.localization.apcs import (
     fit_wall_group,
 )
 from sonar_gym.localization.result import OK
-from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.odometry import predict_run
+from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.validation import checked_array, checked_positive
 
 SIDE_NAMES = ("left", "right")
 """The side sonars: ``left`` looks along the heading + pi/2, ``right`` along heading - pi/2."""
@@ -58,140 +57,6 @@ def _check_side(side: object) -> str:
     if side not in SIDE_NAMES:
         raise ValueError(f"argument 'side' must be one of {list(SIDE_NAMES)}; got {side!r}")
     return str(side)
-
-
-def _finite_array(value: npt.ArrayLike, name: str, shape: tuple[int | None, ...]) -> FloatArray:
-    """``value`` as a float array of ``shape`` (``None``: any length), finite, else ValueError."""
-    try:
-        array = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise ValueError(f"argument {name!r} must be a numeric array; got {value!r}") from error
-    if array.ndim != len(shape) or any(
-        want is not None and got != want for got, want in zip(array.shape, shape, strict=True)
-    ):
-        wanted = "(" + ", ".join("n" if s is None else str(s) for s in shape) + ")"
-        raise ValueError(f"argument {name!r} must have shape {wanted}; got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise ValueError(f"argument {name!r} must be finite; got {array!r}")
-    return array
-
-
-def _positive(value: float, name: str) -> float:
-    number = float(value)
-    if not (math.isfinite(number) and number > 0.0):
-        raise ValueError(f"argument {name!r} must be a finite positive number; got {value!r}")
-    return number
-
-
-# --------------------------------------------------------------------------------------------
-# Dead reckoning
-# --------------------------------------------------------------------------------------------
-
-
-def dead_reckon(
-    pose: Pose,
-    covariance: npt.ArrayLike,
-    encoder_left_m: npt.ArrayLike,
-    encoder_right_m: npt.ArrayLike,
-    wheel_base_m: float,
-    variance_per_m: float,
-) -> tuple[FloatArray, FloatArray]:
-    """The estimate and its covariance after each of a run of encoder increments.
-
-    Kim et al. sec. 3.1, eqs (5)-(6), with the midpoint integration: for the increments
-    ``d_l, d_r`` of command ``k``, ``d = (d_r + d_l)/2``, ``dtheta = (d_r - d_l)/l``,
-    ``x += d cos(theta + dtheta/2)``, ``y += d sin(theta + dtheta/2)``, ``theta += dtheta`` and
-    ``P = A P A^T + F V F^T`` with ``V = diag(k |d_r|, k |d_l|)``. It is
-    :func:`sonar_gym.localization.kim.predict` (``integration="midpoint"``,
-    ``encoder_noise=proportional_encoder_noise(...)``) over every command at once.
-
-    Args:
-        pose: the estimate before the first command ({W}; metres, radians).
-        covariance: its 3x3 covariance over ``[x, y, theta]``.
-        encoder_left_m, encoder_right_m: ``(K,)`` encoder increments of each command, metres.
-        wheel_base_m: wheel base ``l``, metres.
-        variance_per_m: ``k``, each wheel's variance per metre rolled, m^2/m (>= 0).
-
-    Returns:
-        ``(poses, covariances)``: ``(K + 1, 3)`` rows ``[x, y, theta]`` (theta wrapped to
-        (-pi, pi]) and ``(K + 1, 3, 3)``; row 0 is the input.
-    """
-    left = _finite_array(encoder_left_m, "encoder_left_m", (None,))
-    right = _finite_array(encoder_right_m, "encoder_right_m", (len(left),))
-    start_covariance = _finite_array(covariance, "covariance", (3, 3))
-    base = _positive(wheel_base_m, "wheel_base_m")
-    k = float(variance_per_m)
-    if not (math.isfinite(k) and k >= 0.0):
-        raise ValueError(
-            f"argument 'variance_per_m' must be finite and >= 0; got {variance_per_m!r}"
-        )
-    distance = 0.5 * (right + left)
-    turn = (right - left) / base
-    thetas = pose.theta + np.concatenate([[0.0], np.cumsum(turn)])
-    heading = thetas[:-1] + 0.5 * turn
-    cos_h, sin_h = np.cos(heading), np.sin(heading)
-    poses = np.empty((len(left) + 1, 3))
-    poses[0] = pose.x, pose.y, pose.theta
-    poses[1:, 0] = pose.x + np.cumsum(distance * cos_h)
-    poses[1:, 1] = pose.y + np.cumsum(distance * sin_h)
-    poses[1:, 2] = wrap_angles(thetas[1:])
-    # F V F^T for every command: F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|).
-    lever = distance / (2.0 * base)
-    wheels = np.empty((len(left), 3, 2))
-    wheels[:, 0, 0] = 0.5 * cos_h - lever * sin_h
-    wheels[:, 0, 1] = 0.5 * cos_h + lever * sin_h
-    wheels[:, 1, 0] = 0.5 * sin_h + lever * cos_h
-    wheels[:, 1, 1] = 0.5 * sin_h - lever * cos_h
-    wheels[:, 2, 0] = 1.0 / base
-    wheels[:, 2, 1] = -1.0 / base
-    variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
-    encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
-    # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
-    # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
-    # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's. For symmetric X,
-    # (I + w e3^T) X (I + w e3^T)^T = X + w x^T + x w^T + X_33 w w^T with x = X e3; with
-    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K).
-    count = len(left)
-    sums = np.zeros((count + 1, 3))
-    sums[1:, 0] = np.cumsum(-distance * sin_h)
-    sums[1:, 1] = np.cumsum(distance * cos_h)
-
-    def before(values: FloatArray) -> FloatArray:  # [k] = sum over i < k
-        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
-
-    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
-        return a[:, :, None] * b[:, None, :]
-
-    column = start_covariance[:, 2]
-    covariances = (
-        start_covariance
-        + outer(sums, np.broadcast_to(column, sums.shape))
-        + outer(np.broadcast_to(column, sums.shape), sums)
-        + start_covariance[2, 2] * outer(sums, sums)
-    )
-    if count:
-        q = encoder_terms[:, :, 2]
-        q33 = encoder_terms[:, 2, 2]
-        later = sums[1:]  # U_(i+1)
-        total = before(encoder_terms)
-        q_sum = before(q)
-        cross = before(outer(later, q))
-        weight = before(q33)
-        weighted = before(q33[:, None] * later)
-        second = before(q33[:, None, None] * outer(later, later))
-        covariances += (
-            total
-            + outer(sums, q_sum)
-            + outer(q_sum, sums)
-            - cross
-            - cross.transpose(0, 2, 1)
-            + weight[:, None, None] * outer(sums, sums)
-            - outer(sums, weighted)
-            - outer(weighted, sums)
-            + second
-        )
-    covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
-    return poses, covariances
 
 
 # --------------------------------------------------------------------------------------------
@@ -286,8 +151,8 @@ def nearest_facing_walls(
         ``(ids, distances)``: the index of the wall in ``walls`` (-1 where none) and ``t``
         (metres; inf where none), each ``(n,)``.
     """
-    origins = _finite_array(origins, "origins", (None, 2))
-    direction = _finite_array(direction, "direction", (2,))
+    origins = checked_array(origins, "origins", (None, 2))
+    direction = checked_array(direction, "direction", (2,))
     if not walls:
         return np.full(len(origins), -1), np.full(len(origins), math.inf)
     starts = np.array([wall.start for wall in walls])
@@ -360,8 +225,8 @@ class WallStream:
             directions (radians) and ``(n,)`` whether the reading gives an ERP (rows where not
             are zero).
         """
-        positions = _finite_array(sensor_xy, "sensor_xy", (None, 2))
-        headings = _finite_array(headings_rad, "headings_rad", (len(positions),))
+        positions = checked_array(sensor_xy, "sensor_xy", (None, 2))
+        headings = checked_array(headings_rad, "headings_rad", (len(positions),))
         ranges = np.asarray(ranges_m, dtype=np.float64)
         if ranges.shape != (len(positions),):
             raise ValueError(
@@ -434,7 +299,7 @@ class WallStream:
         Returns:
             The new ERP (or ``None``) and the verdicts of the groups this reading closed.
         """
-        position = _finite_array(sensor_xy, "sensor_xy", (2,))
+        position = checked_array(sensor_xy, "sensor_xy", (2,))
         points, phis, valid = self.pending_erps(position[None, :], [heading_rad], [range_m])
         erp_point = points[0].copy() if valid[0] else None
         erp = None if erp_point is None else (erp_point.tolist(), float(phis[0]))
@@ -533,7 +398,7 @@ class APCSTracker:
         wall_map: the map's oriented wall vectors (sec. 4.1).
         estimate, covariance: the initial estimate ({W}) and its 3x3 covariance.
         wheel_base_m: the wheel base the dead reckoning assumes, metres.
-        variance_per_m: each wheel's variance per metre rolled, m^2/m (:func:`dead_reckon`).
+        variance_per_m: each wheel's variance per metre rolled, m^2/m (``odometry.predict_run``).
         range_variance_m2, bearing_variance_rad2: the fixed ``sigma_r`` and ``sigma_xi``.
         measurement_variances: ``"fixed"`` or ``"fit"`` (:func:`fit_measurement_variances`).
         correction_method: ``"paper"`` (eqs 11-14) or ``"linear"``.
@@ -566,12 +431,12 @@ class APCSTracker:
             )
         self.wall_map = tuple(wall_map)
         self.estimate = estimate
-        self.covariance = _finite_array(covariance, "covariance", (3, 3)).copy()
-        self.wheel_base_m = _positive(wheel_base_m, "wheel_base_m")
+        self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
+        self.wheel_base_m = checked_positive(wheel_base_m, "wheel_base_m")
         self.variance_per_m = float(variance_per_m)
         self.fixed_variances = (
-            _positive(range_variance_m2, "range_variance_m2"),
-            _positive(bearing_variance_rad2, "bearing_variance_rad2"),
+            checked_positive(range_variance_m2, "range_variance_m2"),
+            checked_positive(bearing_variance_rad2, "bearing_variance_rad2"),
         )
         self.measurement_variances = measurement_variances
         self.correction_method = correction_method
@@ -604,8 +469,8 @@ class APCSTracker:
             The estimated path, the ERPs and the walls handled, and how many commands were
             consumed. ``estimate`` and ``covariance`` are those after the last consumed command.
         """
-        left = _finite_array(encoder_left_m, "encoder_left_m", (None,))
-        right = _finite_array(encoder_right_m, "encoder_right_m", (len(left),))
+        left = checked_array(encoder_left_m, "encoder_left_m", (None,))
+        right = checked_array(encoder_right_m, "encoder_right_m", (len(left),))
         samples = np.asarray(sample_commands, dtype=np.int64).reshape(-1)
         if samples.size and (
             samples[0] < 0 or samples[-1] >= len(left) or np.any(np.diff(samples) <= 0)
@@ -625,7 +490,7 @@ class APCSTracker:
                 )
             ranges[side] = array
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
-        poses, covariances = dead_reckon(
+        poses, covariances = predict_run(
             self.estimate, self.covariance, left, right, self.wheel_base_m, self.variance_per_m
         )
         result = RunResult(estimated_path=poses[1:].copy(), consumed=len(left))
@@ -673,7 +538,7 @@ class APCSTracker:
                 later_stops = [stop for stop in stops if stop > command]
                 if later_stops:
                     limit = min(limit, later_stops[0])
-                tail_poses, tail_covariances = dead_reckon(
+                tail_poses, tail_covariances = predict_run(
                     self.estimate,
                     self.covariance,
                     left[command + 1 :],
@@ -772,7 +637,6 @@ __all__ = [
     "RunResult",
     "WallHandling",
     "WallStream",
-    "dead_reckon",
     "fit_measurement_variances",
     "nearest_facing_walls",
     "rejection_reason",

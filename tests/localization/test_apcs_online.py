@@ -18,13 +18,13 @@ from sonar_gym.localization.apcs import (
 from sonar_gym.localization.apcs_online import (
     APCSTracker,
     WallStream,
-    dead_reckon,
     fit_measurement_variances,
     nearest_facing_walls,
 )
 from sonar_gym.localization.kim import predict, proportional_encoder_noise
 from sonar_gym.localization.result import OK
 from sonar_gym.maps import map_wall_vectors
+from sonar_gym.odometry import predict_run
 from sonar_gym.pose import Pose
 from sonar_gym.scenario import load_scenario
 
@@ -42,12 +42,12 @@ def _increments(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.nd
 
 
 @pytest.mark.parametrize("count", [1, 7, 300])
-def test_dead_reckon_is_kims_prediction_command_by_command(count: int) -> None:
+def test_predict_run_is_kims_prediction_command_by_command(count: int) -> None:
     rng = np.random.default_rng(count)
     left, right = _increments(rng, count)
     pose = Pose(1.0, -2.0, 3.1)  # near pi: the heading wraps on the way
     covariance = np.array([[1e-4, 3e-5, 1e-6], [3e-5, 2e-4, -2e-6], [1e-6, -2e-6, 1e-5]])
-    poses, covariances = dead_reckon(pose, covariance, left, right, BASE_M, VARIANCE_PER_M)
+    poses, covariances = predict_run(pose, covariance, left, right, BASE_M, VARIANCE_PER_M)
     reference, reference_covariance = pose, covariance
     for k in range(count):
         reference, reference_covariance = predict(
@@ -77,7 +77,7 @@ def test_dead_reckon_is_kims_prediction_command_by_command(count: int) -> None:
         ("variance_per_m", -1.0),
     ],
 )
-def test_dead_reckon_rejects_bad_arguments_by_name(field: str, value: object) -> None:
+def test_predict_run_rejects_bad_arguments_by_name(field: str, value: object) -> None:
     arguments: dict[str, object] = {
         "pose": Pose(0.0, 0.0, 0.0),
         "covariance": np.eye(3) * 1e-4,
@@ -88,7 +88,7 @@ def test_dead_reckon_rejects_bad_arguments_by_name(field: str, value: object) ->
     }
     arguments[field] = value
     with pytest.raises(ValueError, match=field):
-        dead_reckon(**arguments)  # type: ignore[arg-type]
+        predict_run(**arguments)  # type: ignore[arg-type]
 
 
 def _corridor_readings(

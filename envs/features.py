@@ -1,0 +1,246 @@
+"""Observation features: what each slice of a task's observation vector holds.
+
+A task declares its observation as a list of features (HighwayEnv's observation types, kept
+as plain data): each :class:`Feature` has a name, a size and the range its values stay in.
+:class:`ObservationSpec` turns the list into the Gymnasium ``Box`` (always
+``Box(-1, 1, (n,), float32)``, the symmetric normalised range SB3's checker asks for), the
+``observation_layout`` (name -> slice, in declaration order, covering the vector without a
+gap or overlap) and a writer that fills a fresh vector by feature name.
+
+The feature types that compute their own values live here too, so that each mapping has one
+home: :class:`ScaledPosition` (a position scaled from the room's bounds to [-1, 1]),
+:class:`Heading` (cos, sin of an angle), :class:`RangeBins` (the nearest sonar range per
+angular bin, as a fraction of the maximum range) and :class:`ScannedBins` (which bins a pan has
+covered). :data:`FEATURE_TYPES` lists them by name.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import ClassVar
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+
+OBSERVATION_LOW, OBSERVATION_HIGH = -1.0, 1.0
+"""The bounds of every observation vector (each feature's range lies inside them)."""
+
+
+@dataclass(frozen=True)
+class Feature:
+    """One named slice of an observation vector.
+
+    Attributes:
+        name: the key in ``observation_layout``.
+        size: how many entries it takes.
+        low, high: the range its values stay in (inside [-1, 1]).
+    """
+
+    name: str
+    size: int = 1
+    low: float = OBSERVATION_LOW
+    high: float = OBSERVATION_HIGH
+    kind: ClassVar[str] = "value"
+
+    def __post_init__(self) -> None:
+        if not self.name:
+            raise ValueError("field 'name' of a Feature must be a non-empty string; got ''")
+        if isinstance(self.size, bool) or not isinstance(self.size, int) or self.size < 1:
+            raise ValueError(
+                f"field 'size' of feature {self.name!r} must be an integer >= 1; got {self.size!r}"
+            )
+        if not OBSERVATION_LOW <= self.low <= self.high <= OBSERVATION_HIGH:
+            raise ValueError(
+                f"fields 'low' and 'high' of feature {self.name!r} must satisfy "
+                f"-1 <= low <= high <= 1; got {self.low!r} and {self.high!r}"
+            )
+
+
+@dataclass(frozen=True)
+class Flag(Feature):
+    """Values in {0, 1} (a yes/no, or a one-hot group)."""
+
+    low: float = 0.0
+    kind: ClassVar[str] = "flag"
+
+
+@dataclass(frozen=True)
+class Fraction(Feature):
+    """Values in [0, 1] (a share, or a non-negative quantity over its scale, capped)."""
+
+    low: float = 0.0
+    kind: ClassVar[str] = "fraction"
+
+
+@dataclass(frozen=True)
+class ScaledPosition(Feature):
+    """A position, each coordinate mapped from the room's ``[low, high]`` to [-1, 1], clipped."""
+
+    size: int = 2
+    kind: ClassVar[str] = "scaled_position"
+
+    @staticmethod
+    def values(position: npt.ArrayLike, low: npt.ArrayLike, high: npt.ArrayLike) -> np.ndarray:
+        """``2 (p - low) / (high - low) - 1`` per coordinate, clipped to [-1, 1] (float64).
+
+        Args:
+            position, low, high: ``(size,)`` in the same frame and unit (metres in {W}).
+        """
+        position = np.asarray(position, dtype=np.float64)
+        low = np.asarray(low, dtype=np.float64)
+        high = np.asarray(high, dtype=np.float64)
+        return np.clip(2.0 * (position - low) / (high - low) - 1.0, -1.0, 1.0)
+
+    @staticmethod
+    def centred_values(
+        position: npt.ArrayLike, centre: npt.ArrayLike, half_size: npt.ArrayLike
+    ) -> np.ndarray:
+        """``(p - centre) / half_size``, clipped to [-1, 1] (float64): the same map written
+        from the room's centre (it differs from :meth:`values` in the last bits)."""
+        offset = np.asarray(position, dtype=np.float64) - np.asarray(centre, dtype=np.float64)
+        return np.clip(offset / np.asarray(half_size, dtype=np.float64), -1.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Heading(Feature):
+    """An angle as its cosine and sine (radians in; no wrap-around jump)."""
+
+    size: int = 2
+    kind: ClassVar[str] = "heading"
+
+    @staticmethod
+    def values(angle_rad: float) -> tuple[float, float]:
+        """``(cos, sin)`` of ``angle_rad``."""
+        return math.cos(angle_rad), math.sin(angle_rad)
+
+
+@dataclass(frozen=True)
+class RangeBins(Feature):
+    """The nearest range per angular bin of a scan, as a fraction of the maximum range; a bin
+    without an echo (or without a ping) reads 1. ``size`` is the number of bins."""
+
+    low: float = 0.0
+    kind: ClassVar[str] = "range_bins"
+
+    def values(self, range_fractions: npt.ArrayLike | None) -> np.ndarray:
+        """Nearest of ``range_fractions`` (ranges / max range, NaN for a dropout) per bin of
+        consecutive pings (float64, ``(size,)``); ping ``i`` of ``m`` falls in bin
+        ``i * size // m``."""
+        if range_fractions is None:
+            return np.ones(self.size)
+        fractions = np.asarray(range_fractions, dtype=np.float64)
+        if fractions.size == 0:
+            return np.ones(self.size)
+        values = np.where(np.isfinite(fractions), np.clip(fractions, 0.0, 1.0), 1.0)
+        if values.size % self.size == 0:
+            return np.minimum.reduce(values.reshape(self.size, -1), axis=1)
+        bins = np.ones(self.size)
+        np.minimum.at(bins, (np.arange(values.size) * self.size) // values.size, values)
+        return bins
+
+
+@dataclass(frozen=True)
+class ScannedBins(Feature):
+    """1 where a pan has covered any slot of the bin, else 0. ``size`` is the number of bins;
+    the slots divide evenly into them."""
+
+    low: float = 0.0
+    kind: ClassVar[str] = "scanned_bins"
+
+    def values(self, scanned: npt.ArrayLike) -> np.ndarray:
+        """Whether any of ``scanned`` (booleans per slot) is set, per bin (bool, ``(size,)``)."""
+        slots = np.asarray(scanned, dtype=bool)
+        if slots.size % self.size:
+            raise ValueError(
+                f"argument 'scanned' must hold a multiple of {self.size} slots; got {slots.size}"
+            )
+        return np.logical_or.reduce(slots.reshape(self.size, -1), axis=1)
+
+
+FEATURE_TYPES: dict[str, type[Feature]] = {
+    kind.kind: kind
+    for kind in (Feature, Flag, Fraction, ScaledPosition, Heading, RangeBins, ScannedBins)
+}
+"""The feature types by name."""
+
+
+class ObservationSpec:
+    """A task's observation: its features in order, the space, the layout and a writer.
+
+    Attributes:
+        features: the features in vector order.
+        layout: feature name -> its slice of the vector (shared; :meth:`observation_layout`
+            gives a copy to hand out).
+        size: the vector's length.
+        space: ``Box(-1, 1, (size,), float32)``.
+    """
+
+    def __init__(self, features: Sequence[Feature]) -> None:
+        if not features:
+            raise ValueError("argument 'features' must hold at least one Feature; got none")
+        names = [feature.name for feature in features]
+        repeated = sorted({name for name in names if names.count(name) > 1})
+        if repeated:
+            raise ValueError(f"argument 'features' repeats the name(s) {repeated}")
+        self.features = tuple(features)
+        self.layout: dict[str, slice] = {}
+        start = 0
+        for feature in self.features:
+            self.layout[feature.name] = slice(start, start + feature.size)
+            start += feature.size
+        self.size = start
+        self.space = gym.spaces.Box(
+            OBSERVATION_LOW, OBSERVATION_HIGH, shape=(self.size,), dtype=np.float32
+        )
+
+    def __iter__(self) -> Iterator[Feature]:
+        return iter(self.features)
+
+    def __getitem__(self, name: str) -> Feature:
+        for feature in self.features:
+            if feature.name == name:
+                return feature
+        raise KeyError(name)
+
+    def observation_layout(self) -> dict[str, slice]:
+        """A copy of the layout (what a task hands out as ``observation_layout``)."""
+        return dict(self.layout)
+
+    def extended(self, features: Sequence[Feature]) -> ObservationSpec:
+        """This spec with ``features`` appended (a task that observes more than its base)."""
+        return ObservationSpec((*self.features, *features))
+
+    def writer(self) -> ObservationWriter:
+        """A writer over a fresh zero vector."""
+        return ObservationWriter(self)
+
+    def feature_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)`` per entry of the vector, from each feature's range."""
+        low = np.concatenate([np.full(f.size, f.low) for f in self.features])
+        high = np.concatenate([np.full(f.size, f.high) for f in self.features])
+        return low, high
+
+
+class ObservationWriter:
+    """Fills one observation vector (float32 zeros to start) feature by feature."""
+
+    __slots__ = ("_layout", "vector")
+
+    def __init__(self, spec: ObservationSpec) -> None:
+        self._layout = spec.layout
+        self.vector = np.zeros(spec.size, dtype=np.float32)
+
+    def __setitem__(self, name: str, values: npt.ArrayLike | float) -> None:
+        self.vector[self._layout[name]] = values
+
+    def one_hot(self, name: str, index: int) -> None:
+        """Set entry ``index`` of feature ``name`` to 1 (a one-hot group)."""
+        place = self._layout[name]
+        if not 0 <= index < place.stop - place.start:
+            raise IndexError(
+                f"index {index} is outside feature {name!r} of size {place.stop - place.start}"
+            )
+        self.vector[place.start + index] = 1.0

@@ -1,0 +1,112 @@
+"""Writes ``fixtures/rollouts.json``: digests of seeded rollouts of every env.
+
+Run it once on a tree whose behaviour is the reference (never on the code under test), e.g.::
+
+    PYTHONPATH=/path/to/reference/tree python tests/envs/make_rollout_fixture.py
+
+``test_rollout_fixture.py`` replays the same rollouts and compares. Each step is digested
+(observation bytes, reward, terminated, truncated, info) so the file stays small while any
+changed bit shows; spaces are kept as their ``repr``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+FIXTURE = Path(__file__).with_name("fixtures") / "rollouts.json"
+
+CASES: list[tuple[str, dict[str, Any], str]] = [
+    ("SonarGym/BeaconScan-v0", {}, "random"),
+    ("SonarGym/BeaconScan-v0", {}, "paper"),
+    ("SonarGym/BeaconScan-v0", {"action_type": "discrete"}, "random"),
+    ("SonarGym/ActiveBeaconScan-v0", {}, "random"),
+    ("SonarGym/ActiveBeaconScan-v0", {}, "retry"),
+    ("SonarGym/SweepLocalization-v0", {}, "random"),
+    ("SonarGym/SweepLocalization-v0", {}, "covariance"),
+    ("SonarGym/Trilateration-v0", {}, "random"),
+    ("SonarGym/Trilateration-v0", {}, "adaptive"),
+    ("SonarGym/BlockExpansion-v0", {}, "random"),
+    ("SonarGym/BlockExpansion-v0", {"n_areas": 3}, "random"),
+    ("SonarGym/BlockExpansion-v0", {}, "paper"),
+    ("SonarGym/WallCorrection-v0", {}, "random"),
+    ("SonarGym/WallCorrection-v0", {"action_type": "discrete"}, "random"),
+    ("SonarGym/WallCorrection-v0", {}, "both_walls"),
+]
+SEEDS = (0, 1, 2, 3)
+
+
+def canonical(value: Any) -> Any:
+    """A JSON-able form of ``value`` that keeps every bit (floats as hex)."""
+    if isinstance(value, np.ndarray):
+        return ["ndarray", str(value.dtype), list(value.shape), value.tobytes().hex()]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value).hex()
+    if isinstance(value, dict):
+        return {str(key): canonical(item) for key, item in sorted(value.items())}
+    if isinstance(value, (list, tuple)):
+        return [canonical(item) for item in value]
+    return repr(value)
+
+
+def digest(*parts: Any) -> str:
+    text = json.dumps(canonical(list(parts)), sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def rollout(env_id: str, kwargs: dict[str, Any], agent_name: str, seed: int) -> dict[str, Any]:
+    """One episode's digests: the reset, then every step."""
+    from sonar_gym.agents import make_agent
+
+    env = gym.make(env_id, **kwargs)
+    agent = make_agent(agent_name, env)
+    agent.reset(seed=seed)
+    env.action_space.seed(seed)
+    observation, info = env.reset(seed=seed)
+    steps = [digest(observation, info)]
+    actions = []
+    while True:
+        action = agent.act(observation)
+        actions.append(canonical(np.asarray(action)))
+        observation, reward, terminated, truncated, info = env.step(action)
+        steps.append(digest(observation, reward, terminated, truncated, info))
+        if terminated or truncated:
+            break
+    return {
+        "observation_space": repr(env.observation_space),
+        "action_space": repr(env.action_space),
+        "actions": digest(actions),
+        "steps": steps,
+        "final_status": str(info.get("status")),
+    }
+
+
+def case_key(env_id: str, kwargs: dict[str, Any], agent_name: str, seed: int) -> str:
+    return f"{env_id} {json.dumps(kwargs, sort_keys=True)} {agent_name} seed={seed}"
+
+
+def main() -> None:
+    import sonar_gym  # noqa: F401  (registers the ids)
+
+    result = {
+        case_key(env_id, kwargs, agent, seed): rollout(env_id, kwargs, agent, seed)
+        for env_id, kwargs, agent in CASES
+        for seed in SEEDS
+    }
+    FIXTURE.parent.mkdir(exist_ok=True)
+    FIXTURE.write_text(json.dumps(result, indent=1, sort_keys=True) + "\n")
+    print(f"wrote {len(result)} rollouts from {sonar_gym.__file__} to {FIXTURE}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
