@@ -27,7 +27,7 @@ from sonar_gym.registration import REGISTRATIONS
 
 VARIANTS = [(env_id, {}) for env_id in REGISTRATIONS] + [
     ("SonarGym/BlockExpansion-v0", {"n_areas": 3}),
-    ("SonarGym/BeaconScan-v0", {"n_bins": 36}),
+    ("SonarGym/BeaconScan-v0", {"n_range_bins": 36}),
     ("SonarGym/SweepLocalization-v0", {"n_range_bins": 7}),
 ]
 
