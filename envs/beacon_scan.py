@@ -465,13 +465,9 @@ class BeaconScanEnv(SonarEnv):
         sonar = RotatingSonar.preset(
             scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
         ).with_assumed_speed(speed_of_sound_mps(ASSUMED_TEMPERATURE_C))
-        beacons = [scenario.beacon(role) for role in BEACON_ROLES]
-        self._room = _Room(
-            world,
-            sonar,
-            np.array(scenario.bounds, dtype=np.float64),
-            np.array([beacon.center for beacon in beacons], dtype=np.float64),
-        )
+        centres = [scenario.beacon(role).center for role in BEACON_ROLES]
+        bounds = np.array(scenario.bounds, dtype=np.float64)
+        self._room = _Room(world, sonar, bounds, np.array(centres, dtype=np.float64))
         return self._room
 
     def _apply_action(self, action: Any) -> StepOutcome:

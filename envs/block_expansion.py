@@ -52,8 +52,6 @@ from sonar_gym.localization.roh_outcomes import (
 )
 from sonar_gym.maps import (
     CALIBRATED,
-    MAP_FRAME_CENTRE_M,
-    MAP_FRAME_HALF_SPAN_M,
     PRIOR_ONLY,
     SURVEYED,
     beacon_slot_features,
@@ -95,7 +93,6 @@ LAYOUT_JITTER_Z_M = 0.15
 """... and within +-0.15 m in height."""
 RANDOM_CURVATURE_PER_M = (-1.3, -0.5)
 """``path="random"``: range of the parabola's coefficient ``a``, 1/m (the paper-like path: -0.9)."""
-NO_HEADING_ERROR_RAD = 0.0  # Roh et al. estimate positions only (see the Info section)
 MAX_LAYOUT_TRIES = 200
 MIN_BEACON_CLEARANCE_M = 0.3
 """Every beacon stands at least this far above the receiver, metres."""
@@ -103,8 +100,6 @@ BOUNDARY_END_MARGIN_M = 0.1
 """A path must cross each boundary at least this far from the boundary's end beacons, metres."""
 
 # Normalisation of the observation (positions use the beacon map's frame, sonar_gym.maps).
-FRAME_CENTRE_M = MAP_FRAME_CENTRE_M
-FRAME_HALF_SPAN_M = MAP_FRAME_HALF_SPAN_M
 NOISE_SCALE_M = 0.01
 TIMER_SCALE_S = 1e-4
 
@@ -306,11 +301,8 @@ class BlockExpansionEnv(SonarEnv):
     ``failed_fix_fraction``; ``sensing_time_s`` (ranging time of the path so far, seconds);
     ``status``: ``"running"``, ``"ok"``, the first failed boundary's status
     (``"not_reached"``, ``"no_intersection"``, ``"collinear_positions"``,
-    ``"missing_distance"``) or ``"localization_failed"``. ``heading_error_rad`` is always 0.0:
-    trilateration gives no heading and the task scores none (a quantity a task does not
-    estimate reads 0.0, never NaN, as ``position_error_m`` does before the first fix); the key
-    is there so every env reports the same :data:`~sonar_gym.envs.base.INFO_KEYS`, and
-    ``unestimated_info_keys`` names it so evaluation summaries leave it out.
+    ``"missing_distance"``) or ``"localization_failed"``. ``heading_error_rad`` is 0.0:
+    trilateration gives no heading (``unestimated_info_keys`` names it, so summaries omit it).
 
     ## Arguments
 
@@ -618,12 +610,10 @@ class BlockExpansionEnv(SonarEnv):
         sigma_m, sigma_prime_m = errors if errors is not None else (0.0, 0.0)
         info: dict[str, Any] = {
             "position_error_m": float(position_error_m),
-            "heading_error_rad": NO_HEADING_ERROR_RAD,
+            "heading_error_rad": 0.0,  # Roh et al. estimate positions only (see Info)
             "sigma_m": float(sigma_m),
             "sigma_prime_m": float(sigma_prime_m),
-            "calibration_errors_m": {},
-            "calibration_statuses": {},
-            "calibration_conditions": {},
+            **calibration_summaries(()),
             "distances_m": [list(triple) for triple in episode.chosen],
             "failed_fix_fraction": 0.0,
             "sensing_time_s": float(episode.sensing_time_s),
@@ -648,16 +638,8 @@ class BlockExpansionEnv(SonarEnv):
             for name, position in self._calibrated_positions(episode).items()
         }
         title = f"BlockExpansion  {self.config.n_areas} areas"
-        return render_drive(
-            episode.scenario,
-            episode.path,
-            shown,
-            fixes,
-            episode.chosen,
-            episode.status,
-            errors_m,
-            title,
-        )
+        drive = (episode.scenario, episode.path, shown, fixes, episode.chosen, episode.status)
+        return render_drive(*drive, errors_m, title)
 
     def _require_episode(self) -> _Episode:
         if self._episode is None:

@@ -11,7 +11,7 @@ and combined through dead reckoning, feed the voting localization on the known o
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -46,7 +46,6 @@ from sonar_gym.polyline import Route, draw_free_route, draw_polyline, follow_rou
 from sonar_gym.pose import Pose, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Scenario, load_scenario
-from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.swept import SweptSonar
 from sonar_gym.validation import MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
@@ -143,17 +142,6 @@ class SweepLocalizationConfig:
 
 PAPER_SENSOR_PRESET = "srf04"
 """Kim et al.'s ranger, used unless the scenario's ``[sensor]`` chooses another preset."""
-
-
-def swept_sonar_for(scenario: Scenario, config: SweepLocalizationConfig) -> SweptSonar:
-    """The env's swept sonar: Kim et al.'s sweep (:meth:`SweptSonar.kim`, ``sweep_width_deg``
-    and ``sweep_step_deg`` of ``config``) with the transducer of the scenario's ``[sensor]``
-    preset when the scenario chose one, else the paper's SRF04."""
-    sonar = SweptSonar.kim(
-        wide=config.sweep_width_deg == 180, step_rad=math.radians(config.sweep_step_deg)
-    )
-    preset = scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
-    return replace(sonar, transducer=transducer_preset(preset))
 
 
 @dataclass
@@ -313,12 +301,9 @@ class SweepLocalizationEnv(SonarEnv):
 
     ## Version History
 
-    * v0: first release. Later, without changing any default episode:
-      ``encoder_noise_std_m_per_sqrt_m`` renamed ``encoder_std_m_per_sqrt_m`` (the name of
-      :class:`~sonar_gym.odometry.OdometryConfig`) and ``wheel_scale_error`` renamed
-      ``wheel_scale_error_bound`` (a uniform bound, unlike the Gaussian
-      ``wheel_scale_error_std`` of Trilateration and WallCorrection); the old names still
-      work, with a ``DeprecationWarning``.
+    * v0: first release. Later, with every default episode unchanged, renamed arguments (the
+      old names still work, with a ``DeprecationWarning``): ``encoder_noise_std_m_per_sqrt_m``
+      -> ``encoder_std_m_per_sqrt_m``, ``wheel_scale_error`` -> ``wheel_scale_error_bound``.
 
     ## Example
 
@@ -343,7 +328,11 @@ class SweepLocalizationEnv(SonarEnv):
         except (OSError, ValueError) as error:
             raise ValueError(f"argument 'scenario': {error}") from error
         self.grid = occupancy_grid_of(self._scenario)
-        self.sonar = swept_sonar_for(self._scenario, config)
+        self.sonar = SweptSonar.kim(
+            wide=config.sweep_width_deg == 180,
+            preset=self._scenario.sensor.preset_or(PAPER_SENSOR_PRESET),
+            step_rad=math.radians(config.sweep_step_deg),
+        )
         self.action_type = make_action_type(
             "multi_discrete", DiscreteChoices((config.max_sweeps + 1, len(SECTOR_NAMES)))
         )

@@ -15,7 +15,7 @@ the map, stream, verdict and record names it re-exports live in :mod:`sonar_gym.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -58,7 +58,6 @@ from sonar_gym.metrics import heading_error_rad, position_error_m
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
 from sonar_gym.scenario import Scenario, load_scenario
-from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.validation import MIN_LENGTH_M, MIN_SCALE, MIN_VARIANCE
 from sonar_gym.world import World
@@ -197,20 +196,6 @@ class WallCorrectionConfig:
 
 PAPER_SENSOR_PRESET = "ma40b8"
 """The APCS robot's side sonars, used unless the scenario's ``[sensor]`` chooses a preset."""
-
-
-def side_sonars_for(scenario: Scenario, config: WallCorrectionConfig) -> SideSonars:
-    """The env's side sonars: the scenario's ``[sensor]`` preset when it chose one, else the
-    paper's MA40B8 (:meth:`SideSonars.apcs`); either with the timing jitter of
-    ``config.range_noise_std_m`` (metres of range) unless that is None."""
-    sonars = SideSonars.apcs(range_noise_std_m=config.range_noise_std_m)
-    preset = scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
-    if preset == PAPER_SENSOR_PRESET:
-        return sonars
-    transducer = transducer_preset(preset)
-    if config.range_noise_std_m is not None:
-        transducer = replace(transducer, range_noise_std_m=float(config.range_noise_std_m))
-    return replace(sonars, transducer=transducer)
 
 
 def _range_field(config: object, name: str, *, low: float, high: float) -> None:
@@ -412,7 +397,9 @@ class WallCorrectionEnv(SonarEnv):
             config.temperature_c,
             route_margin_m=config.route_margin_m,
         )
-        self.sonars = side_sonars_for(self.scenario, config)
+        self.sonars = SideSonars.apcs(
+            config.range_noise_std_m, preset=self.scenario.sensor.preset_or(PAPER_SENSOR_PRESET)
+        )
         self._map_ahead = map_ahead_features(
             self.wall_map,
             self.leg_starts_x,

@@ -71,10 +71,11 @@ class SweptSonar(PulseEchoSonar):
             )
 
     @classmethod
-    def kim(cls, wide: bool = False, **options: object) -> SweptSonar:
-        """The SRF04 sweep of Kim et al.: +-45 deg, or 180 deg with ``wide=True``."""
+    def kim(cls, wide: bool = False, preset: str = "srf04", **options: object) -> SweptSonar:
+        """The sweep of Kim et al.: +-45 deg, or 180 deg with ``wide=True``, with the paper's
+        SRF04 or the transducer ``preset`` (a scenario's ``[sensor]``)."""
         half = KIM_WIDE_HALF_SWEEP_RAD if wide else KIM_HALF_SWEEP_RAD
-        return cls(transducer_preset("srf04"), half_sweep_rad=half, **options)  # type: ignore[arg-type]
+        return cls(transducer_preset(preset), half_sweep_rad=half, **options)  # type: ignore[arg-type]
 
     def sweep_angles(self, sector_center: float = 0.0) -> FloatArray:
         """Ping angles in {R}, radians: from ``center - half`` to ``center + half`` inclusive."""
@@ -137,10 +138,13 @@ class SideSonars(PulseEchoSonar):
             )
 
     @classmethod
-    def apcs(cls, range_noise_std_m: float | None = None, **options: object) -> SideSonars:
-        """The MA40B8 side sonars of APCS, with the timing jitter set to ``range_noise_std_m``
-        (as range, metres) instead of the preset's when given."""
-        transducer = transducer_preset("ma40b8")
+    def apcs(
+        cls, range_noise_std_m: float | None = None, preset: str = "ma40b8", **options: object
+    ) -> SideSonars:
+        """The side sonars of APCS: the paper's MA40B8 or the transducer ``preset`` (a
+        scenario's ``[sensor]``), with the timing jitter set to ``range_noise_std_m`` (as range,
+        metres) instead of the preset's when given."""
+        transducer = transducer_preset(preset)
         if range_noise_std_m is not None:
             transducer = replace(transducer, range_noise_std_m=float(range_noise_std_m))
         return cls(transducer, **options)  # type: ignore[arg-type]

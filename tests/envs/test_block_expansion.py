@@ -23,8 +23,9 @@ from sonar_gym.agents.block_expansion import (
     dilution_of_precision,
     replay_extraction,
 )
-from sonar_gym.envs.block_expansion import DECREASING_GAP_M, FIRING_INTERVAL_S, FRAME_CENTRE_M
-from sonar_gym.envs.block_expansion import FRAME_HALF_SPAN_M
+from sonar_gym.envs.block_expansion import DECREASING_GAP_M, FIRING_INTERVAL_S
+from sonar_gym.maps import MAP_FRAME_CENTRE_M as FRAME_CENTRE_M
+from sonar_gym.maps import MAP_FRAME_HALF_SPAN_M as FRAME_HALF_SPAN_M
 from sonar_gym.localization.roh import (
     TABLE_I_BEACONS_MM,
     TABLE_II_III_D_MM,
