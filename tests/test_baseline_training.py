@@ -114,3 +114,26 @@ def test_a_seed_run_keeps_its_best_checkpoint_and_ships_loadable(tmp_path: Path)
     rewards = [run_episode(env, agent, seed).reward for seed in bt.validation_seeds(recipe)]
     env.close()
     assert np.mean(rewards) == pytest.approx(run.best_reward, rel=1e-9, abs=1e-9)
+
+
+def test_teacher_episodes_are_dealt_over_the_variants() -> None:
+    recipe = dataclasses.replace(
+        bt.RECIPES["SonarGym/BlockExpansion-v0"],
+        demo_episodes=4,
+        demo_variants=({}, {"layout": "random", "path": "random"}),
+    )
+    mixed = bt.teacher_demonstrations(recipe, "spread", training_seed=1)
+    assert int(mixed.episode_starts.sum()) == 4
+    plain = bt.collect_demonstrations(
+        recipe.env_id, {}, "spread", [bt.TEACHER_SEED_STRIDE, bt.TEACHER_SEED_STRIDE + 2]
+    )
+    jittered = bt.collect_demonstrations(
+        recipe.env_id,
+        {"layout": "random", "path": "random"},
+        "spread",
+        [bt.TEACHER_SEED_STRIDE + 1, bt.TEACHER_SEED_STRIDE + 3],
+    )
+    assert np.array_equal(
+        mixed.observations, np.concatenate([plain.observations, jittered.observations])
+    )
+    assert not np.array_equal(plain.observations, jittered.observations[: len(plain.observations)])

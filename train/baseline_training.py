@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -71,6 +71,9 @@ class BaselineRecipe:
         candidates: scripted agents the teacher is chosen from (best on the validation seeds).
         timesteps: PPO env steps per training seed after the warm start.
         demo_episodes: teacher episodes for the warm start.
+        demo_variants: ``gym.make`` arguments (over ``env_kwargs``) the teacher's episodes are
+            spread over in turn, e.g. ``({}, {"scenario": "random"})`` to show it random rooms
+            too (rooms of the teacher's own seeds, never the validation or evaluation ones).
         clone_epochs: passes over the demonstrations.
         eval_every: env steps between validation scores.
         validation_episodes: validation seeds per score.
@@ -83,6 +86,7 @@ class BaselineRecipe:
     candidates: tuple[str, ...]
     timesteps: int
     demo_episodes: int = 300
+    demo_variants: tuple[Mapping[str, Any], ...] = ({},)
     clone_epochs: int = 30
     eval_every: int = 4096
     validation_episodes: int = DEFAULT_VALIDATION_EPISODES
@@ -92,6 +96,7 @@ class BaselineRecipe:
 
 
 _FINE_TUNING = {"learning_rate": 1e-4, "ent_coef": 0.0}
+_RANDOM_LAYOUT = {"layout": "random", "path": "random"}
 RECIPES: dict[str, BaselineRecipe] = {
     recipe.env_id: recipe
     for recipe in (
@@ -104,7 +109,8 @@ RECIPES: dict[str, BaselineRecipe] = {
         BaselineRecipe("SonarGym/Trilateration-v0", ("paper", "adaptive"), 40_000,
                        demo_episodes=100, hyperparameters=_FINE_TUNING),
         BaselineRecipe("SonarGym/BlockExpansion-v0", ("paper", "spread"), 8_192,
-                       demo_episodes=300, eval_every=2048, hyperparameters={"learning_rate": 1e-4}),
+                       demo_episodes=600, demo_variants=({}, _RANDOM_LAYOUT), eval_every=2048,
+                       hyperparameters={"learning_rate": 1e-4}),
         BaselineRecipe("SonarGym/WallCorrection-v0", ("paper", "both_walls"), 8_192,
                        demo_episodes=100, eval_every=2048, validation_episodes=60,
                        hyperparameters=_FINE_TUNING),
@@ -144,6 +150,8 @@ class Demonstrations:
     rewards: np.ndarray
     episode_starts: np.ndarray
 
+    FIELDS: ClassVar[tuple[str, ...]] = ("observations", "actions", "rewards", "episode_starts")
+
 
 def collect_demonstrations(
     env_id: str, env_kwargs: Mapping[str, Any], teacher: str, seeds: Sequence[int]
@@ -169,6 +177,24 @@ def collect_demonstrations(
         env.close()
     return Demonstrations(
         np.stack(observations), np.stack(actions), np.array(rewards), np.array(starts)
+    )
+
+
+def teacher_demonstrations(
+    recipe: BaselineRecipe, teacher: str, training_seed: int
+) -> Demonstrations:
+    """``recipe.demo_episodes`` episodes of ``teacher`` on training seed ``training_seed``'s
+    stream, dealt in turn over ``recipe.demo_variants``."""
+    seeds = [training_seed * TEACHER_SEED_STRIDE + i for i in range(recipe.demo_episodes)]
+    variants = recipe.demo_variants
+    parts = [
+        collect_demonstrations(
+            recipe.env_id, {**recipe.env_kwargs, **variant}, teacher, seeds[i :: len(variants)]
+        )
+        for i, variant in enumerate(variants)
+    ]
+    return Demonstrations(
+        *(np.concatenate([getattr(part, name) for part in parts]) for name in Demonstrations.FIELDS)
     )
 
 
@@ -361,8 +387,7 @@ def train_seed(
         policy_kwargs=config.sb3_policy_kwargs(),
         **{**dict(config.hyperparameters), **dict(recipe.hyperparameters)},
     )
-    demo_seeds = [training_seed * TEACHER_SEED_STRIDE + i for i in range(recipe.demo_episodes)]
-    demos = collect_demonstrations(recipe.env_id, recipe.env_kwargs, teacher, demo_seeds)
+    demos = teacher_demonstrations(recipe, teacher, training_seed)
     nll = clone_teacher(model, venv, demos, recipe.clone_epochs, training_seed)
     curve: list[CurvePoint] = []
     callback = ValidationCallback(recipe, training_seed, run_dir / "best", started, curve, on_score)
@@ -431,7 +456,8 @@ def write_shipped(
         "env_id": recipe.env_id,
         "algo": ALGO,
         "method": (
-            f"behaviour cloning of the {teacher!r} agent ({recipe.demo_episodes} episodes, "
+            f"behaviour cloning of the {teacher!r} agent ({recipe.demo_episodes} episodes over "
+            f"{[dict(v) for v in recipe.demo_variants]}, "
             f"{recipe.clone_epochs} epochs), then PPO fine-tuning; the best validation "
             "checkpoint of the best seed ships"
         ),
