@@ -431,7 +431,36 @@ def markdown_table(report: BaselinesReport) -> str:
         )
         + "`); *none*: the env offers no randomised room.",
     ]
+    seen = {
+        env_id.rpartition("/")[2]: variants
+        for env_id, directory in report.policy_dirs.items()
+        if (variants := demonstrated_variants(directory))
+    }
+    if seen:
+        notes.append(
+            "Teachers that also played random rooms of their own seeds during the warm start "
+            "(so these held-out rooms are new rooms of a kind the policy saw): "
+            + "; ".join(
+                f"{name}: `"
+                + "`, `".join(
+                    ", ".join(f"{k}={v}" for k, v in variant.items()) for variant in variants
+                )
+                + "`"
+                for name, variants in seen.items()
+            )
+            + "."
+        )
     return "\n".join([header, rule, *body, *notes]) + "\n"
+
+
+def demonstrated_variants(policy_dir: Path) -> list[dict[str, Any]]:
+    """The non-default room settings a policy's teacher played during its warm start, from
+    its ``training.json`` (none for a policy without one)."""
+    training_file = policy_dir / pretrained.TRAINING_FILE
+    if not training_file.is_file():
+        return []
+    recipe = json.loads(training_file.read_text()).get("recipe", {})
+    return [dict(variant) for variant in recipe.get("demo_variants", []) if variant]
 
 
 # --------------------------------------------------------------------------------------------
