@@ -17,7 +17,7 @@ import pytest
 import sonar_gym  # noqa: F401
 from sonar_gym.train import UsageError
 from sonar_gym.train.distributed import chunk_seeds
-from sonar_gym.train.evaluation import evaluate_agents
+from sonar_gym.train.evaluation import evaluate_agents, play_seeds
 from sonar_gym.agents.rllib_policy import is_rllib_run
 from sonar_gym.train.rllib_backend import RUN_FILE, require_ray, train_rllib
 
@@ -62,7 +62,8 @@ def test_ray_evaluation_equals_the_local_run_seed_for_seed(local_ray, env_id: st
     from sonar_gym.train.distributed import evaluate_plan_on_ray
 
     local = evaluate_agents([env_id], ["paper", "random"], episodes=8, seed=3)
-    remote = evaluate_plan_on_ray({env_id: ["paper", "random"]}, 8, 3, {}, 10_000, chunk_episodes=3)
+    plan = {env_id: ["paper", "random"]}
+    remote = evaluate_plan_on_ray(plan, 8, 3, {}, 10_000, play_seeds, chunk_episodes=3)
     for result in local:
         assert list(result.records) == remote[(env_id, result.agent)]
 

@@ -13,35 +13,22 @@ cluster (a shared file system, or the same checkout everywhere).
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from sonar_gym.train.evaluation import EpisodeRecord
 from sonar_gym.train.rllib_backend import init_ray, require_ray
+
+if TYPE_CHECKING:
+    from sonar_gym.train.evaluation import EpisodeRecord
 
 DEFAULT_CHUNK_EPISODES = 16
 """Episodes per Ray task: large enough that a task outweighs its scheduling, small enough
 that a few thousand seeds spread over every core."""
 
-EpisodeCallback = Callable[[str, str, EpisodeRecord], None]
-
-
-def _run_chunk(
-    env_id: str,
-    agent_name: str,
-    env_kwargs: Mapping[str, Any],
-    seeds: Sequence[int],
-    max_steps: int,
-) -> list[EpisodeRecord]:
-    """Play the episodes of ``seeds`` with a fresh env and agent (runs inside a Ray worker)."""
-    import sonar_gym  # noqa: F401  (registers the ids in a fresh worker process)
-    from sonar_gym.train.evaluation import make_env, make_named_agent, run_episode
-
-    env = make_env(env_id, env_kwargs)
-    try:
-        agent = make_named_agent(agent_name, env)
-        return [run_episode(env, agent, seed, max_steps) for seed in seeds]
-    finally:
-        env.close()
+EpisodeCallback = Callable[[str, str, "EpisodeRecord"], None]
+ChunkPlayer = Callable[[str, str, Mapping[str, Any], Sequence[int], int], "list[EpisodeRecord]"]
+"""Plays the episodes of some seeds with a fresh env and agent: (env id, agent name, env
+arguments, seeds, step guard) -> records. It runs inside a Ray worker, so it must be a
+module-level function (Ray ships it by reference)."""
 
 
 def chunk_seeds(first_seed: int, episodes: int, chunk_episodes: int) -> list[list[int]]:
@@ -58,6 +45,7 @@ def evaluate_plan_on_ray(
     seed: int,
     env_kwargs: Mapping[str, Any],
     max_steps: int,
+    play: ChunkPlayer,
     *,
     address: str | None = None,
     chunk_episodes: int = DEFAULT_CHUNK_EPISODES,
@@ -71,13 +59,14 @@ def evaluate_plan_on_ray(
         seed: seed of the first episode.
         env_kwargs: ``gym.make`` arguments for every env.
         max_steps: the per-episode step guard of the local run.
+        play: what a task runs (:func:`sonar_gym.train.evaluation.play_seeds`).
         address: a running cluster (``"auto"``, ``"ray://host:10001"``); None starts a local one.
         chunk_episodes: episodes per task.
         on_episode: called for every record as its chunk comes back (progress display).
     """
     ray = require_ray()
     init_ray(address)
-    remote_chunk = ray.remote(_run_chunk)
+    remote_chunk = ray.remote(play)
     pending: dict[Any, tuple[str, str, int]] = {}
     for env_id, names in plan.items():
         for name in names:

@@ -469,6 +469,23 @@ def run_episode(
     )
 
 
+def play_seeds(
+    env_id: str,
+    agent_name: str,
+    env_kwargs: Mapping[str, Any],
+    seeds: Sequence[int],
+    max_steps: int,
+) -> list[EpisodeRecord]:
+    """Play one episode per seed with a fresh env and agent (what a Ray task runs; importing
+    this module registers the ids in a fresh worker process)."""
+    env = make_env(env_id, env_kwargs)
+    try:
+        agent = make_named_agent(agent_name, env)
+        return [run_episode(env, agent, seed, max_steps) for seed in seeds]
+    finally:
+        env.close()
+
+
 def evaluate_agents(
     env_ids: str | Sequence[str],
     agent_names: Sequence[str] | Mapping[str, Sequence[str]] | None = None,
@@ -525,6 +542,7 @@ def evaluate_agents(
             seed,
             kwargs,
             max_steps_per_episode,
+            play_seeds,
             address=ray_address,
             on_episode=on_episode,
         )
