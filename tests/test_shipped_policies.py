@@ -77,3 +77,45 @@ def test_the_shipped_policy_scores_what_its_trainer_measured(env_id: str) -> Non
     env.close()
     recorded = training["best_validation_reward"][str(training["selected_seed"])]
     assert float(np.mean(rewards)) == pytest.approx(recorded, abs=1e-6)
+
+
+# what README's table claims, on the evaluation seeds nobody trained or selected on
+BEATS_THE_PAPER = tuple(env_id for env_id in ENV_IDS if env_id != "SonarGym/BeaconScan-v0")
+BEATS_THE_HEURISTIC = ("SonarGym/SweepLocalization-v0", "SonarGym/ActiveBeaconScan-v0")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_learned_agent_against_the_paper_and_the_heuristic(env_id: str) -> None:
+    from sonar_gym.train.baselines import beats, heuristic_agent, paired_difference
+    from sonar_gym.train.evaluation import evaluate_agents
+
+    heuristic = heuristic_agent(env_id)
+    results = {
+        result.agent: result.records
+        for result in evaluate_agents(
+            [env_id],
+            ["learned", "paper", heuristic],
+            episodes=pretrained.DEFAULT_EVALUATION_EPISODES,
+            seed=pretrained.EVALUATION_SEED_START,
+        )
+    }
+    versus_paper = paired_difference(results["learned"], results["paper"])
+    versus_heuristic = paired_difference(results["learned"], results[heuristic])
+    assert beats(versus_paper) is (env_id in BEATS_THE_PAPER), versus_paper
+    assert beats(versus_heuristic) is (env_id in BEATS_THE_HEURISTIC), versus_heuristic
+
+
+@pytest.mark.slow
+def test_moving_learned_agent_localizes_from_95_percent_of_lab_poses() -> None:
+    from sonar_gym.train.evaluation import evaluate_agents, summarize
+
+    (result,) = evaluate_agents(
+        ["SonarGym/ActiveBeaconScan-v0"],
+        ["learned"],
+        episodes=pretrained.DEFAULT_EVALUATION_EPISODES,
+        seed=pretrained.EVALUATION_SEED_START,
+    )
+    summary = summarize(result.records)
+    assert summary.success_rate >= 0.95
+    assert summary.position_error_p95_m is not None and summary.position_error_p95_m <= 0.03
