@@ -32,6 +32,9 @@ from typing import Any, ClassVar
 import gymnasium as gym
 import numpy as np
 
+from sonar_gym.envs.action_types import ActionType
+from sonar_gym.envs.features import ObservationSpec
+
 INFO_KEYS = ("position_error_m", "heading_error_rad", "sensing_time_s", "status")
 """The ``info`` keys every task reports on every step (opt in with ``required_info_keys``)."""
 REWARDS_INFO_KEY = "rewards"
@@ -94,6 +97,8 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         config: the task's frozen, validated configuration dataclass.
         observation_layout: the name of each observation feature group -> its slice of the
             observation vector.
+        observation_spec: the features the observation is built from (``envs/features.py``).
+        action_type: the action type the action space comes from (``envs/action_types.py``).
         required_info_keys: keys every step's ``info`` must hold (none unless a task opts in).
         unestimated_info_keys: required keys whose quantity the task does not estimate (for
             example a heading error where the method gives no heading): they read 0.0, never
@@ -108,6 +113,8 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
     max_decisions: int | None = None
     config: Any
     observation_layout: dict[str, slice]
+    observation_spec: ObservationSpec
+    action_type: ActionType
 
     def __init__(self, render_mode: str | None = None) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
