@@ -525,9 +525,7 @@ def test_console_script_is_installed_and_reports_errors_without_traceback():
 BEACON_SCAN = "SonarGym/BeaconScan-v0"
 
 
-def test_evaluate_without_arguments_runs_every_beacon_scan_agent(
-    tmp_path, capsys, monkeypatch
-):
+def test_evaluate_without_arguments_runs_every_beacon_scan_agent(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     arguments = cli.build_parser().parse_args(["evaluate"])
     code, out, err = run_cli(capsys, "evaluate", "--episodes", "3")  # all other defaults
