@@ -27,13 +27,14 @@ import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.envs.action_types import ActionType
-from sonar_gym.envs.features import ObservationSpec
+if TYPE_CHECKING:  # listing agents imports this module, and must load no task code
+    from sonar_gym.envs.action_types import ActionType
+    from sonar_gym.envs.features import ObservationSpec
 
 INFO_KEYS = ("position_error_m", "heading_error_rad", "sensing_time_s", "status")
 """The ``info`` keys every task reports on every step (opt in with ``required_info_keys``)."""
