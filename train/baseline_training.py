@@ -39,7 +39,13 @@ import torch
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
 
-from sonar_gym.agents.learned import MODEL_FILE, RUN_FILE, VECNORMALIZE_FILE, PolicyAgent
+from sonar_gym.agents.learned import (
+    MODEL_FILE,
+    RUN_FILE,
+    VECNORMALIZE_FILE,
+    PolicyAgent,
+    algorithm_class,
+)
 from sonar_gym.pretrained import (
     DEFAULT_VALIDATION_EPISODES,
     LEARNING_CURVE_COLUMNS,
@@ -49,11 +55,13 @@ from sonar_gym.pretrained import (
     VALIDATION_SEED_START,
 )
 from sonar_gym.train.evaluation import (
+    evaluate_agents,
     make_env,
     make_named_agent,
     parse_env_args,
     run_episode,
     software_versions,
+    t_confidence_interval,
 )
 from sonar_gym.train.training import load_config, make_training_vec_env
 
@@ -130,16 +138,17 @@ def validation_seeds(recipe: BaselineRecipe) -> list[int]:
 
 def scripted_levels(recipe: BaselineRecipe) -> dict[str, float]:
     """Mean validation reward of each candidate teacher and of ``random``."""
-    env = make_env(recipe.env_id, recipe.env_kwargs)
-    levels = {}
-    try:
-        for name in (*recipe.candidates, "random"):
-            agent = make_named_agent(name, env)
-            rewards = [run_episode(env, agent, seed).reward for seed in validation_seeds(recipe)]
-            levels[name] = float(np.mean(rewards))
-    finally:
-        env.close()
-    return levels
+    results = evaluate_agents(
+        [recipe.env_id],
+        [*recipe.candidates, "random"],
+        episodes=recipe.validation_episodes,
+        seed=VALIDATION_SEED_START,
+        env_kwargs=recipe.env_kwargs,
+    )
+    return {
+        result.agent: float(np.mean([record.reward for record in result.records]))
+        for result in results
+    }
 
 
 @dataclass(frozen=True)
@@ -289,12 +298,6 @@ class CurvePoint:
     ci95: float
 
 
-def _ci95(rewards: np.ndarray) -> float:
-    from scipy import stats
-
-    return float(stats.t.ppf(0.975, len(rewards) - 1) * rewards.std(ddof=1) / np.sqrt(len(rewards)))
-
-
 class ValidationCallback(BaseCallback):
     """Scores the policy on the validation seeds every ``every`` steps; keeps the best."""
 
@@ -332,7 +335,7 @@ class ValidationCallback(BaseCallback):
             timesteps,
             round(time.time() - self.started, 2),
             float(rewards.mean()),
-            _ci95(rewards),
+            t_confidence_interval(rewards.tolist()).half_width or 0.0,
         )
         self.curve.append(point)
         if point.mean_reward > self.best_reward:
@@ -379,8 +382,7 @@ def train_seed(
         make_training_vec_env(recipe.env_id, config.n_envs, training_seed, recipe.env_kwargs, None),
         **config.vec_normalize_kwargs(ALGO),
     )
-    algorithm = __import__("stable_baselines3").PPO
-    model = algorithm(
+    model = algorithm_class(ALGO)(
         config.policy,
         venv,
         seed=training_seed,
