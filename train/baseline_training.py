@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, ClassVar
 
+import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3.common.callbacks import BaseCallback
@@ -275,16 +276,10 @@ def clone_teacher(
 # validation and selection
 
 
-def policy_rewards(
-    model: Any, venv: VecNormalize, env_id: str, env_kwargs: Mapping[str, Any], seeds: list[int]
-) -> np.ndarray:
-    """Episode rewards of the deterministic policy on ``seeds`` (raw rewards)."""
-    env = make_env(env_id, env_kwargs)
-    try:
-        agent = PolicyAgent("candidate", model, env.action_space, venv)
-        return np.array([run_episode(env, agent, seed).reward for seed in seeds])
-    finally:
-        env.close()
+def policy_rewards(model: Any, venv: VecNormalize, env: gym.Env, seeds: list[int]) -> np.ndarray:
+    """Episode rewards of the deterministic policy on ``seeds`` in ``env`` (raw rewards)."""
+    agent = PolicyAgent("candidate", model, env.action_space, venv)
+    return np.array([run_episode(env, agent, seed).reward for seed in seeds])
 
 
 @dataclass
@@ -320,16 +315,14 @@ class ValidationCallback(BaseCallback):
         self.best_reward = -np.inf
         self.best_timesteps = 0
         self._next = recipe.eval_every
+        self.env = make_env(recipe.env_id, recipe.env_kwargs)  # one env for every score
 
     def score(self, timesteps: int) -> CurvePoint:
         """Score now; save the model and statistics if this is the best so far."""
         venv = self.model.get_vec_normalize_env()
         if venv is None:
             raise RuntimeError("the baseline trainer always wraps its envs in VecNormalize")
-        rewards = policy_rewards(
-            self.model, venv, self.recipe.env_id, self.recipe.env_kwargs,
-            validation_seeds(self.recipe),
-        )  # fmt: skip
+        rewards = policy_rewards(self.model, venv, self.env, validation_seeds(self.recipe))
         point = CurvePoint(
             self.training_seed,
             timesteps,
@@ -402,6 +395,7 @@ def train_seed(
             callback.score(int(model.num_timesteps))
     finally:
         venv.close()
+        callback.env.close()
     return SeedRun(
         training_seed,
         run_dir / "best",
