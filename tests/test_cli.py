@@ -9,10 +9,11 @@ import sys
 import types
 from pathlib import Path
 
+import gymnasium as gym
 import pytest
 import torch
 
-from tests.cli_fakes import BOX_ID, DISCRETE_ID, MAX_EPISODE_STEPS
+from tests.cli_fakes import BOX_ID, DISCRETE_ID, MAX_EPISODE_STEPS, MULTI_DISCRETE_ID
 from sonar_gym.train import cli
 
 torch.set_num_threads(1)  # the trainings here use tiny networks: more threads only contend
@@ -347,6 +348,14 @@ def test_benchmark_reports_random_and_ppo_rates_against_cartpole(tmp_path, capsy
         assert entry["ppo_over_cartpole"] == pytest.approx(
             ppo["steps_per_s"] / reference["ppo_steps_per_s"]
         )
+        ceiling = entry["ceiling"]
+        assert ceiling["timesteps"] >= 1
+        assert entry["ceiling_over_cartpole"] == pytest.approx(
+            ceiling["steps_per_s"] / reference["ppo_steps_per_s"]
+        )
+        assert entry["env_seconds_per_ppo_step"] == pytest.approx(
+            1 / ppo["steps_per_s"] - 1 / ceiling["steps_per_s"]
+        )
         assert set(random["phase_shares"]) == {"sensing", "localization", "env other"}
         assert set(ppo["phase_shares"]) == {"sensing", "localization", "env other", "learner"}
         assert sum(ppo["phase_shares"].values()) == pytest.approx(1.0)
@@ -362,6 +371,35 @@ def test_benchmark_random_run_starts_a_new_episode_whenever_one_ends():
     assert rate.steps > MAX_EPISODE_STEPS
     assert rate.episodes >= rate.steps / MAX_EPISODE_STEPS
     assert rate.env_seconds <= rate.seconds
+
+
+@pytest.mark.parametrize("env_id", [DISCRETE_ID, BOX_ID, MULTI_DISCRETE_ID])
+def test_benchmark_free_stand_in_has_the_env_spaces_and_its_episode_length(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    from sonar_gym.train.benchmark import FreeEnv
+
+    real = gym.make(env_id)
+    free = FreeEnv(real.observation_space, real.action_space, episode_steps=3)
+    check_env(free, skip_render_check=True)
+    assert free.observation_space == real.observation_space
+    assert free.action_space == real.action_space
+    observation, _ = free.reset(seed=1)
+    assert real.observation_space.contains(observation)
+    flags = [free.step(free.action_space.sample())[2] for _ in range(3)]
+    assert flags == [False, False, True]
+    with pytest.raises(ValueError, match="episode_steps"):
+        FreeEnv(real.observation_space, real.action_space, episode_steps=0)
+
+
+def test_benchmark_ceiling_trains_ppo_on_the_free_stand_in():
+    from sonar_gym.train.benchmark import ceiling_rate
+
+    rate = ceiling_rate(MULTI_DISCRETE_ID, seconds=0.3, episode_steps=5, n_steps=64)
+    assert rate.env_id == MULTI_DISCRETE_ID and rate.timesteps >= 1
+    # the stand-in keeps no timing phases: all of its time inside the env is bookkeeping
+    assert rate.phase_seconds == {}
+    assert rate.env_seconds < rate.seconds
 
 
 def test_benchmark_phase_shares_split_the_wall_time():

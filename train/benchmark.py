@@ -11,6 +11,11 @@ One run, one process, reported as tables and written to JSON:
   env-steps per second** (``PPO("MlpPolicy", n_steps=512, batch_size=64, n_epochs=4)``, one
   env, torch on one thread, until the wall-time budget is spent)
   with its ratio to CartPole's PPO rate (the mean of the before and after runs);
+- per env, PPO's **ceiling**: the same PPO on a stand-in env with the env's observation and
+  action spaces and its mean episode length whose ``step`` costs nothing
+  (:class:`FreeEnv`). Its ratio to CartPole is the best the env could reach were it free: the
+  learner's own cost grows with the spaces (a ``MultiDiscrete`` head is several
+  categorical distributions), and that part no env work can remove;
 - per env, the **share of wall time per phase**: the env's own ``env.unwrapped.timing``
   phases (e.g. ``sensing``, ``localization``), the rest of ``reset``/``step`` (``env other``),
   and for PPO everything outside the env (``learner``: policy, rollout buffer, updates).
@@ -21,6 +26,7 @@ which is why the ratio to CartPole in the same run is the number to compare acro
 
 from __future__ import annotations
 
+import copy
 import importlib
 import math
 import time
@@ -40,6 +46,8 @@ PPO_N_EPOCHS = 4
 DEFAULT_SECONDS = 20.0
 RANDOM_SHARE_OF_BUDGET = 0.5
 """The random-action run gets this fraction of the per-env budget (it needs less to settle)."""
+CEILING_SHARE_OF_BUDGET = 0.5
+"""The free-env PPO run gets this fraction of the per-env budget (its rate is steady)."""
 ENV_OTHER = "env other"
 LEARNER = "learner"
 
@@ -68,6 +76,39 @@ class StepClock(gym.Wrapper):
         finally:
             self.env_seconds += time.perf_counter() - start
             self.steps += 1
+
+
+class FreeEnv(gym.Env[Any, Any]):
+    """A stand-in with a real env's spaces whose ``reset`` and ``step`` cost (almost) nothing.
+
+    It returns a fresh copy of one fixed observation (a seeded sample of the space), reward 0,
+    and ends every episode after ``episode_steps`` steps, so PPO on it measures the learner
+    alone for those spaces and that episode length.
+    """
+
+    def __init__(
+        self, observation_space: gym.Space[Any], action_space: gym.Space[Any], episode_steps: int
+    ) -> None:
+        if episode_steps < 1:
+            raise ValueError(f"episode_steps must be at least 1, got {episode_steps}")
+        self.observation_space = observation_space
+        self.action_space = action_space
+        self.episode_steps = episode_steps
+        observation_space.seed(0)
+        self._observation = observation_space.sample()
+        self._steps = 0
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        super().reset(seed=seed)
+        self._steps = 0
+        return copy.deepcopy(self._observation), {}
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        self._steps += 1
+        observation = copy.deepcopy(self._observation)
+        return observation, 0.0, self._steps >= self.episode_steps, False, {}
 
 
 def _timing_snapshot(env: gym.Env) -> dict[str, float]:
@@ -207,10 +248,33 @@ def ppo_rate(
     ``learner`` share says how much). Torch runs on the threads it is given
     (:func:`run_benchmark` sets one).
     """
+    return _train_for(env_id, make_env(env_id, env_kwargs), seconds, seed, n_steps)
+
+
+def ceiling_rate(
+    env_id: str,
+    seconds: float,
+    episode_steps: int,
+    env_kwargs: Mapping[str, Any] | None = None,
+    seed: int = 0,
+    n_steps: int = PPO_N_STEPS,
+) -> PPORate:
+    """:func:`ppo_rate` on a :class:`FreeEnv` with ``env_id``'s spaces and ``episode_steps``:
+    the PPO rate the env would allow if its ``reset`` and ``step`` cost nothing."""
+    env = make_env(env_id, env_kwargs)
+    try:
+        free = FreeEnv(env.observation_space, env.action_space, episode_steps)
+    finally:
+        env.close()
+    return _train_for(env_id, free, seconds, seed, n_steps)
+
+
+def _train_for(env_id: str, env: gym.Env, seconds: float, seed: int, n_steps: int) -> PPORate:
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
 
     if not seconds > 0.0:
+        env.close()
         raise ValueError(f"seconds must be positive, got {seconds}")
 
     class WallTimeBudget(BaseCallback):
@@ -224,11 +288,11 @@ def ppo_rate(
         def _on_step(self) -> bool:
             return time.perf_counter() - self.start < seconds
 
-    env = StepClock(make_env(env_id, env_kwargs))
+    clocked = StepClock(env)
     try:
         model = PPO(
             "MlpPolicy",
-            env,
+            clocked,
             n_steps=n_steps,
             batch_size=min(PPO_BATCH_SIZE, n_steps),
             n_epochs=PPO_N_EPOCHS,
@@ -236,17 +300,17 @@ def ppo_rate(
             device="cpu",
             verbose=0,
         )
-        before = _timing_snapshot(env)
+        before = _timing_snapshot(clocked)
         start = time.perf_counter()
         model.learn(total_timesteps=10**12, callback=WallTimeBudget())
         elapsed = time.perf_counter() - start
-        after = _timing_snapshot(env)
+        after = _timing_snapshot(clocked)
         timesteps = int(model.num_timesteps)
         updates = int(model._n_updates) // PPO_N_EPOCHS
     finally:
-        env.close()
+        clocked.close()
     phases = {phase: after[phase] - before.get(phase, 0.0) for phase in after}
-    return PPORate(env_id, timesteps, updates, elapsed, env.env_seconds, phases)
+    return PPORate(env_id, timesteps, updates, elapsed, clocked.env_seconds, phases)
 
 
 def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
@@ -267,12 +331,16 @@ def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
 
 @dataclass(frozen=True)
 class EnvSpeed:
-    """Both rates of one env and PPO's ratio to CartPole-v1's PPO rate in the same run."""
+    """The rates of one env, and PPO's ratio to CartPole-v1's PPO rate in the same run.
+
+    ``ceiling`` is PPO on a :class:`FreeEnv` with the env's spaces and mean episode length.
+    """
 
     env_id: str
     random: RandomRate
     ppo: PPORate
     reference_steps_per_s: float
+    ceiling: PPORate
 
     @property
     def ppo_over_reference(self) -> float:
@@ -280,6 +348,18 @@ class EnvSpeed:
         if self.reference_steps_per_s <= 0.0:
             return math.nan
         return self.ppo.steps_per_s / self.reference_steps_per_s
+
+    @property
+    def ceiling_over_reference(self) -> float:
+        """PPO env-steps/s on the free stand-in over CartPole-v1's: the most the env allows."""
+        if self.reference_steps_per_s <= 0.0:
+            return math.nan
+        return self.ceiling.steps_per_s / self.reference_steps_per_s
+
+    @property
+    def env_seconds_per_step(self) -> float:
+        """Wall time a PPO step costs beyond the free stand-in's, seconds: the env's share."""
+        return 1.0 / self.ppo.steps_per_s - 1.0 / self.ceiling.steps_per_s
 
 
 def _rate_to_dict(rate: RandomRate | PPORate) -> dict[str, Any]:
@@ -359,6 +439,9 @@ class BenchmarkReport:
                     "random": _rate_to_dict(speed.random),
                     "ppo": _rate_to_dict(speed.ppo),
                     "ppo_over_cartpole": speed.ppo_over_reference,
+                    "ceiling": _rate_to_dict(speed.ceiling),
+                    "ceiling_over_cartpole": speed.ceiling_over_reference,
+                    "env_seconds_per_ppo_step": speed.env_seconds_per_step,
                 }
                 for speed in self.envs
             ],
@@ -380,7 +463,8 @@ def run_benchmark(
     ppo_n_steps: int = PPO_N_STEPS,
     measure_pan: bool = True,
 ) -> BenchmarkReport:
-    """Pan throughput, CartPole PPO, then per env random actions and PPO, then CartPole again.
+    """Pan throughput, CartPole PPO, then per env random actions, PPO and PPO on the env's free
+    stand-in, then CartPole again.
 
     Torch is set to one thread for the run (and restored after). An env that raises is
     recorded in ``failures`` and the others still run.
@@ -422,7 +506,7 @@ def run_benchmark(
             notes.append("pan throughput skipped: not requested")
         stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (before)")
         before = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
-        measured: list[tuple[str, RandomRate, PPORate]] = []
+        measured: list[tuple[str, RandomRate, PPORate, PPORate]] = []
         failures: dict[str, str] = {}
         for env_id in env_ids:
             try:
@@ -430,7 +514,13 @@ def run_benchmark(
                 random = random_rate(env_id, RANDOM_SHARE_OF_BUDGET * seconds, env_kwargs)
                 stage(f"{env_id}: PPO for {seconds:g} s")
                 ppo = ppo_rate(env_id, seconds, env_kwargs, n_steps=ppo_n_steps)
-                measured.append((env_id, random, ppo))
+                ceiling_seconds = CEILING_SHARE_OF_BUDGET * seconds
+                stage(f"{env_id}: PPO on a free stand-in for {ceiling_seconds:g} s")
+                episode_steps = max(1, round(random.steps / random.episodes))
+                ceiling = ceiling_rate(
+                    env_id, ceiling_seconds, episode_steps, env_kwargs, n_steps=ppo_n_steps
+                )
+                measured.append((env_id, random, ppo, ceiling))
             except UsageError:
                 raise
             except Exception as error:  # a broken env must not hide the other envs' numbers
@@ -446,7 +536,7 @@ def run_benchmark(
         pan_rows=tuple(pan_rows),
         reference_before=before,
         reference_after=after,
-        envs=tuple(EnvSpeed(env_id, r, p, reference) for env_id, r, p in measured),
+        envs=tuple(EnvSpeed(env_id, r, p, reference, c) for env_id, r, p, c in measured),
         failures=failures,
         notes=tuple(notes),
     )

@@ -352,7 +352,8 @@ def _shares_text(shares: Mapping[str, float]) -> str:
 
 def speed_table(report: BenchmarkReport) -> Table:
     """Per env: random-action steps/s, PPO env-steps/s and its ratio to PPO on CartPole-v1 in
-    the same run, and the share of wall time per phase of both runs."""
+    the same run, the ceiling (the ratio on a free stand-in with the env's spaces), the env's
+    own time per PPO step, and the share of wall time per phase of both runs."""
     reference = report.reference_steps_per_s
     table = Table(
         title=f"env steps per second (PPO on CartPole-v1: {reference:.0f} steps/s, "
@@ -361,7 +362,14 @@ def speed_table(report: BenchmarkReport) -> Table:
         header_style="bold",
     )
     table.add_column("env", no_wrap=True)
-    for column in ("random steps/s", "episodes", "PPO steps/s", "PPO vs CartPole"):
+    for column in (
+        "random steps/s",
+        "episodes",
+        "PPO steps/s",
+        "PPO vs CartPole",
+        "ceiling vs CartPole",
+        "env ms per PPO step",
+    ):
         table.add_column(column, justify="right")
     table.add_column("random: time share")
     table.add_column("PPO: time share")
@@ -372,6 +380,8 @@ def speed_table(report: BenchmarkReport) -> Table:
             str(speed.random.episodes),
             f"{speed.ppo.steps_per_s:.1f}",
             f"{speed.ppo_over_reference:.3f}",
+            f"{speed.ceiling_over_reference:.3f}",
+            f"{1e3 * speed.env_seconds_per_step:.2f}",
             _shares_text(speed.random.phase_shares),
             _shares_text(speed.ppo.phase_shares),
         )
