@@ -361,6 +361,10 @@ def test_benchmark_reports_random_and_ppo_rates_against_cartpole(tmp_path, capsy
         assert sum(ppo["phase_shares"].values()) == pytest.approx(1.0)
         assert 0.0 < sum(random["phase_shares"].values()) <= 1.0 + 1e-9
     assert data["pan"] == [{"name": "pan", "pans_per_s": 10.0}] and data["notes"] == []
+    room = data["room_reset"]
+    assert room["extra_walls"] == 1500 and room["resets"] == 4
+    assert room["make_seconds"] > 0 and room["reset_seconds"] > 0
+    assert "1500 extra" in out
 
 
 def test_benchmark_random_run_starts_a_new_episode_whenever_one_ends():
@@ -400,6 +404,24 @@ def test_benchmark_ceiling_trains_ppo_on_the_free_stand_in():
     # the stand-in keeps no timing phases: all of its time inside the env is bookkeeping
     assert rate.phase_seconds == {}
     assert rate.env_seconds < rate.seconds
+
+
+def test_large_room_scenario_adds_the_pieces_inside_the_room():
+    from sonar_gym.scenario import load_scenario
+    from sonar_gym.train.bench_room import PIECE_LENGTH_M, scenario_with_extra_walls
+
+    base = len(load_scenario("beom_cho_lab").walls)
+    scenario = scenario_with_extra_walls(30, seed=3)
+    pieces = scenario["walls"][-30:]
+    assert len(scenario["walls"]) == base + 30
+    (x_min, y_min), (x_max, y_max) = scenario["room"]["min"], scenario["room"]["max"]
+    for piece in pieces:
+        (ax, ay), (bx, by) = piece["a"], piece["b"]
+        assert ay == by and bx - ax == pytest.approx(PIECE_LENGTH_M)
+        assert x_min < ax < bx < x_max and y_min < ay < y_max
+    assert scenario == scenario_with_extra_walls(30, seed=3)
+    with pytest.raises(ValueError, match="extra_walls"):
+        scenario_with_extra_walls(-1)
 
 
 def test_benchmark_phase_shares_split_the_wall_time():

@@ -2,6 +2,8 @@
 
 One run, one process, reported as tables and written to JSON:
 
+- **the reset cost of a large room** (:mod:`sonar_gym.train.bench_room`): ``gym.make`` and four
+  resets of BeaconScan in ``beom_cho_lab`` with 1,500 extra walls;
 - **sonar pan throughput**, the rows of ``sonar_gym.train.bench_sonar.pan_throughput()`` (each
   with its ratio to bare pymunk ray casts), or a note when that module does not provide them;
 - **PPO on CartPole-v1** (the yardstick every RL user knows), measured before the envs *and*
@@ -37,6 +39,7 @@ from typing import Any
 import gymnasium as gym
 
 from sonar_gym.train import UsageError
+from sonar_gym.train.bench_room import DEFAULT_EXTRA_WALLS, RoomReset, room_reset
 from sonar_gym.train.evaluation import check_env_kwargs, make_env
 
 REFERENCE_ENV_ID = "CartPole-v1"
@@ -383,6 +386,7 @@ class BenchmarkReport:
             :data:`RANDOM_SHARE_OF_BUDGET` of it; CartPole the whole budget, twice).
         ppo_n_steps: PPO's rollout length.
         pan_rows: rows of :func:`pan_throughput`.
+        room_reset: make and resets in a room with many walls (None when not measured).
         reference_before: PPO on CartPole-v1 before the envs.
         reference_after: PPO on CartPole-v1 after the envs.
         envs: the rates per env that ran.
@@ -393,6 +397,7 @@ class BenchmarkReport:
     seconds: float
     ppo_n_steps: int
     pan_rows: tuple[Mapping[str, Any], ...]
+    room_reset: RoomReset | None
     reference_before: PPORate
     reference_after: PPORate
     envs: tuple[EnvSpeed, ...]
@@ -426,6 +431,7 @@ class BenchmarkReport:
                 **dict(meta or {}),
             },
             "pan": [dict(row) for row in self.pan_rows],
+            "room_reset": None if self.room_reset is None else self.room_reset.to_dict(),
             "reference": {
                 "env_id": REFERENCE_ENV_ID,
                 "before": _rate_to_dict(self.reference_before),
@@ -476,7 +482,7 @@ def run_benchmark(
         on_stage: told what is measured next.
         ppo_n_steps: PPO's rollout length (512 in every reported number; smaller only to
             test the plumbing quickly).
-        measure_pan: False skips the pan rows (with a note).
+        measure_pan: False skips the pan rows and the large-room reset (with a note).
 
     Raises:
         UsageError: an env's constructor does not take a key of ``env_kwargs``.
@@ -498,12 +504,15 @@ def run_benchmark(
     try:
         notes: list[str] = []
         pan_rows: list[dict[str, Any]] = []
+        room: RoomReset | None = None
         if measure_pan:
             stage("sonar pan throughput")
             pan_rows, note = pan_throughput()
             notes.extend([note] if note else [])
+            stage(f"resets of a room with {DEFAULT_EXTRA_WALLS} extra walls")
+            room = room_reset()
         else:
-            notes.append("pan throughput skipped: not requested")
+            notes.append("pan throughput and large-room reset skipped: not requested")
         stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (before)")
         before = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
         measured: list[tuple[str, RandomRate, PPORate, PPORate]] = []
@@ -534,6 +543,7 @@ def run_benchmark(
         seconds=seconds,
         ppo_n_steps=ppo_n_steps,
         pan_rows=tuple(pan_rows),
+        room_reset=room,
         reference_before=before,
         reference_after=after,
         envs=tuple(EnvSpeed(env_id, r, p, reference, c) for env_id, r, p, c in measured),

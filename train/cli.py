@@ -214,7 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
         f"(default {DEFAULT_BENCHMARK_SECONDS:g})",
     )
     benchmark.add_argument(
-        "--no-pan", action="store_true", help="skip the sonar pan throughput rows"
+        "--no-pan",
+        action="store_true",
+        help="skip the sonar pan throughput rows and the large-room reset",
     )
     benchmark.add_argument(
         "--json",
@@ -580,6 +582,8 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
         console.print(note, style="yellow", markup=False)
     if results.pan_rows:
         console.print(report.pan_table(results.pan_rows))
+    if results.room_reset is not None:
+        console.print(report.room_reset_line(results.room_reset), markup=False)
     if results.envs:
         console.print(report.speed_table(results))
     for env_id, failure in results.failures.items():

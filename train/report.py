@@ -20,6 +20,7 @@ from rich.console import Console, RenderableType
 from rich.table import Table
 from rich.text import Text
 
+from sonar_gym.train.bench_room import RoomReset
 from sonar_gym.train.benchmark import BenchmarkReport
 from sonar_gym.train.evaluation import AgentResult, AgentSummary
 
@@ -344,6 +345,15 @@ def pan_table(rows: Sequence[Mapping[str, Any]]) -> Table:
     for row in rows:
         table.add_row(*(Text(_format_cell(row.get(column))) for column in columns))
     return table
+
+
+def room_reset_line(room: RoomReset) -> str:
+    """One line: the make and reset times of the large-room measurement."""
+    return (
+        f"{room.env_id} in a room of {room.walls} walls ({room.extra_walls} extra): "
+        f"gym.make {room.make_seconds:.2f} s, {room.resets} resets {room.reset_seconds:.3f} s "
+        f"in all"
+    )
 
 
 def _shares_text(shares: Mapping[str, float]) -> str:
