@@ -188,8 +188,19 @@ class SideSonars(PulseEchoSonar):
         """
         if len(poses) == 0:
             return SideReadings(np.zeros(0), np.zeros(0))
-        ranges, _ = self.readings(world, self.first_echoes_along(world, poses), rng)
-        pairs = ranges.reshape(len(poses), 2)
+        return self.read_echoes(world, self.first_echoes_along(world, poses), rng)
+
+    def read_echoes(
+        self, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
+    ) -> SideReadings:
+        """The readout of first echoes ``(2 n,)`` in the order of :meth:`first_echoes_along`.
+
+        Its first ``2 m`` rows give the readings of the first ``m`` poses, with the draws of
+        ``m`` calls of :meth:`read`: a caller that keeps only a prefix of a run of samples
+        replays their draws without finding their echoes again.
+        """
+        ranges, _ = self.readings(world, echoes, rng)
+        pairs = ranges.reshape(-1, 2)
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
 
     def sample_along_per_pose(

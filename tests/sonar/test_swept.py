@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sonar_gym.pose import Pose
-from sonar_gym.sonar.pulse_echo import IDEAL_READOUT
+from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, FirstEchoes
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.sonar.swept import APCS_SAMPLE_SPACING_M, APCS_SPEED_MPS, SideSonars, SweptSonar
 from tests.sonar.worlds import cluttered_room, degrees, world
@@ -107,3 +107,25 @@ def test_no_poses_no_samples() -> None:
 def test_bad_side_offset_raises() -> None:
     with pytest.raises(ValueError, match="lateral_offset_m"):
         SideSonars.apcs(lateral_offset_m=-0.1)
+
+
+def test_reading_a_prefix_of_echoes_gives_the_readings_and_draws_of_those_poses() -> None:
+    sonars = SideSonars.apcs()
+    test_world = corridor(walls=[{"a": [3.2, 0.8], "b": [3.6, 0.8]}])
+    poses = np.array([[x, 0.05 * math.sin(x), 0.01 * x] for x in np.arange(3.0, 4.0, 0.03)])
+    echoes = sonars.first_echoes_along(test_world, poses)
+    kept = 11
+    prefix_rng, direct_rng = np.random.default_rng(5), np.random.default_rng(5)
+    prefix = sonars.read_echoes(
+        test_world,
+        FirstEchoes(
+            echoes.detected[: 2 * kept],
+            echoes.path_lengths[: 2 * kept],
+            echoes.amplitudes[: 2 * kept],
+        ),
+        prefix_rng,
+    )
+    direct = sonars.sample_along(test_world, poses[:kept], direct_rng)
+    np.testing.assert_array_equal(prefix.left_m, direct.left_m)
+    np.testing.assert_array_equal(prefix.right_m, direct.right_m)
+    assert prefix_rng.random() == direct_rng.random()  # both streams left in the same state
