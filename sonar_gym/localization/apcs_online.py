@@ -37,9 +37,9 @@ from sonar_gym.localization.apcs import (
     WallFit,
     WallVector,
     correct_with_detected_wall,
-    estimated_reflection_points,
     fit_wall_group,
 )
+from sonar_gym.localization.apcs_walls import newest_reflection_points
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
 from sonar_gym.pose import FloatArray, Pose
@@ -51,6 +51,13 @@ BEAM_OFFSET_RAD = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 """Beam axis of each side sonar relative to the robot heading, radians."""
 MEASUREMENT_VARIANCES = ("fixed", "fit")
 CORRECTION_METHODS = ("paper", "linear")
+
+
+def _check_ranges(ranges: FloatArray, name: str) -> None:
+    if np.any(ranges < 0.0):
+        raise ValueError(
+            f"argument {name!r} must hold ranges >= 0 metres (NaN for a dropout); got {ranges!r}"
+        )
 
 
 def _check_side(side: object) -> str:
@@ -232,6 +239,13 @@ class WallStream:
             raise ValueError(
                 f"argument 'ranges_m' must have shape ({len(positions)},); got {ranges.shape}"
             )
+        _check_ranges(ranges, "ranges_m")
+        return self._pending(positions, headings, ranges)
+
+    def _pending(
+        self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
+    ) -> tuple[FloatArray, FloatArray, np.ndarray]:
+        """:meth:`pending_erps` on checked arrays."""
         directions = headings + BEAM_OFFSET_RAD[self.side]
         if self._previous is not None:
             previous_xy, previous_direction, previous_range = self._previous
@@ -245,12 +259,12 @@ class WallStream:
         points = np.zeros((n, 2))
         phis = np.zeros(n)
         valid = np.zeros(n, dtype=bool)
-        erps = estimated_reflection_points(
-            positions, directions, ranges, valid_range_m=self.params.sensing_range_m
+        erp_points, erp_directions, reading_indices = newest_reflection_points(
+            positions, directions, ranges, self.params.sensing_range_m
         )
-        rows = erps.reading_indices - 1 + offset  # the newer reading of each pair
-        points[rows] = erps.points
-        phis[rows] = erps.reflection_directions_rad
+        rows = reading_indices - 1 + offset  # the newer reading of each pair
+        points[rows] = erp_points
+        phis[rows] = erp_directions
         valid[rows] = True
         return points, phis, valid
 
@@ -488,6 +502,7 @@ class APCSTracker:
                     f"argument 'readings[{side!r}]' must have shape {samples.shape}; "
                     f"got {array.shape}"
                 )
+            _check_ranges(array, f"readings[{side!r}]")
             ranges[side] = array
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
         poses, covariances = predict_run(
@@ -506,7 +521,7 @@ class APCSTracker:
             rows = poses[samples[first_sample:] + 1]
             for side in sides:
                 sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
-                points, phis, valid = self.streams[side].pending_erps(
+                points, phis, valid = self.streams[side]._pending(
                     sensor_xy, rows[:, 2], ranges[side][first_sample:]
                 )
                 pending[side] = (

@@ -454,7 +454,40 @@ def estimated_reflection_points(
     count = positions.shape[0]
     if count < 2:
         return EstimatedReflectionPoints.from_points(np.zeros((0, 2)), np.zeros(0))
+    return _reflection_points(positions, directions, ranges, points_per_pair, max_off_axis_rad)
 
+
+def newest_reflection_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    valid_range_m: tuple[float, float],
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """:func:`estimated_reflection_points` with ``points_per_pair="newest"`` on checked inputs.
+
+    For callers that have validated the readings themselves (``(N, 2)`` finite positions,
+    ``(N,)`` finite directions, ``(N,)`` non-negative ranges, ``N >= 2``, ``valid_range_m``
+    a ``(min, max)`` of floats): the same numbers without the checks and the dataclass.
+
+    Returns:
+        ``(points, reflection_directions_rad, reading_indices)`` as in
+        :class:`EstimatedReflectionPoints`.
+    """
+    if len(positions) < 2:
+        return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    low, high = valid_range_m
+    ranges = np.where((ranges >= low) & (ranges <= high), ranges, np.nan)
+    points, phi, pairs = _newest_points(positions, directions, ranges)
+    return points, wrap_angles(phi), pairs + 1
+
+
+def _newest_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    max_off_axis_rad: float | None = None,
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """``(R2, phi, pairs)`` of every reading pair that gives an ERP, eqs (1)-(6)."""
     p1, p2 = positions[:-1], positions[1:]
     r1, r2 = ranges[:-1], ranges[1:]
     phi_plus, phi_minus, solvable = reflection_direction_candidates(p1, p2, r1, r2)
@@ -474,9 +507,22 @@ def estimated_reflection_points(
     phi = phi[pairs]
     unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     second_erps = p2[pairs] + r2[pairs, None] * unit  # R2, eqs (2)-(3)
+    return second_erps, phi, pairs
+
+
+def _reflection_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    points_per_pair: str,
+    max_off_axis_rad: float | None,
+) -> EstimatedReflectionPoints:
+    """The ERPs of :func:`estimated_reflection_points` on its checked inputs."""
+    second_erps, phi, pairs = _newest_points(positions, directions, ranges, max_off_axis_rad)
     if points_per_pair == "newest":
         return EstimatedReflectionPoints(second_erps, phi, pairs + 1, pairs)
-    first_erps = p1[pairs] + r1[pairs, None] * unit  # R1 = P1 + P1R1, eq. (2)
+    unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    first_erps = positions[:-1][pairs] + ranges[:-1][pairs, None] * unit  # R1 = P1 + P1R1, eq. (2)
     points = np.stack([first_erps, second_erps], axis=1).reshape(-1, 2)
     return EstimatedReflectionPoints(
         points,

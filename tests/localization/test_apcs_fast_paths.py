@@ -1,0 +1,40 @@
+"""The APCS fast paths give exactly the numbers of the reference functions they stand for."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sonar_gym.localization.apcs import DEFAULT_PARAMETERS, estimated_reflection_points
+from sonar_gym.localization.apcs_walls import newest_reflection_points
+
+
+def _readings(seed: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A side sensor driving a wobbly line past a wall with dropouts, jumps and stops."""
+    rng = np.random.default_rng(seed)
+    steps = rng.choice([0.0, 0.03, 0.06], size=count, p=[0.1, 0.6, 0.3])
+    headings = np.cumsum(rng.normal(0.0, 0.02, count))
+    positions = np.column_stack(
+        [np.cumsum(steps * np.cos(headings)), np.cumsum(steps * np.sin(headings))]
+    )
+    ranges = 1.0 + 0.002 * np.arange(count) + rng.normal(0.0, 0.003, count)
+    ranges[rng.random(count) < 0.1] = np.nan
+    ranges[rng.random(count) < 0.05] = 6.0  # beyond the sensing range
+    ranges[rng.random(count) < 0.05] = 0.1  # inside the minimum range
+    ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
+    return positions, headings + np.pi / 2.0 + 7.0 * np.pi * (rng.random(count) < 0.1), ranges
+
+
+def test_newest_reflection_points_are_those_of_estimated_reflection_points() -> None:
+    for seed in range(20):
+        for count in (0, 1, 2, 3, 40):
+            positions, directions, ranges = _readings(seed, count)
+            reference = estimated_reflection_points(
+                positions, directions, ranges, valid_range_m=DEFAULT_PARAMETERS.sensing_range_m
+            )
+            points, phis, readings = newest_reflection_points(
+                positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m
+            )
+            np.testing.assert_array_equal(points, reference.points)
+            np.testing.assert_array_equal(phis, reference.reflection_directions_rad)
+            np.testing.assert_array_equal(readings, reference.reading_indices)
+            assert count < 40 or len(reference) > 5  # the scene does give ERPs
