@@ -311,8 +311,11 @@ def _side_first_echoes(
     if footprint > 0.0:
         offset = sensors - centres
         test = footprint > transducer.min_range_m - np.hypot(offset[:, 0], offset[:, 1])
-        inside = np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
-        valid &= ~(test[:, None] & inside)
+        if test.any():  # else no path is dropped: skip the (P, C) distances
+            inside = (
+                np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
+            )
+            valid &= ~(test[:, None] & inside)
 
     # Detection along each sensor's beam (first_echoes with one ping per sensor).
     cos_h, sin_h = np.cos(headings), np.sin(headings)
