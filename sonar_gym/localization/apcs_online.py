@@ -32,17 +32,15 @@ from sonar_gym.localization.apcs import (
     APCSParameters,
     CorrectionResult,
     DetectedWall,
-    EstimatedReflectionPoints,
     MatchResult,
     WallFit,
     WallVector,
     correct_with_detected_wall,
-    fit_wall_group,
 )
-from sonar_gym.localization.apcs_walls import newest_reflection_points
+from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
 SIDE_NAMES = ("left", "right")
@@ -351,8 +349,9 @@ class WallStream:
         self._group_points, self._group_directions = [], []
         if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
             return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, tuple(range(len(points)))), points)
-        erps = EstimatedReflectionPoints.from_points(points, directions)
-        return ClosedGroup(fit_wall_group(erps, range(len(points)), self.params), points)
+        indices = tuple(range(len(points)))
+        fit = fit_group_points(points, wrap_angles(directions), indices, self.params)
+        return ClosedGroup(fit, points)
 
 
 # --------------------------------------------------------------------------------------------

@@ -674,8 +674,27 @@ def fit_wall_group(
         raise ValueError(f"group must hold positions in 0..{points.shape[0] - 1}, got {indices}")
     if len(indices) < params.min_group_size:
         return WallFit(GROUP_TOO_FEW_POINTS, indices)
-
     members = points[list(indices)]
+    return fit_group_points(
+        members, None if directions is None else directions[list(indices)], indices, params
+    )
+
+
+def fit_group_points(
+    members: FloatArray,
+    directions: FloatArray | None,
+    indices: tuple[int, ...],
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> WallFit:
+    """:func:`fit_wall_group` of a group given as its own points, on checked inputs.
+
+    Args:
+        members: ``(n, 2)`` the group's ERPs, finite, metres in {W}, with
+            ``n >= params.min_group_size``.
+        directions: ``(n,)`` their reflection directions, radians in (-pi, pi], or ``None``
+            for plain points.
+        indices: the group's positions in the ERP sequence (kept in the verdict).
+    """
     centroid = members.mean(axis=0)
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
@@ -687,8 +706,7 @@ def fit_wall_group(
 
     occupied_side = np.array([-along[1], along[0]])  # left of `along`
     if directions is not None:
-        group_directions = directions[list(indices)]
-        towards_wall = np.array([np.cos(group_directions).sum(), np.sin(group_directions).sum()])
+        towards_wall = np.array([np.cos(directions).sum(), np.sin(directions).sum()])
         flip = float(occupied_side @ towards_wall) < 0.0
     else:
         flip = float((centred[-1] - centred[0]) @ along) < 0.0

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonar_gym.localization.apcs import DEFAULT_PARAMETERS, estimated_reflection_points
+from sonar_gym.localization.apcs import (
+    DEFAULT_PARAMETERS,
+    GROUP_OK,
+    GROUP_TOO_FEW_POINTS,
+    GROUP_TOO_MUCH_VARIANCE,
+    EstimatedReflectionPoints,
+    estimated_reflection_points,
+    fit_wall_group,
+)
+from sonar_gym.localization.apcs_online import WallStream
 from sonar_gym.localization.apcs_walls import newest_reflection_points
 
 
@@ -38,3 +47,31 @@ def test_newest_reflection_points_are_those_of_estimated_reflection_points() -> 
             np.testing.assert_array_equal(phis, reference.reflection_directions_rad)
             np.testing.assert_array_equal(readings, reference.reading_indices)
             assert count < 40 or len(reference) > 5  # the scene does give ERPs
+
+
+def test_a_stream_closes_its_groups_with_the_verdicts_of_fit_wall_group() -> None:
+    rng = np.random.default_rng(3)
+    steps = np.where(rng.random(400) < 0.08, 0.5, 0.03)  # a jump now and then
+    along = np.cumsum(steps)
+    points = np.column_stack([along, 1.0 + rng.normal(0.0, 0.03 * rng.random(400), 400)])
+    phis = np.pi / 2.0 + rng.normal(0.0, 0.05, 400) + 2.0 * np.pi * (rng.random(400) < 0.2)
+    stream = WallStream("left")
+    closed = []
+    for point, phi in zip(points, phis, strict=True):
+        closed.extend(stream.accept((point[0], 0.0), 0.0, 1.0, (point.tolist(), float(phi))))
+    closed.extend(stream.flush())
+    verdicts = {group.fit.status for group in closed}
+    assert {GROUP_OK, GROUP_TOO_FEW_POINTS, GROUP_TOO_MUCH_VARIANCE} <= verdicts
+    first = 0
+    for group in closed:
+        count = len(group.points)
+        np.testing.assert_array_equal(group.points, points[first : first + count])
+        reference = fit_wall_group(
+            EstimatedReflectionPoints.from_points(
+                points[first : first + count], phis[first : first + count]
+            ),
+            range(count),
+        )
+        assert group.fit == reference
+        first += count
+    assert first == len(points)
