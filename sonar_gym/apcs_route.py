@@ -297,8 +297,19 @@ class APCSRoute:
                 half = 0.5 * turn * base
                 command(-half, half, straight=False)
             count = min(remaining, steps_per_aim)
+            # command(step_m, step_m, straight=True) count times, inlined: the hot loop.
+            step_noise = encoder_std * math.sqrt(abs(step_m))
             for _ in range(count):
-                command(step_m, step_m, straight=True)
+                normals, _ = plan.draws.draw(rng)
+                noise_left, noise_right = normals.tolist()
+                left = step_m + step_noise * noise_left
+                right = step_m + step_noise * noise_right
+                distance, turn = 0.5 * (right + left), (right - left) / base
+                heading = theta + 0.5 * turn
+                x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
+                theta = wrap_angle(theta + turn)
+            plan.commanded.extend([(step_m, step_m)] * count)
+            plan.straight.extend([True] * count)
             if count < steps_per_aim:
                 waypoint += 1
             plan.stops.append(len(plan.commanded))
