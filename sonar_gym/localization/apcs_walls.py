@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.pose import FloatArray, angle_difference, wrap_angles
+from sonar_gym.pose import FloatArray, wrap_angle, wrap_angles
 
 IntArray = npt.NDArray[np.int64]
 
@@ -868,21 +868,22 @@ def check_wall(
     ``d1 = |T_s V_s|`` and ``d2 = |T_e V_e|`` are the distances of the detected end points
     from that line.
     """
-    orientation_error = angle_difference(detected.direction_angle, map_wall.direction_angle)
-    # WallVector.projection_parameter and signed_distance on its validated float end points,
-    # inlined: this runs for every map wall against every detected wall.
+    # angle_difference of the direction angles, and WallVector.projection_parameter and
+    # signed_distance (with line_coefficients (a, b, c) = (uy, -ux, offset)) on the validated
+    # float end points, inlined: this runs for every map wall against every detected wall.
+    orientation_error = wrap_angle(detected._angle - map_wall._angle)  # type: ignore[attr-defined]
     (start_x, start_y), (end_x, end_y) = detected.start, detected.end
     wall_x, wall_y = map_wall.start
-    a, b, c = map_wall.line_coefficients
     ux, uy = map_wall._unit  # type: ignore[attr-defined]
-    length = map_wall.length
+    a, b, c = uy, -ux, map_wall._offset  # type: ignore[attr-defined]
+    length = map_wall._length  # type: ignore[attr-defined]
     start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
     end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
     d1 = a * start_x + b * start_y + c
     d2 = a * end_x + b * end_y + c
     distance_squared = d1 * d1 + d2 * d2
     slack = 1e-12
-    inside = all(-slack <= t <= 1.0 + slack for t in (start_parameter, end_parameter))
+    inside = -slack <= start_parameter <= 1.0 + slack and -slack <= end_parameter <= 1.0 + slack
     return WallCheck(
         map_index=map_index,
         wall=map_wall,
