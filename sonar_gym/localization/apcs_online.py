@@ -35,8 +35,9 @@ from sonar_gym.localization.apcs import (
     MatchResult,
     WallFit,
     WallVector,
-    correct_with_detected_wall,
+    correct_with_checked_wall,
 )
+from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
 from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
@@ -445,6 +446,8 @@ class APCSTracker:
         self.wall_map = tuple(wall_map)
         self.estimate = estimate
         self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
+        # Checked once here: dead reckoning and the Joseph-form corrections keep it so.
+        validated_covariance(self.covariance)
         self.wheel_base_m = checked_positive(wheel_base_m, "wheel_base_m")
         self.variance_per_m = float(variance_per_m)
         self.fixed_variances = (
@@ -595,9 +598,11 @@ class APCSTracker:
             sigma_r, sigma_xi = fit_measurement_variances(
                 group, before, self.fixed_variances, self.measurement_variances
             )
-            match, correction = correct_with_detected_wall(
+            prior = symmetrized(self.covariance)
+            prior.setflags(write=False)
+            match, correction = correct_with_checked_wall(
                 before,
-                self.covariance,
+                prior,
                 fit.wall,
                 self.wall_map,
                 sigma_r,

@@ -3,17 +3,27 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from sonar_gym.localization.apcs import (
+    AMBIGUOUS,
     DEFAULT_PARAMETERS,
     GROUP_OK,
     GROUP_TOO_FEW_POINTS,
     GROUP_TOO_MUCH_VARIANCE,
+    MATCHED,
+    NO_MATCH,
+    DetectedWall,
     EstimatedReflectionPoints,
+    WallVector,
+    correct_with_checked_wall,
+    correct_with_detected_wall,
     estimated_reflection_points,
     fit_wall_group,
+    validated_covariance,
 )
-from sonar_gym.localization.apcs_online import WallStream
+from sonar_gym.localization.apcs_online import APCSTracker, WallStream
+from sonar_gym.pose import Pose
 from sonar_gym.localization.apcs_walls import newest_reflection_points
 
 
@@ -75,3 +85,46 @@ def test_a_stream_closes_its_groups_with_the_verdicts_of_fit_wall_group() -> Non
         assert group.fit == reference
         first += count
     assert first == len(points)
+
+
+def test_correcting_with_a_checked_wall_is_correcting_with_the_detected_wall() -> None:
+    wall_map = (
+        WallVector((-1.0, 1.0), (10.0, 1.0), name="left"),
+        WallVector((10.0, -1.0), (-1.0, -1.0), name="right"),
+        WallVector((4.0, 0.9), (6.0, 0.9), name="board"),
+    )
+    covariance = np.array([[4e-4, 1e-5, 2e-6], [1e-5, 3e-4, -4e-6], [2e-6, -4e-6, 1e-4]])
+    pose = Pose(2.0, 0.03, 0.01)
+    detected = [
+        DetectedWall((1.0, 1.01), (1.2, 1.012), (0, 1, 2, 3), 1e-6),  # the left wall
+        DetectedWall((1.2, -0.99), (1.0, -0.99), (0, 1, 2, 3), 1e-6),  # the right wall
+        DetectedWall((4.5, 0.95), (4.7, 0.95), (0, 1, 2, 3), 1e-6),  # left wall or board
+        DetectedWall((1.0, 1.0), (1.2, 1.05), (0, 1, 2, 3), 1e-6),  # off in orientation
+    ]
+    statuses = set()
+    for wall in detected:
+        for method in ("paper", "linear"):
+            reference = correct_with_detected_wall(
+                pose, covariance, wall, wall_map, 1e-4, 3e-4, method=method
+            )
+            checked = correct_with_checked_wall(
+                pose, validated_covariance(covariance), wall, wall_map, 1e-4, 3e-4, method=method
+            )
+            assert checked[0] == reference[0]
+            assert (checked[1].status, checked[1].pose) == (reference[1].status, reference[1].pose)
+            np.testing.assert_array_equal(checked[1].covariance, reference[1].covariance)
+            statuses.add(reference[0].status)
+    assert statuses == {MATCHED, AMBIGUOUS, NO_MATCH}
+
+
+def test_a_tracker_refuses_a_covariance_that_is_not_positive_definite() -> None:
+    with pytest.raises(ValueError, match="positive definite"):
+        APCSTracker(
+            (),
+            Pose(0.0, 0.0, 0.0),
+            np.diag([1e-4, -1e-4, 1e-5]),
+            wheel_base_m=0.3,
+            variance_per_m=1e-6,
+            range_variance_m2=1e-4,
+            bearing_variance_rad2=1e-4,
+        )
