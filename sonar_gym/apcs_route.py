@@ -380,7 +380,9 @@ class APCSRoute:
         if not samples:
             return {}, None
         with self._timed("sensing"):
-            echoes = self.sonars.first_echoes_along(self.world, true_poses[np.asarray(samples)])
+            echoes = self.sonars.first_echoes_along(
+                self.world, true_poses[np.asarray(samples)], active_sides
+            )
             side_readings = self.sonars.read_echoes(self.world, echoes, self.sensor_rng)
         all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
         return {side: all_readings[side] for side in active_sides}, echoes

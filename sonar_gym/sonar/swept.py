@@ -40,6 +40,8 @@ APCS_SAMPLE_SPACING_M = 0.03
 """APCS sec. 6: a range sample every 3 cm of travel."""
 APCS_SPEED_MPS = 0.3
 """APCS sec. 6: the robot drove at 30 cm/s (so a sample every 0.1 s)."""
+SIDE_NAMES = ("left", "right")
+"""The side sensors, in the order of their readings: left (+90 deg in {R}), then right."""
 _SIDE_DIRECTIONS = np.array([[0.0, 1.0], [0.0, -1.0]])  # left, right in {R}
 _PATH_END_TOLERANCE = 1e-9  # as sonar_gym.sonar.echoes.PATH_END_TOLERANCE
 _UV_CENTRE_SCALAR = (1.0 - _PATH_END_TOLERANCE) / 2.0
@@ -177,6 +179,7 @@ class SideSonars(PulseEchoSonar):
         world: WorldLike,
         poses: Sequence[Pose] | FloatArray,
         rng: np.random.Generator | None,
+        sides: Sequence[str] = SIDE_NAMES,
     ) -> SideReadings:
         """Samples at each of ``poses`` ({W}; Poses or ``(n, 3)`` rows ``[x, y, theta]``);
         geometry and electronics as arrays over all of them.
@@ -184,11 +187,13 @@ class SideSonars(PulseEchoSonar):
         The echo geometry of every sensor position is found at once
         (:meth:`first_echoes_along`, the same physics as :meth:`first_echoes_at` pose by pose);
         the readout (delay, noise, counter) is one array operation over every sample, drawing
-        the noise in the order of ``len(poses)`` calls of :meth:`read`.
+        the noise in the order of ``len(poses)`` calls of :meth:`read`. The readings of a
+        sensor left out of ``sides`` are NaN, with their noise drawn all the same, so that
+        the named sensors read what they read with both.
         """
         if len(poses) == 0:
             return SideReadings(np.zeros(0), np.zeros(0))
-        return self.read_echoes(world, self.first_echoes_along(world, poses), rng)
+        return self.read_echoes(world, self.first_echoes_along(world, poses, sides), rng)
 
     def read_echoes(
         self, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
@@ -215,7 +220,10 @@ class SideSonars(PulseEchoSonar):
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
 
     def first_echoes_along(
-        self, world: WorldLike, poses: Sequence[Pose] | FloatArray
+        self,
+        world: WorldLike,
+        poses: Sequence[Pose] | FloatArray,
+        sides: Sequence[str] = SIDE_NAMES,
     ) -> FirstEchoes:
         """First echoes of the left and right sensor at each of ``poses``, ``(2 n,)`` in the
         order left, right of the first pose, then of the next.
@@ -223,8 +231,14 @@ class SideSonars(PulseEchoSonar):
         The echo candidates of :func:`~sonar_gym.sonar.echoes.echo_candidates` (planes,
         cylinders, corners, edges; minimum range, threshold, footprint, occlusion) and the
         detection of :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, evaluated with the same
-        constant tables for every sensor position at once.
+        constant tables for every sensor position at once. Only the sensors named in
+        ``sides`` (``"left"``, ``"right"``) are evaluated; the rows of the others hold no echo.
         """
+        unknown = [side for side in sides if side not in SIDE_NAMES]
+        if unknown:
+            raise ValueError(
+                f"argument 'sides' must name sensors of {list(SIDE_NAMES)}; got {list(sides)!r}"
+            )
         if isinstance(poses, np.ndarray):
             robot = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
         else:
@@ -242,7 +256,19 @@ class SideSonars(PulseEchoSonar):
             sensors = centres + self.lateral_offset_m * np.column_stack(
                 [np.cos(angle), np.sin(angle)]
             )
-        return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
+        if len(set(sides)) == len(SIDE_NAMES):
+            return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
+        echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+        if not sides:
+            return echoes
+        rows = slice(SIDE_NAMES.index(sides[0]), None, 2)
+        sensed = _side_first_echoes(
+            self, world, sensors[rows], centres[rows], headings[rows], side_sign[rows]
+        )
+        echoes.detected[rows] = sensed.detected
+        echoes.path_lengths[rows] = sensed.path_lengths
+        echoes.amplitudes[rows] = sensed.amplitudes
+        return echoes
 
 
 def _side_first_echoes(

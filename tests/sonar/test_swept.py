@@ -129,3 +129,23 @@ def test_reading_a_prefix_of_echoes_gives_the_readings_and_draws_of_those_poses(
     np.testing.assert_array_equal(prefix.left_m, direct.left_m)
     np.testing.assert_array_equal(prefix.right_m, direct.right_m)
     assert prefix_rng.random() == direct_rng.random()  # both streams left in the same state
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_one_named_side_reads_what_it_reads_beside_the_other(side: str) -> None:
+    sonars = SideSonars.apcs()
+    test_world = corridor(walls=[{"a": [3.2, 0.8], "b": [3.6, 0.8]}])
+    poses = np.array([[x, 0.05 * math.sin(x), 0.01 * x] for x in np.arange(3.0, 4.0, 0.03)])
+    alone_rng, both_rng = np.random.default_rng(4), np.random.default_rng(4)
+    alone = sonars.sample_along(test_world, poses, alone_rng, sides=(side,))
+    both = sonars.sample_along(test_world, poses, both_rng)
+    other = "right" if side == "left" else "left"
+    named = getattr(alone, f"{side}_m")
+    assert np.isfinite(named).mean() > 0.9
+    np.testing.assert_array_equal(named, getattr(both, f"{side}_m"))
+    assert np.all(np.isnan(getattr(alone, f"{other}_m")))
+    assert alone_rng.random() == both_rng.random()  # the other side's noise was drawn too
+    none = sonars.sample_along(test_world, poses, np.random.default_rng(4), sides=())
+    assert np.all(np.isnan(none.left_m)) and np.all(np.isnan(none.right_m))
+    with pytest.raises(ValueError, match="sides"):
+        sonars.sample_along(test_world, poses, None, sides=("up",))
