@@ -271,6 +271,15 @@ class SideSonars(PulseEchoSonar):
         return echoes
 
 
+_FAINTEST_LEVEL = float(np.nextafter(0.0, 1.0))
+
+
+def widest_main_lobe_cos(beam: PistonBeam) -> float:
+    """The least of :meth:`~sonar_gym.sonar.acoustics.PistonBeam.main_lobe_cos_limits` over
+    every positive level: the cosine limit of the faintest one."""
+    return float(beam.main_lobe_cos_limits(np.array([_FAINTEST_LEVEL]))[0])
+
+
 def _side_first_echoes(
     sonar: SideSonars,
     world: WorldLike,
@@ -353,12 +362,16 @@ def _side_first_echoes(
     beam = PistonBeam.for_ka(
         transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
     )
-    safe_amplitudes = np.where(valid, amplitudes, threshold)
     if beam.side_lobes:
+        safe_amplitudes = np.where(valid, amplitudes, threshold)
         heard = (beam.two_way_from_cos(cosines) * safe_amplitudes >= threshold) & valid
     else:
-        limits = beam.main_lobe_cos_limits((threshold / safe_amplitudes).reshape(-1))
-        heard = (cosines >= limits.reshape(cosines.shape)) & valid
+        # The limit grows with the level, so no path outside the widest main lobe (that of
+        # the faintest level) is heard: the limits are needed only inside it.
+        inside = valid & (cosines >= widest_main_lobe_cos(beam))
+        heard = np.zeros_like(valid)
+        limits = beam.main_lobe_cos_limits(threshold / amplitudes[inside])
+        heard[inside] = cosines[inside] >= limits
 
     # Occlusion (echo_candidates' _unoccluded), only for the paths a beam hears.
     sensor_rows, candidate_rows = np.nonzero(heard)

@@ -8,9 +8,17 @@ import numpy as np
 import pytest
 
 from sonar_gym.pose import Pose
+from sonar_gym.sonar.acoustics import PistonBeam
+from sonar_gym.sonar.presets import PRESET_NAMES, preset
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, FirstEchoes
 from sonar_gym.sonar.rotating import RotatingSonar
-from sonar_gym.sonar.swept import APCS_SAMPLE_SPACING_M, APCS_SPEED_MPS, SideSonars, SweptSonar
+from sonar_gym.sonar.swept import (
+    APCS_SAMPLE_SPACING_M,
+    APCS_SPEED_MPS,
+    SideSonars,
+    SweptSonar,
+    widest_main_lobe_cos,
+)
 from tests.sonar.worlds import cluttered_room, degrees, world
 
 
@@ -149,3 +157,19 @@ def test_one_named_side_reads_what_it_reads_beside_the_other(side: str) -> None:
     assert np.all(np.isnan(none.left_m)) and np.all(np.isnan(none.right_m))
     with pytest.raises(ValueError, match="sides"):
         sonars.sample_along(test_world, poses, None, sides=("up",))
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+@pytest.mark.parametrize("leakage", [0.0, 0.01])
+def test_no_main_lobe_limit_is_wider_than_that_of_the_faintest_level(
+    name: str, leakage: float
+) -> None:
+    transducer = preset(name)
+    beam = PistonBeam.for_ka(transducer.wavenumber_ka(343.2), False, leakage)
+    levels = np.concatenate([np.geomspace(1e-300, 10.0, 20_001), [1.0, 1.0 + 1e-12]])
+    limits = beam.main_lobe_cos_limits(levels)
+    widest = widest_main_lobe_cos(beam)
+    assert 0.0 < widest < 1.0
+    assert np.all(limits >= widest)
+    order = np.argsort(levels)
+    assert np.all(np.diff(limits[order]) >= 0.0)  # the limit grows with the level
