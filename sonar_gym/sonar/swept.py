@@ -314,17 +314,19 @@ def _side_first_echoes(
 
     ranges = np.hypot(rel[:, :, 0], rel[:, :, 1])
     centre_distance = ranges[:, n_segments:n_specular].copy()
-    ranges[:, n_segments:n_specular] -= tables.radius
-    rel[:, n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
-        :, :, None
-    ]
+    if tables.n_circles:
+        ranges[:, n_segments:n_specular] -= tables.radius
+        rel[:, n_segments:n_specular, :2] *= (
+            1.0 - tables.radius / np.maximum(centre_distance, 1e-12)
+        )[:, :, None]
 
     safe = np.maximum(ranges, 1e-9)
     amplitudes = 0.5 / safe
-    cylinder_ranges = safe[:, n_segments:n_specular]
-    amplitudes[:, n_segments:n_specular] *= np.sqrt(
-        tables.radius / (cylinder_ranges + tables.radius)
-    )
+    if tables.n_circles:
+        cylinder_ranges = safe[:, n_segments:n_specular]
+        amplitudes[:, n_segments:n_specular] *= np.sqrt(
+            tables.radius / (cylinder_ranges + tables.radius)
+        )
     edges = edge_echo_amplitude(safe[:, n_specular:], wavenumber, sonar.edge_law)
     amplitudes[:, n_specular:wedge_end] = np.where(
         concave, amplitudes[:, n_specular:wedge_end], edges[:, :n_wedges]
@@ -354,9 +356,8 @@ def _side_first_echoes(
 
     # Detection along each sensor's beam (first_echoes with one ping per sensor).
     cos_h, sin_h = np.cos(headings), np.sin(headings)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        unit_x = rel[:, :, 0] / safe
-        unit_y = rel[:, :, 1] / safe
+    unit_x = rel[:, :, 0] / safe  # safe >= 1e-9: no division by zero
+    unit_y = rel[:, :, 1] / safe
     # The beam is (0, +-1) in {R}: its cosine with a direction is +-(robot-frame y).
     cosines = side_sign[:, None] * (-sin_h[:, None] * unit_x + cos_h[:, None] * unit_y)
     beam = PistonBeam.for_ka(
@@ -380,7 +381,6 @@ def _side_first_echoes(
         matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
             len(sensor_rows), -1, 3
         )
-        matrix[:, :n_segments] *= occluders[:, :, None]
         paths = rel[sensor_rows, candidate_rows]  # (H, 3)
         products = np.einsum("hrk,hk->hr", matrix, paths)  # (H, 3 S + C)
         blocked = np.zeros(len(sensor_rows), dtype=bool)
@@ -391,7 +391,8 @@ def _side_first_echoes(
                     / products[:, None, :n_segments]
                 )
             inside_uv = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
-            blocked |= (inside_uv[:, 0] & inside_uv[:, 1]).any(axis=1)
+            # Only occluding segments block (masked here rather than by zeroing their rows).
+            blocked |= (inside_uv[:, 0] & inside_uv[:, 1] & occluders).any(axis=1)
         if tables.n_circles:
             dots = products[:, 3 * n_segments :]
             path_sq = ranges[sensor_rows, candidate_rows] ** 2
