@@ -346,11 +346,11 @@ class WallStream:
 
     def _close(self) -> ClosedGroup:
         points = np.array(self._group_points)
-        directions = np.array(self._group_directions)
+        directions = self._group_directions
         self._group_points, self._group_directions = [], []
-        if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
-            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, tuple(range(len(points)))), points)
         indices = tuple(range(len(points)))
+        if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
+            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, indices), points)
         fit = fit_group_points(points, wrap_angles(directions), indices, self.params)
         return ClosedGroup(fit, points)
 

@@ -853,7 +853,7 @@ class MatchResult:
     @property
     def rejections(self) -> dict[int, str]:
         """Map position -> reason, for every wall that failed a condition."""
-        return {c.map_index: c.reason for c in self.checks if c.reason is not None}
+        return {c.map_index: reason for c in self.checks if (reason := c.reason) is not None}
 
 
 def check_wall(
