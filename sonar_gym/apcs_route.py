@@ -28,6 +28,7 @@ from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResul
 from sonar_gym.pose import FloatArray, Pose, angle_difference, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Box, Scenario
+from sonar_gym.sonar.pulse_echo import FirstEchoes
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.straight_drive import CommandDraws, drive_commands
 from sonar_gym.world import World
@@ -296,8 +297,19 @@ class APCSRoute:
                 half = 0.5 * turn * base
                 command(-half, half, straight=False)
             count = min(remaining, steps_per_aim)
+            # command(step_m, step_m, straight=True) count times, inlined: the hot loop.
+            step_noise = encoder_std * math.sqrt(abs(step_m))
             for _ in range(count):
-                command(step_m, step_m, straight=True)
+                normals, _ = plan.draws.draw(rng)
+                noise_left, noise_right = normals.tolist()
+                left = step_m + step_noise * noise_left
+                right = step_m + step_noise * noise_right
+                distance, turn = 0.5 * (right + left), (right - left) / base
+                heading = theta + 0.5 * turn
+                x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
+                theta = wrap_angle(theta + turn)
+            plan.commanded.extend([(step_m, step_m)] * count)
+            plan.straight.extend([True] * count)
             if count < steps_per_aim:
                 waypoint += 1
             plan.stops.append(len(plan.commanded))
@@ -322,7 +334,7 @@ class APCSRoute:
                     samples.append(index)
             counters.append(counter)
         sensor_state = self.sensor_rng.bit_generator.state
-        readings = self._read(motion.true_poses, samples, active_sides)
+        readings, echoes = self._read(motion.true_poses, samples, active_sides)
         with self._timed("localization"):
             result = self.tracker.run(
                 motion.encoder_left_m,
@@ -339,7 +351,15 @@ class APCSRoute:
             self.robot.odometry_pose = Pose(*motion.odometry_poses[consumed - 1])
             plan.draws.rewind(self.motion_rng, consumed)
             self.sensor_rng.bit_generator.state = sensor_state
-            self._read(motion.true_poses, kept, active_sides)  # the draws of the kept readings
+            if kept and echoes is not None:  # the draws of the kept readings, in their order
+                rows = 2 * len(kept)
+                self.sonars.read_echoes(
+                    self.world,
+                    FirstEchoes(
+                        echoes.detected[:rows], echoes.path_lengths[:rows], echoes.amplitudes[:rows]
+                    ),
+                    self.sensor_rng,
+                )
         self.steps_since_sample = counters[consumed - 1]
         listen_s = self.sonars.transducer.listen_time_s * len(kept)  # both sonars fire together
         self.sensing_time_s += listen_s
@@ -354,16 +374,18 @@ class APCSRoute:
 
     def _read(
         self, true_poses: FloatArray, samples: Sequence[int], active_sides: Sequence[str]
-    ) -> dict[str, FloatArray]:
-        """Readings of the active sides at the commands ``samples`` (both sonars fire)."""
+    ) -> tuple[dict[str, FloatArray], FirstEchoes | None]:
+        """Readings of the active sides at the commands ``samples`` (both sonars fire), and
+        the first echoes they were read from (``None`` without samples)."""
         if not samples:
-            return {}
+            return {}, None
         with self._timed("sensing"):
-            side_readings = self.sonars.sample_along(
-                self.world, true_poses[np.asarray(samples)], self.sensor_rng
+            echoes = self.sonars.first_echoes_along(
+                self.world, true_poses[np.asarray(samples)], active_sides
             )
+            side_readings = self.sonars.read_echoes(self.world, echoes, self.sensor_rng)
         all_readings = {"left": side_readings.left_m, "right": side_readings.right_m}
-        return {side: all_readings[side] for side in active_sides}
+        return {side: all_readings[side] for side in active_sides}, echoes
 
     def _handled(self, result: RunResult, true_poses: FloatArray, summary: LegSummary) -> None:
         """Book the ERPs, walls and corrections of a tracker run into the trace and summary."""

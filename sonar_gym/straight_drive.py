@@ -51,19 +51,41 @@ class StraightRun:
     collided: np.ndarray
 
 
-def _clearance(geometry: StaticGeometry, points: FloatArray) -> FloatArray:
-    """``(P,)`` distance (metres) from each point to the nearest static segment or circle."""
+def _clearance(
+    geometry: StaticGeometry, points: FloatArray, within_m: float | None = None
+) -> FloatArray:
+    """``(P,)`` distance (metres) from each point to the nearest static segment or circle.
+
+    With ``within_m``, only the distances up to ``within_m`` are exact; a point whose nearest
+    shape is farther gets some value above ``within_m``. Shapes whose bounding box lies
+    farther than ``within_m`` from the points' bounding box are then left out.
+    """
     nearest = np.full(len(points), math.inf)
-    if geometry.n_segments:
-        starts, ends = geometry.segment_starts, geometry.segment_ends
+    starts, ends = geometry.segment_starts, geometry.segment_ends
+    circles = geometry.circles
+    if within_m is not None:
+        low, high = points.min(axis=0), points.max(axis=0)
+        reach = within_m + _ROUNDING_M
+        if geometry.n_segments:
+            box_low, box_high = np.minimum(starts, ends), np.maximum(starts, ends)
+            near = np.all((box_low - high <= reach) & (low - box_high <= reach), axis=1)
+            starts, ends = starts[near], ends[near]
+        if geometry.n_circles:
+            radii = circles[:, 2:3]
+            near = np.all(
+                (circles[:, :2] - radii - high <= reach) & (low - circles[:, :2] - radii <= reach),
+                axis=1,
+            )
+            circles = circles[near]
+    if len(starts):
         edges = ends - starts
         lengths_sq = np.maximum(np.einsum("sk,sk->s", edges, edges), 1e-24)
         rel = points[:, None, :] - starts[None, :, :]
         t = np.clip(np.einsum("psk,sk->ps", rel, edges) / lengths_sq, 0.0, 1.0)
         gap = rel - t[:, :, None] * edges[None, :, :]
         nearest = np.minimum(nearest, np.sqrt(np.einsum("psk,psk->ps", gap, gap)).min(axis=1))
-    if geometry.n_circles:
-        centres, radii = geometry.circles[:, :2], geometry.circles[:, 2]
+    if len(circles):
+        centres, radii = circles[:, :2], circles[:, 2]
         gaps = np.hypot(*(points[:, None, :] - centres[None, :, :]).transpose(2, 0, 1)) - radii
         nearest = np.minimum(nearest, np.abs(gaps).min(axis=1))
     return nearest
@@ -250,9 +272,12 @@ def _free_commands(
     # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
     # than the chord's nearer end minus half its length; the arc leaves its chord by at most
     # its sagitta, |d dtheta| / 8.
-    gaps = _clearance(world.geometry, np.column_stack([ends_x, ends_y]))
     reach = 0.5 * np.abs(distance) + np.abs(distance * ground_turn) / 8.0 + _ROUNDING_M
     margin = world.robot_radius + CLEARANCE_MARGIN_M
+    # Only whether each gap exceeds reach + margin matters: farther shapes can be left out.
+    gaps = _clearance(
+        world.geometry, np.column_stack([ends_x, ends_y]), float(reach.max()) + margin
+    )
     clear = np.minimum(gaps[:-1], gaps[1:]) - reach > margin
     free = count if clear.all() else int(np.argmin(clear))
     out[:free, 0] = ends_x[1 : free + 1]

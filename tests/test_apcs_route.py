@@ -15,7 +15,7 @@ from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
 from sonar_gym.scenario import Scenario, load_scenario, scenario_from_dict
 from sonar_gym.sonar.presets import preset
 from sonar_gym.sonar.swept import SideSonars
-from sonar_gym.straight_drive import drive_straight_run, turn_run
+from sonar_gym.straight_drive import _clearance, drive_straight_run, turn_run
 from sonar_gym.world import World
 
 NOISE = OdometryNoise(0.0005, 0.003, -0.002, 0.3, 0.3)  # slips are frequent on purpose
@@ -152,3 +152,18 @@ def test_a_leg_command_runs_the_sonars_it_names() -> None:
     assert LegCommand("left", 3, 0.0).active_sides == ("left",)
     assert LegCommand("right", 6, 0.2).active_sides == ("right",)
     assert LegCommand("both", 9, -0.2).active_sides == ("left", "right")
+
+
+@pytest.mark.parametrize("within_m", [0.05, 0.3, 1.0])
+def test_clearance_within_a_bound_is_exact_up_to_it_and_above_it_beyond(within_m: float) -> None:
+    world = World(load_scenario("beom_cho_lab"))  # segments and cylinders
+    assert world.geometry.n_segments and world.geometry.n_circles
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        start = world.sample_free_pose(rng).position
+        path = start + np.cumsum(rng.normal(0.0, 0.05, (40, 2)), axis=0)
+        exact = _clearance(world.geometry, path)
+        bounded = _clearance(world.geometry, path, within_m)
+        close = exact <= within_m
+        np.testing.assert_array_equal(bounded[close], exact[close])
+        assert np.all(bounded[~close] > within_m)

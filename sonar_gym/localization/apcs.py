@@ -19,7 +19,7 @@ section 6 are the defaults of :class:`APCSParameters`. The implementation lives 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy.typing as npt
 
@@ -31,6 +31,7 @@ from sonar_gym.localization.apcs_correction import (
     CorrectionResult,
     WallObservation,
     correct_pose,
+    corrected_pose,
     information_matrix,
     information_vector,
     observe_wall,
@@ -65,7 +66,7 @@ from sonar_gym.localization.apcs_walls import (
     match_wall,
     reflection_direction_candidates,
 )
-from sonar_gym.pose import Pose
+from sonar_gym.pose import FloatArray, Pose
 
 __all__ = [
     "AMBIGUOUS",
@@ -94,6 +95,8 @@ __all__ = [
     "WallVector",
     "check_wall",
     "correct_pose",
+    "correct_with_checked_wall",
+    "corrected_pose",
     "correct_with_detected_wall",
     "detect_walls",
     "detect_walls_from_readings",
@@ -142,6 +145,60 @@ def correct_with_detected_wall(
         raise ValueError(f"pose must be a Pose, got {type(pose).__name__}")
     prior = validated_covariance(covariance)
     prior.setflags(write=False)
+    return _match_and_correct(
+        pose,
+        prior,
+        detected,
+        wall_map,
+        params,
+        method,
+        lambda wall, r, xi: correct_pose(
+            pose, covariance, wall, r, xi, sigma_r, sigma_xi, method=method
+        ),
+    )
+
+
+def correct_with_checked_wall(
+    pose: Pose,
+    prior: FloatArray,
+    detected: DetectedWall,
+    wall_map: Sequence[WallVector],
+    sigma_r: float,
+    sigma_xi: float,
+    params: APCSParameters = DEFAULT_PARAMETERS,
+    *,
+    method: CorrectionMethod = "paper",
+) -> tuple[MatchResult, CorrectionResult]:
+    """:func:`correct_with_detected_wall` on checked inputs, for a caller that keeps them so.
+
+    ``prior`` is the covariance as :func:`validated_covariance` returns it (symmetric,
+    positive definite, read-only); ``sigma_r``, ``sigma_xi`` are positive floats and
+    ``method`` is ``"paper"`` or ``"linear"``. The same match and correction, without the
+    checks.
+    """
+    return _match_and_correct(
+        pose,
+        prior,
+        detected,
+        wall_map,
+        params,
+        method,
+        lambda wall, r, xi: corrected_pose(
+            pose, prior, wall, r, xi, sigma_r, sigma_xi, method=method
+        ),
+    )
+
+
+def _match_and_correct(
+    pose: Pose,
+    prior: FloatArray,
+    detected: DetectedWall,
+    wall_map: Sequence[WallVector],
+    params: APCSParameters,
+    method: CorrectionMethod,
+    correct: Callable[[WallVector, float, float], CorrectionResult],
+) -> tuple[MatchResult, CorrectionResult]:
+    """Fig. 2 after the checks: match, observe the wall, ``correct(wall, r, xi)``."""
     match = match_wall(detected, wall_map, params)
     if not match.matched or match.wall is None:
         reasons = ", ".join(f"{index}: {reason}" for index, reason in match.rejections.items())
@@ -160,14 +217,4 @@ def correct_with_detected_wall(
             covariance=prior,
             method=method,
         )
-    correction = correct_pose(
-        pose,
-        covariance,
-        match.wall,
-        observation.r_m,
-        observation.xi_rad,
-        sigma_r,
-        sigma_xi,
-        method=method,
-    )
-    return match, correction
+    return match, correct(match.wall, observation.r_m, observation.xi_rad)

@@ -126,6 +126,11 @@ def _check_positive(value: float, name: str, unit: str) -> float:
     return number
 
 
+def symmetrized(matrix: FloatArray) -> FloatArray:
+    """``(M + M^T) / 2``: the symmetric part of a float matrix."""
+    return 0.5 * (matrix + matrix.T)
+
+
 def validated_covariance(covariance: npt.ArrayLike) -> FloatArray:
     """``covariance`` as a symmetric positive-definite 3x3 float array, or ValueError."""
     matrix = np.asarray(covariance, dtype=np.float64)
@@ -134,7 +139,7 @@ def validated_covariance(covariance: npt.ArrayLike) -> FloatArray:
     scale = float(np.max(np.abs(matrix)))
     if scale == 0.0 or np.max(np.abs(matrix - matrix.T)) > 1e-9 * scale:
         raise ValueError("covariance must be symmetric and non-zero")
-    matrix = 0.5 * (matrix + matrix.T)
+    matrix = symmetrized(matrix)
     try:
         np.linalg.cholesky(matrix)
     except np.linalg.LinAlgError as error:
@@ -334,7 +339,23 @@ def correct_pose(
     sigma_xi = _check_positive(sigma_xi, "sigma_xi", "variance of xi in rad^2")
     if method not in ("paper", "linear"):
         raise ValueError(f"method must be 'paper' or 'linear', got {method!r}")
+    return corrected_pose(pose, prior_covariance, wall, r, xi, sigma_r, sigma_xi, method=method)
 
+
+def corrected_pose(
+    pose: Pose,
+    prior_covariance: FloatArray,
+    wall: WallVector,
+    r: float,
+    xi: float,
+    sigma_r: float,
+    sigma_xi: float,
+    *,
+    method: CorrectionMethod = "paper",
+) -> CorrectionResult:
+    """:func:`correct_pose` on checked inputs: ``prior_covariance`` as
+    :func:`validated_covariance` returns it, ``r``, ``sigma_r``, ``sigma_xi`` positive floats,
+    ``xi`` a finite float and ``method`` one of ``"paper"``, ``"linear"``."""
     step = _paper_step if method == "paper" else _linear_step
     status, corrected, corrected_covariance, message = step(
         pose.as_array(), prior_covariance, wall, r, xi, sigma_r, sigma_xi

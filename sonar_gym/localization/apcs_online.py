@@ -32,17 +32,16 @@ from sonar_gym.localization.apcs import (
     APCSParameters,
     CorrectionResult,
     DetectedWall,
-    EstimatedReflectionPoints,
     MatchResult,
     WallFit,
     WallVector,
-    correct_with_detected_wall,
-    estimated_reflection_points,
-    fit_wall_group,
+    correct_with_checked_wall,
 )
+from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
+from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
 SIDE_NAMES = ("left", "right")
@@ -51,6 +50,13 @@ BEAM_OFFSET_RAD = {"left": math.pi / 2.0, "right": -math.pi / 2.0}
 """Beam axis of each side sonar relative to the robot heading, radians."""
 MEASUREMENT_VARIANCES = ("fixed", "fit")
 CORRECTION_METHODS = ("paper", "linear")
+
+
+def _check_ranges(ranges: FloatArray, name: str) -> None:
+    if np.any(ranges < 0.0):
+        raise ValueError(
+            f"argument {name!r} must hold ranges >= 0 metres (NaN for a dropout); got {ranges!r}"
+        )
 
 
 def _check_side(side: object) -> str:
@@ -232,6 +238,13 @@ class WallStream:
             raise ValueError(
                 f"argument 'ranges_m' must have shape ({len(positions)},); got {ranges.shape}"
             )
+        _check_ranges(ranges, "ranges_m")
+        return self._pending(positions, headings, ranges)
+
+    def _pending(
+        self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
+    ) -> tuple[FloatArray, FloatArray, np.ndarray]:
+        """:meth:`pending_erps` on checked arrays."""
         directions = headings + BEAM_OFFSET_RAD[self.side]
         if self._previous is not None:
             previous_xy, previous_direction, previous_range = self._previous
@@ -245,12 +258,12 @@ class WallStream:
         points = np.zeros((n, 2))
         phis = np.zeros(n)
         valid = np.zeros(n, dtype=bool)
-        erps = estimated_reflection_points(
-            positions, directions, ranges, valid_range_m=self.params.sensing_range_m
+        erp_points, erp_directions, reading_indices = newest_reflection_points(
+            positions, directions, ranges, self.params.sensing_range_m
         )
-        rows = erps.reading_indices - 1 + offset  # the newer reading of each pair
-        points[rows] = erps.points
-        phis[rows] = erps.reflection_directions_rad
+        rows = reading_indices - 1 + offset  # the newer reading of each pair
+        points[rows] = erp_points
+        phis[rows] = erp_directions
         valid[rows] = True
         return points, phis, valid
 
@@ -333,12 +346,13 @@ class WallStream:
 
     def _close(self) -> ClosedGroup:
         points = np.array(self._group_points)
-        directions = np.array(self._group_directions)
+        directions = self._group_directions
         self._group_points, self._group_directions = [], []
+        indices = tuple(range(len(points)))
         if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
-            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, tuple(range(len(points)))), points)
-        erps = EstimatedReflectionPoints.from_points(points, directions)
-        return ClosedGroup(fit_wall_group(erps, range(len(points)), self.params), points)
+            return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, indices), points)
+        fit = fit_group_points(points, wrap_angles(directions), indices, self.params)
+        return ClosedGroup(fit, points)
 
 
 # --------------------------------------------------------------------------------------------
@@ -432,6 +446,8 @@ class APCSTracker:
         self.wall_map = tuple(wall_map)
         self.estimate = estimate
         self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
+        # Checked once here: dead reckoning and the Joseph-form corrections keep it so.
+        validated_covariance(self.covariance)
         self.wheel_base_m = checked_positive(wheel_base_m, "wheel_base_m")
         self.variance_per_m = float(variance_per_m)
         self.fixed_variances = (
@@ -488,6 +504,7 @@ class APCSTracker:
                     f"argument 'readings[{side!r}]' must have shape {samples.shape}; "
                     f"got {array.shape}"
                 )
+            _check_ranges(array, f"readings[{side!r}]")
             ranges[side] = array
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
         poses, covariances = predict_run(
@@ -506,7 +523,7 @@ class APCSTracker:
             rows = poses[samples[first_sample:] + 1]
             for side in sides:
                 sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
-                points, phis, valid = self.streams[side].pending_erps(
+                points, phis, valid = self.streams[side]._pending(
                     sensor_xy, rows[:, 2], ranges[side][first_sample:]
                 )
                 pending[side] = (
@@ -581,9 +598,11 @@ class APCSTracker:
             sigma_r, sigma_xi = fit_measurement_variances(
                 group, before, self.fixed_variances, self.measurement_variances
             )
-            match, correction = correct_with_detected_wall(
+            prior = symmetrized(self.covariance)
+            prior.setflags(write=False)
+            match, correction = correct_with_checked_wall(
                 before,
-                self.covariance,
+                prior,
                 fit.wall,
                 self.wall_map,
                 sigma_r,

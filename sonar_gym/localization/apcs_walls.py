@@ -26,7 +26,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.pose import FloatArray, angle_difference, wrap_angles
+from sonar_gym.pose import FloatArray, wrap_angle, wrap_angles
 
 IntArray = npt.NDArray[np.int64]
 
@@ -454,7 +454,40 @@ def estimated_reflection_points(
     count = positions.shape[0]
     if count < 2:
         return EstimatedReflectionPoints.from_points(np.zeros((0, 2)), np.zeros(0))
+    return _reflection_points(positions, directions, ranges, points_per_pair, max_off_axis_rad)
 
+
+def newest_reflection_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    valid_range_m: tuple[float, float],
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """:func:`estimated_reflection_points` with ``points_per_pair="newest"`` on checked inputs.
+
+    For callers that have validated the readings themselves (``(N, 2)`` finite positions,
+    ``(N,)`` finite directions, ``(N,)`` non-negative ranges, ``N >= 2``, ``valid_range_m``
+    a ``(min, max)`` of floats): the same numbers without the checks and the dataclass.
+
+    Returns:
+        ``(points, reflection_directions_rad, reading_indices)`` as in
+        :class:`EstimatedReflectionPoints`.
+    """
+    if len(positions) < 2:
+        return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    low, high = valid_range_m
+    ranges = np.where((ranges >= low) & (ranges <= high), ranges, np.nan)
+    points, phi, pairs = _newest_points(positions, directions, ranges)
+    return points, wrap_angles(phi), pairs + 1
+
+
+def _newest_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    max_off_axis_rad: float | None = None,
+) -> tuple[FloatArray, FloatArray, IntArray]:
+    """``(R2, phi, pairs)`` of every reading pair that gives an ERP, eqs (1)-(6)."""
     p1, p2 = positions[:-1], positions[1:]
     r1, r2 = ranges[:-1], ranges[1:]
     phi_plus, phi_minus, solvable = reflection_direction_candidates(p1, p2, r1, r2)
@@ -474,9 +507,22 @@ def estimated_reflection_points(
     phi = phi[pairs]
     unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     second_erps = p2[pairs] + r2[pairs, None] * unit  # R2, eqs (2)-(3)
+    return second_erps, phi, pairs
+
+
+def _reflection_points(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    points_per_pair: str,
+    max_off_axis_rad: float | None,
+) -> EstimatedReflectionPoints:
+    """The ERPs of :func:`estimated_reflection_points` on its checked inputs."""
+    second_erps, phi, pairs = _newest_points(positions, directions, ranges, max_off_axis_rad)
     if points_per_pair == "newest":
         return EstimatedReflectionPoints(second_erps, phi, pairs + 1, pairs)
-    first_erps = p1[pairs] + r1[pairs, None] * unit  # R1 = P1 + P1R1, eq. (2)
+    unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
+    first_erps = positions[:-1][pairs] + ranges[:-1][pairs, None] * unit  # R1 = P1 + P1R1, eq. (2)
     points = np.stack([first_erps, second_erps], axis=1).reshape(-1, 2)
     return EstimatedReflectionPoints(
         points,
@@ -628,8 +674,27 @@ def fit_wall_group(
         raise ValueError(f"group must hold positions in 0..{points.shape[0] - 1}, got {indices}")
     if len(indices) < params.min_group_size:
         return WallFit(GROUP_TOO_FEW_POINTS, indices)
-
     members = points[list(indices)]
+    return fit_group_points(
+        members, None if directions is None else directions[list(indices)], indices, params
+    )
+
+
+def fit_group_points(
+    members: FloatArray,
+    directions: FloatArray | None,
+    indices: tuple[int, ...],
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> WallFit:
+    """:func:`fit_wall_group` of a group given as its own points, on checked inputs.
+
+    Args:
+        members: ``(n, 2)`` the group's ERPs, finite, metres in {W}, with
+            ``n >= params.min_group_size``.
+        directions: ``(n,)`` their reflection directions, radians in (-pi, pi], or ``None``
+            for plain points.
+        indices: the group's positions in the ERP sequence (kept in the verdict).
+    """
     centroid = members.mean(axis=0)
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
@@ -641,8 +706,7 @@ def fit_wall_group(
 
     occupied_side = np.array([-along[1], along[0]])  # left of `along`
     if directions is not None:
-        group_directions = directions[list(indices)]
-        towards_wall = np.array([np.cos(group_directions).sum(), np.sin(group_directions).sum()])
+        towards_wall = np.array([np.cos(directions).sum(), np.sin(directions).sum()])
         flip = float(occupied_side @ towards_wall) < 0.0
     else:
         flip = float((centred[-1] - centred[0]) @ along) < 0.0
@@ -789,7 +853,7 @@ class MatchResult:
     @property
     def rejections(self) -> dict[int, str]:
         """Map position -> reason, for every wall that failed a condition."""
-        return {c.map_index: c.reason for c in self.checks if c.reason is not None}
+        return {c.map_index: reason for c in self.checks if (reason := c.reason) is not None}
 
 
 def check_wall(
@@ -804,21 +868,22 @@ def check_wall(
     ``d1 = |T_s V_s|`` and ``d2 = |T_e V_e|`` are the distances of the detected end points
     from that line.
     """
-    orientation_error = angle_difference(detected.direction_angle, map_wall.direction_angle)
-    # WallVector.projection_parameter and signed_distance on its validated float end points,
-    # inlined: this runs for every map wall against every detected wall.
+    # angle_difference of the direction angles, and WallVector.projection_parameter and
+    # signed_distance (with line_coefficients (a, b, c) = (uy, -ux, offset)) on the validated
+    # float end points, inlined: this runs for every map wall against every detected wall.
+    orientation_error = wrap_angle(detected._angle - map_wall._angle)  # type: ignore[attr-defined]
     (start_x, start_y), (end_x, end_y) = detected.start, detected.end
     wall_x, wall_y = map_wall.start
-    a, b, c = map_wall.line_coefficients
     ux, uy = map_wall._unit  # type: ignore[attr-defined]
-    length = map_wall.length
+    a, b, c = uy, -ux, map_wall._offset  # type: ignore[attr-defined]
+    length = map_wall._length  # type: ignore[attr-defined]
     start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
     end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
     d1 = a * start_x + b * start_y + c
     d2 = a * end_x + b * end_y + c
     distance_squared = d1 * d1 + d2 * d2
     slack = 1e-12
-    inside = all(-slack <= t <= 1.0 + slack for t in (start_parameter, end_parameter))
+    inside = -slack <= start_parameter <= 1.0 + slack and -slack <= end_parameter <= 1.0 + slack
     return WallCheck(
         map_index=map_index,
         wall=map_wall,

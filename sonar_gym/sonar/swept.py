@@ -40,6 +40,8 @@ APCS_SAMPLE_SPACING_M = 0.03
 """APCS sec. 6: a range sample every 3 cm of travel."""
 APCS_SPEED_MPS = 0.3
 """APCS sec. 6: the robot drove at 30 cm/s (so a sample every 0.1 s)."""
+SIDE_NAMES = ("left", "right")
+"""The side sensors, in the order of their readings: left (+90 deg in {R}), then right."""
 _SIDE_DIRECTIONS = np.array([[0.0, 1.0], [0.0, -1.0]])  # left, right in {R}
 _PATH_END_TOLERANCE = 1e-9  # as sonar_gym.sonar.echoes.PATH_END_TOLERANCE
 _UV_CENTRE_SCALAR = (1.0 - _PATH_END_TOLERANCE) / 2.0
@@ -177,6 +179,7 @@ class SideSonars(PulseEchoSonar):
         world: WorldLike,
         poses: Sequence[Pose] | FloatArray,
         rng: np.random.Generator | None,
+        sides: Sequence[str] = SIDE_NAMES,
     ) -> SideReadings:
         """Samples at each of ``poses`` ({W}; Poses or ``(n, 3)`` rows ``[x, y, theta]``);
         geometry and electronics as arrays over all of them.
@@ -184,12 +187,25 @@ class SideSonars(PulseEchoSonar):
         The echo geometry of every sensor position is found at once
         (:meth:`first_echoes_along`, the same physics as :meth:`first_echoes_at` pose by pose);
         the readout (delay, noise, counter) is one array operation over every sample, drawing
-        the noise in the order of ``len(poses)`` calls of :meth:`read`.
+        the noise in the order of ``len(poses)`` calls of :meth:`read`. The readings of a
+        sensor left out of ``sides`` are NaN, with their noise drawn all the same, so that
+        the named sensors read what they read with both.
         """
         if len(poses) == 0:
             return SideReadings(np.zeros(0), np.zeros(0))
-        ranges, _ = self.readings(world, self.first_echoes_along(world, poses), rng)
-        pairs = ranges.reshape(len(poses), 2)
+        return self.read_echoes(world, self.first_echoes_along(world, poses, sides), rng)
+
+    def read_echoes(
+        self, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
+    ) -> SideReadings:
+        """The readout of first echoes ``(2 n,)`` in the order of :meth:`first_echoes_along`.
+
+        Its first ``2 m`` rows give the readings of the first ``m`` poses, with the draws of
+        ``m`` calls of :meth:`read`: a caller that keeps only a prefix of a run of samples
+        replays their draws without finding their echoes again.
+        """
+        ranges, _ = self.readings(world, echoes, rng)
+        pairs = ranges.reshape(-1, 2)
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
 
     def sample_along_per_pose(
@@ -204,7 +220,10 @@ class SideSonars(PulseEchoSonar):
         return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
 
     def first_echoes_along(
-        self, world: WorldLike, poses: Sequence[Pose] | FloatArray
+        self,
+        world: WorldLike,
+        poses: Sequence[Pose] | FloatArray,
+        sides: Sequence[str] = SIDE_NAMES,
     ) -> FirstEchoes:
         """First echoes of the left and right sensor at each of ``poses``, ``(2 n,)`` in the
         order left, right of the first pose, then of the next.
@@ -212,8 +231,14 @@ class SideSonars(PulseEchoSonar):
         The echo candidates of :func:`~sonar_gym.sonar.echoes.echo_candidates` (planes,
         cylinders, corners, edges; minimum range, threshold, footprint, occlusion) and the
         detection of :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, evaluated with the same
-        constant tables for every sensor position at once.
+        constant tables for every sensor position at once. Only the sensors named in
+        ``sides`` (``"left"``, ``"right"``) are evaluated; the rows of the others hold no echo.
         """
+        unknown = [side for side in sides if side not in SIDE_NAMES]
+        if unknown:
+            raise ValueError(
+                f"argument 'sides' must name sensors of {list(SIDE_NAMES)}; got {list(sides)!r}"
+            )
         if isinstance(poses, np.ndarray):
             robot = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
         else:
@@ -231,7 +256,28 @@ class SideSonars(PulseEchoSonar):
             sensors = centres + self.lateral_offset_m * np.column_stack(
                 [np.cos(angle), np.sin(angle)]
             )
-        return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
+        if len(set(sides)) == len(SIDE_NAMES):
+            return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
+        echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+        if not sides:
+            return echoes
+        rows = slice(SIDE_NAMES.index(sides[0]), None, 2)
+        sensed = _side_first_echoes(
+            self, world, sensors[rows], centres[rows], headings[rows], side_sign[rows]
+        )
+        echoes.detected[rows] = sensed.detected
+        echoes.path_lengths[rows] = sensed.path_lengths
+        echoes.amplitudes[rows] = sensed.amplitudes
+        return echoes
+
+
+_FAINTEST_LEVEL = float(np.nextafter(0.0, 1.0))
+
+
+def widest_main_lobe_cos(beam: PistonBeam) -> float:
+    """The least of :meth:`~sonar_gym.sonar.acoustics.PistonBeam.main_lobe_cos_limits` over
+    every positive level: the cosine limit of the faintest one."""
+    return float(beam.main_lobe_cos_limits(np.array([_FAINTEST_LEVEL]))[0])
 
 
 def _side_first_echoes(
@@ -268,17 +314,19 @@ def _side_first_echoes(
 
     ranges = np.hypot(rel[:, :, 0], rel[:, :, 1])
     centre_distance = ranges[:, n_segments:n_specular].copy()
-    ranges[:, n_segments:n_specular] -= tables.radius
-    rel[:, n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
-        :, :, None
-    ]
+    if tables.n_circles:
+        ranges[:, n_segments:n_specular] -= tables.radius
+        rel[:, n_segments:n_specular, :2] *= (
+            1.0 - tables.radius / np.maximum(centre_distance, 1e-12)
+        )[:, :, None]
 
     safe = np.maximum(ranges, 1e-9)
     amplitudes = 0.5 / safe
-    cylinder_ranges = safe[:, n_segments:n_specular]
-    amplitudes[:, n_segments:n_specular] *= np.sqrt(
-        tables.radius / (cylinder_ranges + tables.radius)
-    )
+    if tables.n_circles:
+        cylinder_ranges = safe[:, n_segments:n_specular]
+        amplitudes[:, n_segments:n_specular] *= np.sqrt(
+            tables.radius / (cylinder_ranges + tables.radius)
+        )
     edges = edge_echo_amplitude(safe[:, n_specular:], wavenumber, sonar.edge_law)
     amplitudes[:, n_specular:wedge_end] = np.where(
         concave, amplitudes[:, n_specular:wedge_end], edges[:, :n_wedges]
@@ -300,25 +348,31 @@ def _side_first_echoes(
     if footprint > 0.0:
         offset = sensors - centres
         test = footprint > transducer.min_range_m - np.hypot(offset[:, 0], offset[:, 1])
-        inside = np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
-        valid &= ~(test[:, None] & inside)
+        if test.any():  # else no path is dropped: skip the (P, C) distances
+            inside = (
+                np.hypot(rel[:, :, 0] + offset[:, 0:1], rel[:, :, 1] + offset[:, 1:2]) < footprint
+            )
+            valid &= ~(test[:, None] & inside)
 
     # Detection along each sensor's beam (first_echoes with one ping per sensor).
     cos_h, sin_h = np.cos(headings), np.sin(headings)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        unit_x = rel[:, :, 0] / safe
-        unit_y = rel[:, :, 1] / safe
+    unit_x = rel[:, :, 0] / safe  # safe >= 1e-9: no division by zero
+    unit_y = rel[:, :, 1] / safe
     # The beam is (0, +-1) in {R}: its cosine with a direction is +-(robot-frame y).
     cosines = side_sign[:, None] * (-sin_h[:, None] * unit_x + cos_h[:, None] * unit_y)
     beam = PistonBeam.for_ka(
         transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
     )
-    safe_amplitudes = np.where(valid, amplitudes, threshold)
     if beam.side_lobes:
+        safe_amplitudes = np.where(valid, amplitudes, threshold)
         heard = (beam.two_way_from_cos(cosines) * safe_amplitudes >= threshold) & valid
     else:
-        limits = beam.main_lobe_cos_limits((threshold / safe_amplitudes).reshape(-1))
-        heard = (cosines >= limits.reshape(cosines.shape)) & valid
+        # The limit grows with the level, so no path outside the widest main lobe (that of
+        # the faintest level) is heard: the limits are needed only inside it.
+        inside = valid & (cosines >= widest_main_lobe_cos(beam))
+        heard = np.zeros_like(valid)
+        limits = beam.main_lobe_cos_limits(threshold / amplitudes[inside])
+        heard[inside] = cosines[inside] >= limits
 
     # Occlusion (echo_candidates' _unoccluded), only for the paths a beam hears.
     sensor_rows, candidate_rows = np.nonzero(heard)
@@ -327,7 +381,6 @@ def _side_first_echoes(
         matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
             len(sensor_rows), -1, 3
         )
-        matrix[:, :n_segments] *= occluders[:, :, None]
         paths = rel[sensor_rows, candidate_rows]  # (H, 3)
         products = np.einsum("hrk,hk->hr", matrix, paths)  # (H, 3 S + C)
         blocked = np.zeros(len(sensor_rows), dtype=bool)
@@ -338,7 +391,8 @@ def _side_first_echoes(
                     / products[:, None, :n_segments]
                 )
             inside_uv = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
-            blocked |= (inside_uv[:, 0] & inside_uv[:, 1]).any(axis=1)
+            # Only occluding segments block (masked here rather than by zeroing their rows).
+            blocked |= (inside_uv[:, 0] & inside_uv[:, 1] & occluders).any(axis=1)
         if tables.n_circles:
             dots = products[:, 3 * n_segments :]
             path_sq = ranges[sensor_rows, candidate_rows] ** 2

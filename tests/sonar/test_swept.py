@@ -8,9 +8,17 @@ import numpy as np
 import pytest
 
 from sonar_gym.pose import Pose
-from sonar_gym.sonar.pulse_echo import IDEAL_READOUT
+from sonar_gym.sonar.acoustics import PistonBeam
+from sonar_gym.sonar.presets import PRESET_NAMES, preset
+from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, FirstEchoes
 from sonar_gym.sonar.rotating import RotatingSonar
-from sonar_gym.sonar.swept import APCS_SAMPLE_SPACING_M, APCS_SPEED_MPS, SideSonars, SweptSonar
+from sonar_gym.sonar.swept import (
+    APCS_SAMPLE_SPACING_M,
+    APCS_SPEED_MPS,
+    SideSonars,
+    SweptSonar,
+    widest_main_lobe_cos,
+)
 from tests.sonar.worlds import cluttered_room, degrees, world
 
 
@@ -107,3 +115,61 @@ def test_no_poses_no_samples() -> None:
 def test_bad_side_offset_raises() -> None:
     with pytest.raises(ValueError, match="lateral_offset_m"):
         SideSonars.apcs(lateral_offset_m=-0.1)
+
+
+def test_reading_a_prefix_of_echoes_gives_the_readings_and_draws_of_those_poses() -> None:
+    sonars = SideSonars.apcs()
+    test_world = corridor(walls=[{"a": [3.2, 0.8], "b": [3.6, 0.8]}])
+    poses = np.array([[x, 0.05 * math.sin(x), 0.01 * x] for x in np.arange(3.0, 4.0, 0.03)])
+    echoes = sonars.first_echoes_along(test_world, poses)
+    kept = 11
+    prefix_rng, direct_rng = np.random.default_rng(5), np.random.default_rng(5)
+    prefix = sonars.read_echoes(
+        test_world,
+        FirstEchoes(
+            echoes.detected[: 2 * kept],
+            echoes.path_lengths[: 2 * kept],
+            echoes.amplitudes[: 2 * kept],
+        ),
+        prefix_rng,
+    )
+    direct = sonars.sample_along(test_world, poses[:kept], direct_rng)
+    np.testing.assert_array_equal(prefix.left_m, direct.left_m)
+    np.testing.assert_array_equal(prefix.right_m, direct.right_m)
+    assert prefix_rng.random() == direct_rng.random()  # both streams left in the same state
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_one_named_side_reads_what_it_reads_beside_the_other(side: str) -> None:
+    sonars = SideSonars.apcs()
+    test_world = corridor(walls=[{"a": [3.2, 0.8], "b": [3.6, 0.8]}])
+    poses = np.array([[x, 0.05 * math.sin(x), 0.01 * x] for x in np.arange(3.0, 4.0, 0.03)])
+    alone_rng, both_rng = np.random.default_rng(4), np.random.default_rng(4)
+    alone = sonars.sample_along(test_world, poses, alone_rng, sides=(side,))
+    both = sonars.sample_along(test_world, poses, both_rng)
+    other = "right" if side == "left" else "left"
+    named = getattr(alone, f"{side}_m")
+    assert np.isfinite(named).mean() > 0.9
+    np.testing.assert_array_equal(named, getattr(both, f"{side}_m"))
+    assert np.all(np.isnan(getattr(alone, f"{other}_m")))
+    assert alone_rng.random() == both_rng.random()  # the other side's noise was drawn too
+    none = sonars.sample_along(test_world, poses, np.random.default_rng(4), sides=())
+    assert np.all(np.isnan(none.left_m)) and np.all(np.isnan(none.right_m))
+    with pytest.raises(ValueError, match="sides"):
+        sonars.sample_along(test_world, poses, None, sides=("up",))
+
+
+@pytest.mark.parametrize("name", PRESET_NAMES)
+@pytest.mark.parametrize("leakage", [0.0, 0.01])
+def test_no_main_lobe_limit_is_wider_than_that_of_the_faintest_level(
+    name: str, leakage: float
+) -> None:
+    transducer = preset(name)
+    beam = PistonBeam.for_ka(transducer.wavenumber_ka(343.2), False, leakage)
+    levels = np.concatenate([np.geomspace(1e-300, 10.0, 20_001), [1.0, 1.0 + 1e-12]])
+    limits = beam.main_lobe_cos_limits(levels)
+    widest = widest_main_lobe_cos(beam)
+    assert 0.0 < widest < 1.0
+    assert np.all(limits >= widest)
+    order = np.argsort(levels)
+    assert np.all(np.diff(limits[order]) >= 0.0)  # the limit grows with the level

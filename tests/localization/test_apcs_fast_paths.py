@@ -1,0 +1,130 @@
+"""The APCS fast paths give exactly the numbers of the reference functions they stand for."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonar_gym.localization.apcs import (
+    AMBIGUOUS,
+    DEFAULT_PARAMETERS,
+    GROUP_OK,
+    GROUP_TOO_FEW_POINTS,
+    GROUP_TOO_MUCH_VARIANCE,
+    MATCHED,
+    NO_MATCH,
+    DetectedWall,
+    EstimatedReflectionPoints,
+    WallVector,
+    correct_with_checked_wall,
+    correct_with_detected_wall,
+    estimated_reflection_points,
+    fit_wall_group,
+    validated_covariance,
+)
+from sonar_gym.localization.apcs_online import APCSTracker, WallStream
+from sonar_gym.pose import Pose
+from sonar_gym.localization.apcs_walls import newest_reflection_points
+
+
+def _readings(seed: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A side sensor driving a wobbly line past a wall with dropouts, jumps and stops."""
+    rng = np.random.default_rng(seed)
+    steps = rng.choice([0.0, 0.03, 0.06], size=count, p=[0.1, 0.6, 0.3])
+    headings = np.cumsum(rng.normal(0.0, 0.02, count))
+    positions = np.column_stack(
+        [np.cumsum(steps * np.cos(headings)), np.cumsum(steps * np.sin(headings))]
+    )
+    ranges = 1.0 + 0.002 * np.arange(count) + rng.normal(0.0, 0.003, count)
+    ranges[rng.random(count) < 0.1] = np.nan
+    ranges[rng.random(count) < 0.05] = 6.0  # beyond the sensing range
+    ranges[rng.random(count) < 0.05] = 0.1  # inside the minimum range
+    ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
+    return positions, headings + np.pi / 2.0 + 7.0 * np.pi * (rng.random(count) < 0.1), ranges
+
+
+def test_newest_reflection_points_are_those_of_estimated_reflection_points() -> None:
+    for seed in range(20):
+        for count in (0, 1, 2, 3, 40):
+            positions, directions, ranges = _readings(seed, count)
+            reference = estimated_reflection_points(
+                positions, directions, ranges, valid_range_m=DEFAULT_PARAMETERS.sensing_range_m
+            )
+            points, phis, readings = newest_reflection_points(
+                positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m
+            )
+            np.testing.assert_array_equal(points, reference.points)
+            np.testing.assert_array_equal(phis, reference.reflection_directions_rad)
+            np.testing.assert_array_equal(readings, reference.reading_indices)
+            assert count < 40 or len(reference) > 5  # the scene does give ERPs
+
+
+def test_a_stream_closes_its_groups_with_the_verdicts_of_fit_wall_group() -> None:
+    rng = np.random.default_rng(3)
+    steps = np.where(rng.random(400) < 0.08, 0.5, 0.03)  # a jump now and then
+    along = np.cumsum(steps)
+    points = np.column_stack([along, 1.0 + rng.normal(0.0, 0.03 * rng.random(400), 400)])
+    phis = np.pi / 2.0 + rng.normal(0.0, 0.05, 400) + 2.0 * np.pi * (rng.random(400) < 0.2)
+    stream = WallStream("left")
+    closed = []
+    for point, phi in zip(points, phis, strict=True):
+        closed.extend(stream.accept((point[0], 0.0), 0.0, 1.0, (point.tolist(), float(phi))))
+    closed.extend(stream.flush())
+    verdicts = {group.fit.status for group in closed}
+    assert {GROUP_OK, GROUP_TOO_FEW_POINTS, GROUP_TOO_MUCH_VARIANCE} <= verdicts
+    first = 0
+    for group in closed:
+        count = len(group.points)
+        np.testing.assert_array_equal(group.points, points[first : first + count])
+        reference = fit_wall_group(
+            EstimatedReflectionPoints.from_points(
+                points[first : first + count], phis[first : first + count]
+            ),
+            range(count),
+        )
+        assert group.fit == reference
+        first += count
+    assert first == len(points)
+
+
+def test_correcting_with_a_checked_wall_is_correcting_with_the_detected_wall() -> None:
+    wall_map = (
+        WallVector((-1.0, 1.0), (10.0, 1.0), name="left"),
+        WallVector((10.0, -1.0), (-1.0, -1.0), name="right"),
+        WallVector((4.0, 0.9), (6.0, 0.9), name="board"),
+    )
+    covariance = np.array([[4e-4, 1e-5, 2e-6], [1e-5, 3e-4, -4e-6], [2e-6, -4e-6, 1e-4]])
+    pose = Pose(2.0, 0.03, 0.01)
+    detected = [
+        DetectedWall((1.0, 1.01), (1.2, 1.012), (0, 1, 2, 3), 1e-6),  # the left wall
+        DetectedWall((1.2, -0.99), (1.0, -0.99), (0, 1, 2, 3), 1e-6),  # the right wall
+        DetectedWall((4.5, 0.95), (4.7, 0.95), (0, 1, 2, 3), 1e-6),  # left wall or board
+        DetectedWall((1.0, 1.0), (1.2, 1.05), (0, 1, 2, 3), 1e-6),  # off in orientation
+    ]
+    statuses = set()
+    for wall in detected:
+        for method in ("paper", "linear"):
+            reference = correct_with_detected_wall(
+                pose, covariance, wall, wall_map, 1e-4, 3e-4, method=method
+            )
+            checked = correct_with_checked_wall(
+                pose, validated_covariance(covariance), wall, wall_map, 1e-4, 3e-4, method=method
+            )
+            assert checked[0] == reference[0]
+            assert (checked[1].status, checked[1].pose) == (reference[1].status, reference[1].pose)
+            np.testing.assert_array_equal(checked[1].covariance, reference[1].covariance)
+            statuses.add(reference[0].status)
+    assert statuses == {MATCHED, AMBIGUOUS, NO_MATCH}
+
+
+def test_a_tracker_refuses_a_covariance_that_is_not_positive_definite() -> None:
+    with pytest.raises(ValueError, match="positive definite"):
+        APCSTracker(
+            (),
+            Pose(0.0, 0.0, 0.0),
+            np.diag([1e-4, -1e-4, 1e-5]),
+            wheel_base_m=0.3,
+            variance_per_m=1e-6,
+            range_variance_m2=1e-4,
+            bearing_variance_rad2=1e-4,
+        )
