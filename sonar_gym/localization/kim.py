@@ -222,6 +222,7 @@ class _FreeDistanceTable:
         self.direction_bins = direction_bins
         self.end_clearance_m = end_clearance_m
         self.centers = grid.occupied_centers()
+        self.obstacle_points = grid.occupied_obstacle_points()
         step = 0.5 * grid.cell_size_m
         x_min, y_min, x_max, y_max = grid.bounds
         longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
@@ -229,8 +230,14 @@ class _FreeDistanceTable:
         self.distance = np.zeros((direction_bins, self.centers.shape[0]))
         self.filled = np.zeros(direction_bins, dtype=bool)
 
+    def anchors(self, anchor: Anchor) -> FloatArray:
+        """``(K, 2)`` anchor points (m) of the occupied cells: centres or obstacle points."""
+        return self.centers if anchor == "cell_center" else self.obstacle_points
+
     def columns(self, direction_indices: npt.NDArray[np.intp]) -> FloatArray:
         """The table, with the given direction rows filled."""
+        if self.filled.take(direction_indices).all():
+            return self.distance
         missing = np.unique(direction_indices[~self.filled[direction_indices]])
         if missing.size:
             per_direction = max(1, self.centers.shape[0] * self.samples_m.size)
@@ -365,16 +372,36 @@ class _Readings:
     end_xy: FloatArray  # (J, 2) end points (m)
     beam_rad: FloatArray  # (J,) beam directions (rad)
     range_m: FloatArray  # (J,) ranges (m)
+    end_x: FloatArray  # (J,) contiguous copies of the two columns of end_xy (m)
+    end_y: FloatArray
 
 
 def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Readings:
-    ends, beams, ranges = [], [], []
+    """The readings of every sweep with an echo, as :func:`sweep_end_points` of each sweep at
+    its odometry, concatenated (the same arithmetic, element by element, in one pass)."""
+    angles = np.concatenate([sweep.angles for sweep in sweeps])
+    ranges = np.concatenate([sweep.ranges for sweep in sweeps])
+    counts = [sweep.ranges.size for sweep in sweeps]
+    thetas, sensor_x, sensor_y = [], [], []
     for sweep in sweeps:
-        sensor_xy, end_xy, beam = sweep_end_points(sweep, sweep.odometry, max_range_m)
-        ends.append(end_xy)
-        beams.append(beam)
-        ranges.append(np.linalg.norm(end_xy - sensor_xy, axis=1))
-    return _Readings(np.concatenate(ends), np.concatenate(beams), np.concatenate(ranges))
+        pose = sweep.odometry
+        offset_x, offset_y = sweep.sensor_offset
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        thetas.append(pose.theta)
+        sensor_x.append(pose.x + c * offset_x - s * offset_y)
+        sensor_y.append(pose.y + s * offset_x + c * offset_y)
+    keep = np.isfinite(ranges)
+    if max_range_m is not None:
+        keep &= ranges < max_range_m
+    ranges = ranges[keep]
+    beam = np.repeat(thetas, counts)[keep] + angles[keep]
+    from_x = np.repeat(sensor_x, counts)[keep]
+    from_y = np.repeat(sensor_y, counts)[keep]
+    end_x = from_x + ranges * np.cos(beam)
+    end_y = from_y + ranges * np.sin(beam)
+    run_x, run_y = end_x - from_x, end_y - from_y
+    length = np.sqrt(run_x * run_x + run_y * run_y)
+    return _Readings(np.column_stack((end_x, end_y)), beam, length, end_x, end_y)
 
 
 def _direction_index(
@@ -404,7 +431,7 @@ def _candidate_pairs(
         pair_j, pair_k = np.divmod(np.arange(n_readings * n_anchors), n_anchors)
         return pair_j, pair_k
     anchor_distance = np.hypot(anchors[:, 0] - center[0], anchors[:, 1] - center[1])
-    reach = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])
+    reach = np.hypot(readings.end_x, readings.end_y)
     slack = radius * (1.0 + 1e-9) + 1e-12
     near = np.abs(anchor_distance[None, :] - reach[:, None]) <= slack  # (J, K)
     pair_j, pair_k = np.nonzero(near)
@@ -433,19 +460,20 @@ def _pairs_reachable_by_headings(
         return pairs
     to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
     middle = float(headings[headings.size // 2])
-    spread = float(np.max(np.abs(wrap_angles(headings - middle))))
-    distance = np.hypot(to_anchor_x, to_anchor_y)[pair_k]
-    length = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])[pair_j]
+    spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
+    distance = np.hypot(to_anchor_x, to_anchor_y).take(pair_k)
+    length = np.hypot(readings.end_x, readings.end_y).take(pair_j)
     padded = radius * (1.0 + 1e-9) + 1e-12
     product = 2.0 * distance * length
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cosine = (distance * distance + length * length - padded * padded) / product
+    # where product <= 1e-12 the quotient is replaced by pi below; the floor only keeps the
+    # division finite
+    cosine = (distance * distance + length * length - padded * padded) / np.maximum(product, 1e-12)
     half_width = np.where(product > 1e-12, np.arccos(np.clip(cosine, -1.0, 1.0)), np.pi)
-    best = (
-        np.arctan2(to_anchor_y, to_anchor_x)[pair_k]
-        - np.arctan2(readings.end_xy[:, 1], readings.end_xy[:, 0])[pair_j]
-    )
-    reachable = np.abs(wrap_angles(best - middle)) <= spread + half_width + 1e-6
+    best = (np.arctan2(to_anchor_y, to_anchor_x) - middle).take(pair_k) - np.arctan2(
+        readings.end_y, readings.end_x
+    ).take(pair_j)
+    off_middle = np.abs(np.remainder(best + np.pi, 2.0 * np.pi) - np.pi)
+    reachable = off_middle <= spread + half_width + 1e-6
     return pair_j[reachable], pair_k[reachable]
 
 
@@ -467,19 +495,17 @@ def _vote_positions(
     pair_j, pair_k = pairs
     n_anchors = table.shape[1]
     # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
-    flat = direction_index[:, pair_j] * n_anchors + pair_k[None, :]
-    free = table.ravel().take(flat) > readings.range_m.take(pair_j)[None, :]
+    flat = direction_index[:, pair_j] * n_anchors + pair_k
+    free = table.take(flat) > readings.range_m.take(pair_j)
     heading_i, pair_i = np.nonzero(free)  # (h, P)
     reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
-    cos_h, sin_h = np.cos(headings), np.sin(headings)
-    end_x = readings.end_xy[:, 0]
-    end_y = readings.end_xy[:, 1]
-    rotated_x = cos_h[:, None] * end_x[None, :] - sin_h[:, None] * end_y[None, :]
-    rotated_y = sin_h[:, None] * end_x[None, :] + cos_h[:, None] * end_y[None, :]
-    n_readings = end_x.size
-    rotated_at = heading_i * n_readings + reading_i
-    t_x = anchors[:, 0].take(cell_i) - rotated_x.ravel().take(rotated_at)
-    t_y = anchors[:, 1].take(cell_i) - rotated_y.ravel().take(rotated_at)
+    cos_h, sin_h = np.cos(headings)[:, None], np.sin(headings)[:, None]
+    end_x, end_y = readings.end_x, readings.end_y
+    rotated_x = cos_h * end_x - sin_h * end_y
+    rotated_y = sin_h * end_x + cos_h * end_y
+    rotated_at = heading_i * end_x.size + reading_i
+    t_x = anchors[:, 0].take(cell_i) - rotated_x.take(rotated_at)
+    t_y = anchors[:, 1].take(cell_i) - rotated_y.take(rotated_at)
     return heading_i, t_x, t_y
 
 
@@ -523,22 +549,40 @@ def _vote_window(
     return _VoteWindow((low_x, low_y), (high_x - low_x + 1, high_y - low_y + 1))
 
 
-def _vote_cells(
+@dataclass(frozen=True)
+class _Votes:
+    """The votes that count, in the order they were cast: heading index within the block,
+    continuous position ``t`` (m, {W}) and cell of the whole grid."""
+
+    heading_i: npt.NDArray[np.intp]
+    t_x: FloatArray
+    t_y: FloatArray
+    cell_x: npt.NDArray[np.int64]
+    cell_y: npt.NDArray[np.int64]
+
+
+def _counted_votes(
     grid: OccupancyGrid,
+    window: _VoteWindow,
+    heading_i: npt.NDArray[np.intp],
     t_x: FloatArray,
     t_y: FloatArray,
     center: FloatArray | None,
     radius: float | None,
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
-    """Cells of vote positions and the mask of votes that count (in grid and search circle)."""
+) -> _Votes:
+    """The votes inside the search circle (if any) whose cell lies in ``window``.
+
+    The window lies inside the grid, so its test is also the test of the grid's bounds.
+    """
+    if center is not None and radius is not None:
+        inside = (t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius
+        heading_i, t_x, t_y = heading_i[inside], t_x[inside], t_y[inside]
     x0, y0 = grid.origin_m
-    nx, ny = grid.shape
     cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
     cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
-    keep = (cell_x >= 0) & (cell_x < nx) & (cell_y >= 0) & (cell_y < ny)
-    if center is not None and radius is not None:
-        keep &= (t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius
-    return cell_x, cell_y, keep
+    (low_x, low_y), (wx, wy) = window.low, window.shape
+    keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
+    return _Votes(heading_i[keep], t_x[keep], t_y[keep], cell_x[keep], cell_y[keep])
 
 
 def _failure(status: str, message: str) -> VoteLocalization:
@@ -638,7 +682,7 @@ def vote_localize(
     if readings.range_m.size == 0:
         return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
     table_cache = _free_distance_table(grid, direction_bins, clearance)
-    anchors = table_cache.centers if anchor == "cell_center" else grid.occupied_obstacle_points()
+    anchors = table_cache.anchors(anchor)
     if anchors.shape[0] == 0:
         return _failure(NO_VOTES, "the grid has no occupied cell")
 
@@ -654,6 +698,7 @@ def vote_localize(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
     block = max(1, _CHUNK_ELEMENTS // pairs[0].size)
+    counted: _Votes | None = None
     for start in range(0, headings.size, block):
         block_headings = headings[start : start + block]
         direction_index = _direction_index(block_headings, readings, direction_bins)
@@ -661,12 +706,16 @@ def vote_localize(
         heading_i, t_x, t_y = _vote_positions(
             readings, anchors, table, block_headings, direction_index, pairs
         )
-        cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
-        local_x, local_y = cell_x - low_x, cell_y - low_y
-        keep &= (local_x >= 0) & (local_x < wx) & (local_y >= 0) & (local_y < wy)
-        flat = heading_i[keep] * cells_per_layer + local_x[keep] * wy + local_y[keep]
+        counted = _counted_votes(grid, window, heading_i, t_x, t_y, center, radius)
+        flat = (
+            counted.heading_i * cells_per_layer
+            + (counted.cell_x - low_x) * wy
+            + (counted.cell_y - low_y)
+        )
         counts = np.bincount(flat, minlength=block_headings.size * cells_per_layer)
         volume[start : start + block_headings.size] = counts.reshape(-1, wx, wy)
+    if block < headings.size:
+        counted = None  # only the last block's votes are kept: recompute the chosen heading's
 
     if not volume.any():
         return _failure(
@@ -696,18 +745,22 @@ def vote_localize(
     if refine == "cell_center":
         position = choice.centre
     else:
-        position = _mean_vote_position(
-            grid,
-            readings,
-            table_cache,
-            anchors,
-            heading,
-            direction_bins,
-            choice,
-            center,
-            radius,
-            pairs,
-        )
+        if counted is None:
+            position = _mean_vote_position(
+                grid,
+                readings,
+                table_cache,
+                anchors,
+                heading,
+                direction_bins,
+                choice,
+                window,
+                center,
+                radius,
+                pairs,
+            )
+        else:
+            position = _mean_in_window(counted, choice.heading_index, choice)
     pose = Pose(float(position[0]), float(position[1]), heading)
     return VoteLocalization(
         status=OK,
@@ -805,18 +858,30 @@ def _mean_vote_position(
     heading: float,
     direction_bins: int,
     choice: _Choice,
+    window: _VoteWindow,
     center: FloatArray | None,
     radius: float | None,
     pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
 ) -> FloatArray:
-    """Mean of the continuous vote positions in the chosen window of cells."""
+    """Mean of the continuous vote positions in the chosen window of cells, the votes of
+    ``heading`` cast afresh."""
     headings = np.array([heading])
     direction_index = _direction_index(headings, readings, direction_bins)
     table = table_cache.columns(direction_index.ravel())
-    _, t_x, t_y = _vote_positions(readings, anchors, table, headings, direction_index, pairs)
-    cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
-    keep &= (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
-    keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
+    heading_i, t_x, t_y = _vote_positions(
+        readings, anchors, table, headings, direction_index, pairs
+    )
+    return _mean_in_window(
+        _counted_votes(grid, window, heading_i, t_x, t_y, center, radius), 0, choice
+    )
+
+
+def _mean_in_window(votes: _Votes, heading_index: int, choice: _Choice) -> FloatArray:
+    """Mean of the positions of the ``votes`` of ``heading_index`` in the chosen window of
+    cells (its centre when none lies there)."""
+    keep = votes.heading_i == heading_index
+    keep &= (votes.cell_x >= choice.window_low[0]) & (votes.cell_x <= choice.window_high[0])
+    keep &= (votes.cell_y >= choice.window_low[1]) & (votes.cell_y <= choice.window_high[1])
     if not keep.any():
         return choice.centre
-    return np.array([t_x[keep].mean(), t_y[keep].mean()])
+    return np.array([votes.t_x[keep].mean(), votes.t_y[keep].mean()])
