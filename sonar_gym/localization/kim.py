@@ -369,11 +369,15 @@ def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
 class _Readings:
     """All valid readings moved into the first sweep's robot frame."""
 
-    end_xy: FloatArray  # (J, 2) end points (m)
+    end_x: FloatArray  # (J,) end points (m)
+    end_y: FloatArray
     beam_rad: FloatArray  # (J,) beam directions (rad)
     range_m: FloatArray  # (J,) ranges (m)
-    end_x: FloatArray  # (J,) contiguous copies of the two columns of end_xy (m)
-    end_y: FloatArray
+
+    @property
+    def end_xy(self) -> FloatArray:
+        """``(J, 2)`` end points (m)."""
+        return np.column_stack((self.end_x, self.end_y))
 
 
 def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Readings:
@@ -390,18 +394,19 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
         thetas.append(pose.theta)
         sensor_x.append(pose.x + c * offset_x - s * offset_y)
         sensor_y.append(pose.y + s * offset_x + c * offset_y)
-    keep = np.isfinite(ranges)
+    valid = np.isfinite(ranges)
     if max_range_m is not None:
-        keep &= ranges < max_range_m
-    ranges = ranges[keep]
-    beam = np.repeat(thetas, counts)[keep] + angles[keep]
-    from_x = np.repeat(sensor_x, counts)[keep]
-    from_y = np.repeat(sensor_y, counts)[keep]
+        valid &= ranges < max_range_m
+    keep = np.flatnonzero(valid)
+    ranges = ranges.take(keep)
+    beam = np.repeat(thetas, counts).take(keep) + angles.take(keep)
+    from_x = np.repeat(sensor_x, counts).take(keep)
+    from_y = np.repeat(sensor_y, counts).take(keep)
     end_x = from_x + ranges * np.cos(beam)
     end_y = from_y + ranges * np.sin(beam)
     run_x, run_y = end_x - from_x, end_y - from_y
     length = np.sqrt(run_x * run_x + run_y * run_y)
-    return _Readings(np.column_stack((end_x, end_y)), beam, length, end_x, end_y)
+    return _Readings(end_x, end_y, beam, length)
 
 
 def _direction_index(
@@ -433,9 +438,10 @@ def _candidate_pairs(
     anchor_distance = np.hypot(anchors[:, 0] - center[0], anchors[:, 1] - center[1])
     reach = np.hypot(readings.end_x, readings.end_y)
     slack = radius * (1.0 + 1e-9) + 1e-12
-    near = np.abs(anchor_distance[None, :] - reach[:, None]) <= slack  # (J, K)
-    pair_j, pair_k = np.nonzero(near)
-    return pair_j, pair_k
+    near = np.abs(anchor_distance - reach[:, None]) <= slack  # (J, K)
+    flat = np.flatnonzero(near)
+    pair_j = flat // n_anchors
+    return pair_j, flat - pair_j * n_anchors
 
 
 def _pairs_reachable_by_headings(
@@ -449,32 +455,41 @@ def _pairs_reachable_by_headings(
     """The ``pairs`` whose vote some candidate heading can bring into the search circle.
 
     ``|t - c|^2 = D^2 + E^2 - 2 D E cos(heading - psi*)`` (``D = |a - c|``, ``E = |e|``,
-    ``psi*`` the heading that turns ``e`` onto ``a - c``) is within ``radius^2`` only for
-    headings within ``delta = arccos((D^2 + E^2 - radius^2) / 2DE)`` of ``psi*``; every
-    candidate lies within ``spread`` of the middle one, so a pair with ``psi*`` farther than
-    ``spread + delta`` from it never votes inside. The test is padded so that rounding never
-    drops a pair that votes; the kept pairs keep their order. Without a circle: all pairs.
+    ``psi*`` the heading that turns ``e`` onto ``a - c``). Every candidate lies within
+    ``spread`` of the middle one; with ``phi`` the angle between ``psi*`` and the middle
+    heading, the largest ``cos(heading - psi*)`` over the candidates is 1 when ``phi <=
+    spread``, else ``cos(phi - spread)``. So a pair can vote inside only if ``phi <= spread``
+    or ``D E cos(phi - spread) >= (D^2 + E^2 - radius^2) / 2``, where ``D E cos(phi - spread)
+    = dot cos(spread) + |cross| sin(spread)`` with ``dot`` and ``cross`` the products of
+    ``a - c`` turned back by the middle heading and ``e``: no trigonometry per pair. The test
+    is padded (radius and spread) so that rounding never drops a pair that votes; the kept
+    pairs keep their order. Without a circle: all pairs.
     """
     pair_j, pair_k = pairs
     if center is None or radius is None or headings.size == 0 or pair_j.size == 0:
         return pairs
-    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
     middle = float(headings[headings.size // 2])
     spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
-    distance = np.hypot(to_anchor_x, to_anchor_y).take(pair_k)
-    length = np.hypot(readings.end_x, readings.end_y).take(pair_j)
+    spread += 1e-6
+    if spread >= np.pi:
+        return pairs
+    cos_m, sin_m = math.cos(middle), math.sin(middle)
+    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
+    # a - c in the frame of the middle heading, per anchor; the end points, per reading
+    back_x = (cos_m * to_anchor_x + sin_m * to_anchor_y).take(pair_k)
+    back_y = (cos_m * to_anchor_y - sin_m * to_anchor_x).take(pair_k)
+    end_x, end_y = readings.end_x.take(pair_j), readings.end_y.take(pair_j)
+    dot = back_x * end_x + back_y * end_y
+    cross = np.abs(back_x * end_y - back_y * end_x)
+    squared_d = (to_anchor_x * to_anchor_x + to_anchor_y * to_anchor_y).take(pair_k)
+    squared_e = (readings.end_x * readings.end_x + readings.end_y * readings.end_y).take(pair_j)
     padded = radius * (1.0 + 1e-9) + 1e-12
-    product = 2.0 * distance * length
-    # where product <= 1e-12 the quotient is replaced by pi below; the floor only keeps the
-    # division finite
-    cosine = (distance * distance + length * length - padded * padded) / np.maximum(product, 1e-12)
-    half_width = np.where(product > 1e-12, np.arccos(np.clip(cosine, -1.0, 1.0)), np.pi)
-    best = (np.arctan2(to_anchor_y, to_anchor_x) - middle).take(pair_k) - np.arctan2(
-        readings.end_y, readings.end_x
-    ).take(pair_j)
-    off_middle = np.abs(np.remainder(best + np.pi, 2.0 * np.pi) - np.pi)
-    reachable = off_middle <= spread + half_width + 1e-6
-    return pair_j[reachable], pair_k[reachable]
+    needed = 0.5 * (squared_d + squared_e - padded * padded) - 1e-12
+    cos_s, sin_s = math.cos(spread), math.sin(spread)
+    within_spread = dot >= cos_s * np.sqrt(squared_d * squared_e) - 1e-12  # cos(phi) >= cos(spread)
+    reachable = within_spread | (dot * cos_s + cross * sin_s >= needed)
+    kept = np.flatnonzero(reachable)
+    return pair_j.take(kept), pair_k.take(kept)
 
 
 def _vote_positions(
@@ -497,7 +512,9 @@ def _vote_positions(
     # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
     flat = direction_index[:, pair_j] * n_anchors + pair_k
     free = table.take(flat) > readings.range_m.take(pair_j)
-    heading_i, pair_i = np.nonzero(free)  # (h, P)
+    hits = np.flatnonzero(free)  # (h, P) row-major: heading by heading
+    heading_i = hits // pair_j.size
+    pair_i = hits - heading_i * pair_j.size
     reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
     cos_h, sin_h = np.cos(headings)[:, None], np.sin(headings)[:, None]
     end_x, end_y = readings.end_x, readings.end_y
@@ -551,8 +568,9 @@ def _vote_window(
 
 @dataclass(frozen=True)
 class _Votes:
-    """The votes that count, in the order they were cast: heading index within the block,
-    continuous position ``t`` (m, {W}) and cell of the whole grid."""
+    """The votes that count, in the order they were cast (heading by heading, so
+    ``heading_i`` is sorted): heading index within the block, continuous position ``t``
+    (m, {W}) and cell of the whole grid."""
 
     heading_i: npt.NDArray[np.intp]
     t_x: FloatArray
@@ -575,14 +593,19 @@ def _counted_votes(
     The window lies inside the grid, so its test is also the test of the grid's bounds.
     """
     if center is not None and radius is not None:
-        inside = (t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius
-        heading_i, t_x, t_y = heading_i[inside], t_x[inside], t_y[inside]
+        inside = np.flatnonzero((t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius)
+        heading_i, t_x, t_y = heading_i.take(inside), t_x.take(inside), t_y.take(inside)
     x0, y0 = grid.origin_m
     cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
     cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
     (low_x, low_y), (wx, wy) = window.low, window.shape
     keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
-    return _Votes(heading_i[keep], t_x[keep], t_y[keep], cell_x[keep], cell_y[keep])
+    if keep.all():  # always inside a search circle: its window has a margin for rounding
+        return _Votes(heading_i, t_x, t_y, cell_x, cell_y)
+    kept = np.flatnonzero(keep)
+    return _Votes(
+        heading_i.take(kept), t_x.take(kept), t_y.take(kept), cell_x.take(kept), cell_y.take(kept)
+    )
 
 
 def _failure(status: str, message: str) -> VoteLocalization:
@@ -821,9 +844,8 @@ def _choose(
         high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
         return _Choice(heading_index, cell, low, high, centroid, volume)
     score = _binomial_smooth(volume)
-    heading_index, local_x, local_y = (
-        int(i) for i in np.unravel_index(int(np.argmax(score)), score.shape)
-    )
+    heading_index, rest = divmod(int(np.argmax(score)), score.shape[1] * score.shape[2])
+    local_x, local_y = divmod(rest, score.shape[2])
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
     cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
@@ -879,9 +901,10 @@ def _mean_vote_position(
 def _mean_in_window(votes: _Votes, heading_index: int, choice: _Choice) -> FloatArray:
     """Mean of the positions of the ``votes`` of ``heading_index`` in the chosen window of
     cells (its centre when none lies there)."""
-    keep = votes.heading_i == heading_index
-    keep &= (votes.cell_x >= choice.window_low[0]) & (votes.cell_x <= choice.window_high[0])
-    keep &= (votes.cell_y >= choice.window_low[1]) & (votes.cell_y <= choice.window_high[1])
+    first, end = np.searchsorted(votes.heading_i, (heading_index, heading_index + 1))
+    cell_x, cell_y = votes.cell_x[first:end], votes.cell_y[first:end]
+    keep = (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
+    keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
     if not keep.any():
         return choice.centre
-    return np.array([votes.t_x[keep].mean(), votes.t_y[keep].mean()])
+    return np.array([votes.t_x[first:end][keep].mean(), votes.t_y[first:end][keep].mean()])
