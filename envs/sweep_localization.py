@@ -328,6 +328,7 @@ class SweepLocalizationEnv(SonarEnv):
         except (OSError, ValueError) as error:
             raise ValueError(f"argument 'scenario': {error}") from error
         self.grid = occupancy_grid_of(self._scenario)
+        self._bounds = self._scenario.bounds  # (min, max) corners; the scenario never changes
         self.sonar = SweptSonar.kim(
             wide=config.sweep_width_deg == 180,
             preset=self._scenario.sensor.preset_or(PAPER_SENSOR_PRESET),
@@ -558,7 +559,7 @@ class SweepLocalizationEnv(SonarEnv):
         episode = self._require_episode()
         observation = self.observation_spec.writer()
         estimate = episode.estimate
-        (x_min, y_min), (x_max, y_max) = self._scenario.bounds
+        (x_min, y_min), (x_max, y_max) = self._bounds
         observation["estimate_xy"] = ScaledPosition.values(
             (estimate.x, estimate.y), (x_min, y_min), (x_max, y_max)
         )
@@ -644,7 +645,7 @@ def _relative_pose(reference: Pose, pose: Pose) -> Pose:
     """``pose`` expressed in the frame of ``reference`` (both in {W})."""
     dx, dy = pose.x - reference.x, pose.y - reference.y
     c, s = math.cos(reference.theta), math.sin(reference.theta)
-    return Pose(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
+    return Pose.unchecked(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
 
 
 __all__ = ["SECTOR_CENTRES_RAD", "SECTOR_NAMES", "SweepLocalizationConfig", "SweepLocalizationEnv"]
