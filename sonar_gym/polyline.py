@@ -58,10 +58,8 @@ class Route:
 
     def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
         """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
-        inner = [
-            v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if start_m < s < stop_m
-        ]
-        return [*inner, self.point_at(stop_m)]
+        between = (self.cumulative_m > start_m) & (self.cumulative_m < stop_m)
+        return [*self.vertices[between], self.point_at(stop_m)]
 
     def heading_at_start(self) -> float:
         delta = self.vertices[1] - self.vertices[0]

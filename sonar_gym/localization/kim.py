@@ -386,22 +386,21 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
     angles = np.concatenate([sweep.angles for sweep in sweeps])
     ranges = np.concatenate([sweep.ranges for sweep in sweeps])
     counts = [sweep.ranges.size for sweep in sweeps]
-    thetas, sensor_x, sensor_y = [], [], []
+    per_sweep = []  # heading and sensor position of each sweep, in the first sweep's frame
     for sweep in sweeps:
         pose = sweep.odometry
         offset_x, offset_y = sweep.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
-        thetas.append(pose.theta)
-        sensor_x.append(pose.x + c * offset_x - s * offset_y)
-        sensor_y.append(pose.y + s * offset_x + c * offset_y)
+        per_sweep.append(
+            (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
+        )
     valid = np.isfinite(ranges)
     if max_range_m is not None:
         valid &= ranges < max_range_m
     keep = np.flatnonzero(valid)
     ranges = ranges.take(keep)
-    beam = np.repeat(thetas, counts).take(keep) + angles.take(keep)
-    from_x = np.repeat(sensor_x, counts).take(keep)
-    from_y = np.repeat(sensor_y, counts).take(keep)
+    theta, from_x, from_y = np.repeat(np.array(per_sweep).T, counts, axis=1).take(keep, axis=1)
+    beam = theta + angles.take(keep)
     end_x = from_x + ranges * np.cos(beam)
     end_y = from_y + ranges * np.sin(beam)
     run_x, run_y = end_x - from_x, end_y - from_y
@@ -850,7 +849,11 @@ def _choose(
     cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
-    return _Choice(heading_index, cell, low, high, grid.cell_to_world(np.array(cell)), score)
+    x0, y0 = grid.origin_m  # the centre of the cell, as OccupancyGrid.cell_to_world
+    centre = np.array(
+        [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
+    )
+    return _Choice(heading_index, cell, low, high, centre, score)
 
 
 def _rival_score(
@@ -901,10 +904,13 @@ def _mean_vote_position(
 def _mean_in_window(votes: _Votes, heading_index: int, choice: _Choice) -> FloatArray:
     """Mean of the positions of the ``votes`` of ``heading_index`` in the chosen window of
     cells (its centre when none lies there)."""
-    first, end = np.searchsorted(votes.heading_i, (heading_index, heading_index + 1))
+    first, end = votes.heading_i.searchsorted([heading_index, heading_index + 1])
     cell_x, cell_y = votes.cell_x[first:end], votes.cell_y[first:end]
     keep = (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
     keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
-    if not keep.any():
+    kept = np.flatnonzero(keep)
+    if kept.size == 0:
         return choice.centre
-    return np.array([votes.t_x[first:end][keep].mean(), votes.t_y[first:end][keep].mean()])
+    # sum / count is np.mean's own arithmetic (one pairwise sum, one division)
+    t_x, t_y = votes.t_x[first:end].take(kept), votes.t_y[first:end].take(kept)
+    return np.array([t_x.sum() / kept.size, t_y.sum() / kept.size])
