@@ -221,8 +221,9 @@ class _FreeDistanceTable:
         self.cell_size_m = grid.cell_size_m
         self.direction_bins = direction_bins
         self.end_clearance_m = end_clearance_m
-        self.centers = grid.occupied_centers()
-        self.obstacle_points = grid.occupied_obstacle_points()
+        # column-major: the x and y columns are contiguous for the per-vote gathers
+        self.centers = np.asfortranarray(grid.occupied_centers())
+        self.obstacle_points = np.asfortranarray(grid.occupied_obstacle_points())
         step = 0.5 * grid.cell_size_m
         x_min, y_min, x_max, y_max = grid.bounds
         longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
@@ -509,20 +510,16 @@ def _vote_positions(
     pair_j, pair_k = pairs
     n_anchors = table.shape[1]
     # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
-    flat = direction_index[:, pair_j] * n_anchors + pair_k
+    flat = (direction_index * n_anchors).take(pair_j, axis=1) + pair_k
     free = table.take(flat) > readings.range_m.take(pair_j)
     hits = np.flatnonzero(free)  # (h, P) row-major: heading by heading
-    heading_i = hits // pair_j.size
-    pair_i = hits - heading_i * pair_j.size
-    reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
     cos_h, sin_h = np.cos(headings)[:, None], np.sin(headings)[:, None]
     end_x, end_y = readings.end_x, readings.end_y
-    rotated_x = cos_h * end_x - sin_h * end_y
-    rotated_y = sin_h * end_x + cos_h * end_y
-    rotated_at = heading_i * end_x.size + reading_i
-    t_x = anchors[:, 0].take(cell_i) - rotated_x.take(rotated_at)
-    t_y = anchors[:, 1].take(cell_i) - rotated_y.take(rotated_at)
-    return heading_i, t_x, t_y
+    rotated_x = (cos_h * end_x - sin_h * end_y).take(pair_j, axis=1)  # (h, P)
+    rotated_y = (sin_h * end_x + cos_h * end_y).take(pair_j, axis=1)
+    t_x = (anchors[:, 0].take(pair_k) - rotated_x).take(hits)
+    t_y = (anchors[:, 1].take(pair_k) - rotated_y).take(hits)
+    return hits // pair_j.size, t_x, t_y
 
 
 @dataclass(frozen=True)
