@@ -122,7 +122,9 @@ class OdometryConfig:
         """What the encoders report for wheels commanded ``commanded_m`` metres: the command
         plus Gaussian noise of standard deviation ``encoder_std_m_per_sqrt_m * sqrt(|d|)``,
         from standard normal draws ``normals`` (same shape), metres."""
-        return commanded_m + self.encoder_std_m_per_sqrt_m * np.sqrt(abs(commanded_m)) * normals
+        # math.sqrt on one wheel's float: the correctly rounded root np.sqrt gives, without a ufunc
+        root = math.sqrt if isinstance(commanded_m, float) else np.sqrt
+        return commanded_m + self.encoder_std_m_per_sqrt_m * root(abs(commanded_m)) * normals
 
     def ground_travel(
         self, commanded_m: Wheels, scale_errors: Wheels, slip_draws: Wheels, size_draws: Wheels
@@ -235,12 +237,9 @@ def wheel_increment_covariance(
     by ``k = variance_per_m`` (m^2 per metre rolled) and a scale error of variance ``s =
     scale_variance`` (dimensionless^2) that grows with the square of the increment.
     """
-    return np.diag(
-        [
-            variance_per_m * abs(d_right_m) + scale_variance * d_right_m * d_right_m,
-            variance_per_m * abs(d_left_m) + scale_variance * d_left_m * d_left_m,
-        ]
-    )
+    right = variance_per_m * abs(d_right_m) + scale_variance * d_right_m * d_right_m
+    left = variance_per_m * abs(d_left_m) + scale_variance * d_left_m * d_left_m
+    return np.array([[right, 0.0], [0.0, left]])
 
 
 def predict_step(

@@ -225,25 +225,17 @@ class DifferentialDriveRobot:
             )
         wheel_base = self.wheel_base_for(world)
         noise = self.noise
-        normals = rng.standard_normal(2)
-        uniforms = rng.random(4)
+        normal_left, normal_right = rng.standard_normal(2).tolist()
+        slip_left, slip_right, size_left, size_right = rng.random(4).tolist()
 
         # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
         encoder = (
-            float(noise.encoder_increments(d_left_m, float(normals[0]))),
-            float(noise.encoder_increments(d_right_m, float(normals[1]))),
+            float(noise.encoder_increments(d_left_m, normal_left)),
+            float(noise.encoder_increments(d_right_m, normal_right)),
         )
         ground = (
-            float(
-                noise.ground_travel(
-                    d_left_m, noise.scale_error_left, float(uniforms[0]), float(uniforms[2])
-                )
-            ),
-            float(
-                noise.ground_travel(
-                    d_right_m, noise.scale_error_right, float(uniforms[1]), float(uniforms[3])
-                )
-            ),
+            float(noise.ground_travel(d_left_m, noise.scale_error_left, slip_left, size_left)),
+            float(noise.ground_travel(d_right_m, noise.scale_error_right, slip_right, size_right)),
         )
 
         n = self._substep_count(ground, encoder, wheel_base, substeps)

@@ -189,7 +189,9 @@ def test_the_run_prediction_in_closed_form_matches_the_per_command_prediction(co
 
 
 @pytest.mark.parametrize("commanded", [0.3, -0.05, 0.0, 2.5])
-def test_one_wheel_in_floats_rolls_as_the_same_wheel_in_an_array(commanded: float) -> None:
+def test_one_wheel_in_floats_rolls_and_reports_as_the_same_wheel_in_an_array(
+    commanded: float,
+) -> None:
     config = OdometryNoise(0.005, 0.01, -0.01, 0.5, 0.3)
     rng = np.random.default_rng(3)
     for slip_draw, size_draw in rng.random((50, 2)).tolist():
@@ -199,3 +201,8 @@ def test_one_wheel_in_floats_rolls_as_the_same_wheel_in_an_array(commanded: floa
         )
         assert isinstance(alone, float)
         assert alone == float(many[0])
+        reported = config.encoder_increments(commanded, slip_draw - 0.5)
+        reported_many = config.encoder_increments(
+            np.array([commanded]), np.array([slip_draw - 0.5])
+        )
+        assert reported == float(reported_many[0])
