@@ -230,6 +230,7 @@ class _FreeDistanceTable:
         self.samples_m = end_clearance_m + step * np.arange(math.ceil(longest / step) + 1)
         self.distance = np.zeros((direction_bins, self.centers.shape[0]))
         self.filled = np.zeros(direction_bins, dtype=bool)
+        self.complete = False
 
     def anchors(self, anchor: Anchor) -> FloatArray:
         """``(K, 2)`` anchor points (m) of the occupied cells: centres or obstacle points."""
@@ -237,7 +238,7 @@ class _FreeDistanceTable:
 
     def columns(self, direction_indices: npt.NDArray[np.intp]) -> FloatArray:
         """The table, with the given direction rows filled."""
-        if self.filled.take(direction_indices).all():
+        if self.complete or self.filled.take(direction_indices).all():
             return self.distance
         missing = np.unique(direction_indices[~self.filled[direction_indices]])
         if missing.size:
@@ -247,6 +248,7 @@ class _FreeDistanceTable:
                 block = missing[start : start + chunk]
                 self.distance[block] = self._trace(block)
             self.filled[missing] = True
+            self.complete = bool(self.filled.all())
         return self.distance
 
     def _trace(self, directions: npt.NDArray[np.intp]) -> FloatArray:
@@ -595,9 +597,14 @@ def _counted_votes(
     cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
     cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
     (low_x, low_y), (wx, wy) = window.low, window.shape
-    keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
-    if keep.all():  # always inside a search circle: its window has a margin for rounding
+    if cell_x.size == 0 or (
+        low_x <= cell_x.min()
+        and cell_x.max() < low_x + wx
+        and low_y <= cell_y.min()
+        and cell_y.max() < low_y + wy
+    ):  # always inside a search circle: its window has a margin for rounding
         return _Votes(heading_i, t_x, t_y, cell_x, cell_y)
+    keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
     kept = np.flatnonzero(keep)
     return _Votes(
         heading_i.take(kept), t_x.take(kept), t_y.take(kept), cell_x.take(kept), cell_y.take(kept)
