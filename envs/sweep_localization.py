@@ -328,6 +328,11 @@ class SweepLocalizationEnv(SonarEnv):
         except (OSError, ValueError) as error:
             raise ValueError(f"argument 'scenario': {error}") from error
         self.grid = occupancy_grid_of(self._scenario)
+        self._bounds = self._scenario.bounds  # (min, max) corners; the scenario never changes
+        self._fix_covariance = fix_covariance(
+            config.fix_position_std_m, math.radians(config.fix_heading_std_deg)
+        )
+        self._fix_covariance.setflags(write=False)  # G of every fix, shared
         self.sonar = SweptSonar.kim(
             wide=config.sweep_width_deg == 180,
             preset=self._scenario.sensor.preset_or(PAPER_SENSOR_PRESET),
@@ -522,7 +527,7 @@ class SweepLocalizationEnv(SonarEnv):
                 episode.estimate,
                 episode.covariance,
                 result.last_sweep_pose,
-                fix_covariance(config.fix_position_std_m, math.radians(config.fix_heading_std_deg)),
+                self._fix_covariance,
                 config.innovation_gate,
             )
             if corrected is not None:
@@ -558,15 +563,17 @@ class SweepLocalizationEnv(SonarEnv):
         episode = self._require_episode()
         observation = self.observation_spec.writer()
         estimate = episode.estimate
-        (x_min, y_min), (x_max, y_max) = self._scenario.bounds
+        (x_min, y_min), (x_max, y_max) = self._bounds
         observation["estimate_xy"] = ScaledPosition.values(
             (estimate.x, estimate.y), (x_min, y_min), (x_max, y_max)
         )
         observation["estimate_heading"] = Heading.values(estimate.theta)
-        std = np.sqrt(np.clip(np.diag(episode.covariance), 0.0, None))
-        observation["estimate_std"] = np.clip(
-            std / [POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD], 0.0, 1.0
-        )
+        variances = episode.covariance.diagonal().tolist()
+        scales = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD)
+        observation["estimate_std"] = [
+            min(max(math.sqrt(max(variance, 0.0)) / scale, 0.0), 1.0)
+            for variance, scale in zip(variances, scales, strict=True)
+        ]
         observation["distance_since_fix"] = min(
             episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0
         )
@@ -576,9 +583,12 @@ class SweepLocalizationEnv(SonarEnv):
         observation["last_sweep_ranges"] = self._sweep_bins.values(episode.last_ranges)
         observation["last_sweep_sector"] = Heading.values(SECTOR_CENTRES_RAD[episode.last_sector])
         observation["last_fix_ok"] = float(episode.last_fix_ok)
-        ahead = self._next_station_point(episode) - estimate.position
+        station_x, station_y = self._next_station_point(episode).tolist()
+        ahead_x, ahead_y = station_x - estimate.x, station_y - estimate.y
         bearing = (
-            wrap_angle(math.atan2(ahead[1], ahead[0]) - estimate.theta) if np.any(ahead) else 0.0
+            wrap_angle(math.atan2(ahead_y, ahead_x) - estimate.theta)
+            if ahead_x != 0.0 or ahead_y != 0.0
+            else 0.0
         )
         observation["route_heading"] = Heading.values(bearing)
         remaining = len(episode.decision_stations_m) - episode.decisions
@@ -644,7 +654,7 @@ def _relative_pose(reference: Pose, pose: Pose) -> Pose:
     """``pose`` expressed in the frame of ``reference`` (both in {W})."""
     dx, dy = pose.x - reference.x, pose.y - reference.y
     c, s = math.cos(reference.theta), math.sin(reference.theta)
-    return Pose(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
+    return Pose.unchecked(c * dx + s * dy, -s * dx + c * dy, pose.theta - reference.theta)
 
 
 __all__ = ["SECTOR_CENTRES_RAD", "SECTOR_NAMES", "SweepLocalizationConfig", "SweepLocalizationEnv"]

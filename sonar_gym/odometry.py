@@ -28,7 +28,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.pose import FloatArray, Pose, wrap_angle, wrap_angles
+from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
 Integration = Literal["euler", "midpoint", "arc"]
@@ -122,7 +122,9 @@ class OdometryConfig:
         """What the encoders report for wheels commanded ``commanded_m`` metres: the command
         plus Gaussian noise of standard deviation ``encoder_std_m_per_sqrt_m * sqrt(|d|)``,
         from standard normal draws ``normals`` (same shape), metres."""
-        return commanded_m + self.encoder_std_m_per_sqrt_m * np.sqrt(abs(commanded_m)) * normals
+        # math.sqrt on one wheel's float: the correctly rounded root np.sqrt gives, without a ufunc
+        root = math.sqrt if isinstance(commanded_m, float) else np.sqrt
+        return commanded_m + self.encoder_std_m_per_sqrt_m * root(abs(commanded_m)) * normals
 
     def ground_travel(
         self, commanded_m: Wheels, scale_errors: Wheels, slip_draws: Wheels, size_draws: Wheels
@@ -133,9 +135,14 @@ class OdometryConfig:
         loses the fraction ``size_draws * slip_fraction_max`` of the command (``size_draws``
         uniform in [0, 1))."""
         slip_probability = 1.0 - (1.0 - self.slip_probability_per_m) ** abs(commanded_m)
-        slip_loss = np.where(
-            slip_draws < slip_probability, size_draws * self.slip_fraction_max, 0.0
-        )
+        if isinstance(slip_draws, float):  # one wheel: a plain branch, no 0-d arrays
+            slip_loss = (
+                size_draws * self.slip_fraction_max if slip_draws < slip_probability else 0.0
+            )
+        else:
+            slip_loss = np.where(
+                slip_draws < slip_probability, size_draws * self.slip_fraction_max, 0.0
+            )
         return commanded_m * (1.0 + scale_errors) * (1.0 - slip_loss)
 
 
@@ -163,11 +170,16 @@ def integrate_substeps(
         integration: ``"euler"``, ``"midpoint"`` or ``"arc"`` (see ``unicycle_step``).
     """
     n = int(substeps)
+    d_left_m, d_right_m, wheel_base_m = float(d_left_m), float(d_right_m), float(wheel_base_m)
+    if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+        raise ValueError(
+            f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+        )
     distance = 0.5 * (d_left_m + d_right_m) / n
     delta = (d_right_m - d_left_m) / (wheel_base_m * n)
     if delta == 0.0:
         heading = pose.theta
-        return Pose(
+        return Pose.unchecked(
             pose.x + n * distance * math.cos(heading),
             pose.y + n * distance * math.sin(heading),
             heading,
@@ -180,7 +192,7 @@ def integrate_substeps(
     half = 0.5 * delta
     gain = n if abs(half) < 1e-300 else math.sin(n * half) / math.sin(half)
     heading = pose.theta + (lead + 0.5 * (n - 1)) * delta
-    return Pose(
+    return Pose.unchecked(
         pose.x + distance * gain * math.cos(heading),
         pose.y + distance * gain * math.sin(heading),
         pose.theta + n * delta,
@@ -225,12 +237,9 @@ def wheel_increment_covariance(
     by ``k = variance_per_m`` (m^2 per metre rolled) and a scale error of variance ``s =
     scale_variance`` (dimensionless^2) that grows with the square of the increment.
     """
-    return np.diag(
-        [
-            variance_per_m * abs(d_right_m) + scale_variance * d_right_m * d_right_m,
-            variance_per_m * abs(d_left_m) + scale_variance * d_left_m * d_left_m,
-        ]
-    )
+    right = variance_per_m * abs(d_right_m) + scale_variance * d_right_m * d_right_m
+    left = variance_per_m * abs(d_left_m) + scale_variance * d_left_m * d_left_m
+    return np.array([[right, 0.0], [0.0, left]])
 
 
 def predict_step(
@@ -249,6 +258,7 @@ def predict_step(
     :func:`wheel_increment_covariance`: :func:`sonar_gym.localization.ekf.predict` without its
     argument checks (the increments come from the robot, finite by construction).
     """
+    d_left_m, d_right_m, wheel_base_m = float(d_left_m), float(d_right_m), float(wheel_base_m)
     distance = 0.5 * (d_left_m + d_right_m)
     turned = (d_right_m - d_left_m) / wheel_base_m
     heading = pose.theta + 0.5 * turned if integration == "midpoint" else pose.theta
@@ -257,17 +267,20 @@ def predict_step(
         [[1.0, 0.0, -distance * sin_h], [0.0, 1.0, distance * cos_h], [0.0, 0.0, 1.0]]
     )
     inverse_base = 1.0 / wheel_base_m
-    wheel_jacobian = np.array(
-        [[0.5 * cos_h, 0.5 * cos_h], [0.5 * sin_h, 0.5 * sin_h], [inverse_base, -inverse_base]]
-    )
-    if integration == "midpoint":
+    half_cos, half_sin = 0.5 * cos_h, 0.5 * sin_h
+    if integration == "midpoint":  # the lever of the half-turn, added to the first two rows
         lever = distance / (2.0 * wheel_base_m)
-        wheel_jacobian[0] += (-lever * sin_h, lever * sin_h)
-        wheel_jacobian[1] += (lever * cos_h, -lever * cos_h)
+        wheel_rows = [
+            [half_cos + -lever * sin_h, half_cos + lever * sin_h],
+            [half_sin + lever * cos_h, half_sin + -lever * cos_h],
+        ]
+    else:
+        wheel_rows = [[half_cos, half_cos], [half_sin, half_sin]]
+    wheel_jacobian = np.array([*wheel_rows, [inverse_base, -inverse_base]])
     wheels = wheel_increment_covariance(d_left_m, d_right_m, variance_per_m, scale_variance)
     p = state_jacobian @ covariance @ state_jacobian.T + wheel_jacobian @ wheels @ wheel_jacobian.T
-    moved = Pose(
-        pose.x + distance * cos_h, pose.y + distance * sin_h, wrap_angle(pose.theta + turned)
+    moved = Pose.unchecked(
+        pose.x + distance * cos_h, pose.y + distance * sin_h, pose.theta + turned
     )
     return moved, 0.5 * (p + p.T)
 
@@ -289,16 +302,9 @@ def predict_over_motion(
     """
     p = np.asarray(covariance, dtype=np.float64)
     poses: list[Pose] = []
-    for d_left, d_right in np.asarray(increments_m, dtype=np.float64).reshape(-1, 2):
+    for d_left, d_right in np.asarray(increments_m, dtype=np.float64).reshape(-1, 2).tolist():
         pose, p = predict_step(
-            pose,
-            p,
-            float(d_left),
-            float(d_right),
-            float(wheel_base_m),
-            variance_per_m,
-            scale_variance,
-            integration,
+            pose, p, d_left, d_right, wheel_base_m, variance_per_m, scale_variance, integration
         )
         poses.append(pose)
     return pose, p, poses

@@ -7,6 +7,8 @@ waypoints by legs the robot disc can drive straight along, as the Kim et al. tas
 
 from __future__ import annotations
 
+import bisect
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -47,21 +49,26 @@ class Route:
     def length_m(self) -> float:
         return float(self.cumulative_m[-1])
 
+    @functools.cached_property
+    def _as_floats(self) -> tuple[list[float], list[list[float]]]:
+        """``cumulative_m`` and ``vertices`` as Python floats (for :meth:`point_at`)."""
+        return self.cumulative_m.tolist(), self.vertices.tolist()
+
     def point_at(self, s_m: float) -> np.ndarray:
         """The point at route length ``s_m`` (clipped to the route)."""
+        cumulative, vertices = self._as_floats
         s = min(max(s_m, 0.0), self.length_m)
-        index = int(np.searchsorted(self.cumulative_m, s, side="right")) - 1
-        index = min(max(index, 0), len(self.vertices) - 2)
-        span = self.cumulative_m[index + 1] - self.cumulative_m[index]
-        fraction = 0.0 if span <= 0.0 else (s - self.cumulative_m[index]) / span
-        return self.vertices[index] + fraction * (self.vertices[index + 1] - self.vertices[index])
+        index = bisect.bisect_right(cumulative, s) - 1  # np.searchsorted(..., side="right")
+        index = min(max(index, 0), len(vertices) - 2)
+        span = cumulative[index + 1] - cumulative[index]
+        fraction = 0.0 if span <= 0.0 else (s - cumulative[index]) / span
+        (x0, y0), (x1, y1) = vertices[index], vertices[index + 1]
+        return np.array([x0 + fraction * (x1 - x0), y0 + fraction * (y1 - y0)])
 
     def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
         """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
-        inner = [
-            v for v, s in zip(self.vertices, self.cumulative_m, strict=True) if start_m < s < stop_m
-        ]
-        return [*inner, self.point_at(stop_m)]
+        between = (self.cumulative_m > start_m) & (self.cumulative_m < stop_m)
+        return [*self.vertices[between], self.point_at(stop_m)]
 
     def heading_at_start(self) -> float:
         delta = self.vertices[1] - self.vertices[0]

@@ -225,33 +225,26 @@ class DifferentialDriveRobot:
             )
         wheel_base = self.wheel_base_for(world)
         noise = self.noise
-        normals = rng.standard_normal(2)
-        uniforms = rng.random(4)
+        normal_left, normal_right = rng.standard_normal(2).tolist()
+        slip_left, slip_right, size_left, size_right = rng.random(4).tolist()
 
         # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
         encoder = (
-            float(noise.encoder_increments(d_left_m, float(normals[0]))),
-            float(noise.encoder_increments(d_right_m, float(normals[1]))),
+            float(noise.encoder_increments(d_left_m, normal_left)),
+            float(noise.encoder_increments(d_right_m, normal_right)),
         )
         ground = (
-            float(
-                noise.ground_travel(
-                    d_left_m, noise.scale_error_left, float(uniforms[0]), float(uniforms[2])
-                )
-            ),
-            float(
-                noise.ground_travel(
-                    d_right_m, noise.scale_error_right, float(uniforms[1]), float(uniforms[3])
-                )
-            ),
+            float(noise.ground_travel(d_left_m, noise.scale_error_left, slip_left, size_left)),
+            float(noise.ground_travel(d_right_m, noise.scale_error_right, slip_right, size_right)),
         )
 
         n = self._substep_count(ground, encoder, wheel_base, substeps)
         start = world.robot_pose
         odometry_start = start if self.odometry_pose is None else self.odometry_pose
 
-        if _path_is_clear(world, start, ground, wheel_base):
-            true_pose, collided, path_length = _free_motion(world, start, ground, wheel_base, n)
+        arc_end = integrate_substeps(start, ground[0], ground[1], wheel_base, 1, "arc")
+        if _path_is_clear(world, start, ground, wheel_base, arc_end):
+            true_pose, collided, path_length = _free_motion(world, arc_end, ground, wheel_base, n)
         else:
             outcome = world.move_robot(
                 arc_displacements(start, ground[0], ground[1], wheel_base, n)
@@ -353,20 +346,26 @@ class DifferentialDriveRobot:
 
 
 def _path_is_clear(
-    world: World, start: Pose, ground: tuple[float, float], wheel_base_m: float
+    world: World,
+    start: Pose,
+    ground: tuple[float, float],
+    wheel_base_m: float,
+    end: Pose | None = None,
 ) -> bool:
     """Whether the robot disc can follow the planned arc without touching a static shape.
 
     The arc of length ``L`` turning by ``phi`` lies within its sagitta ``<= L |phi| / 8`` of
     its chord, so the disc of the robot radius plus that sagitta plus :data:`PATH_CLEARANCE_M`
-    swept along the chord covers every position the body takes. pymunk's bounding-box index
+    swept along the chord (``start`` to ``end``, the arc's end, integrated here if not given)
+    covers every position the body takes. pymunk's bounding-box index
     picks the shapes near the chord; their exact distance to it decides.
     """
     turned = abs(float(ground[1] - ground[0])) / wheel_base_m
     if turned > math.pi:
         return False
     arc_length = 0.5 * abs(float(ground[0] + ground[1]))
-    end = integrate_substeps(start, float(ground[0]), float(ground[1]), wheel_base_m, 1, "arc")
+    if end is None:
+        end = integrate_substeps(start, float(ground[0]), float(ground[1]), wheel_base_m, 1, "arc")
     radius = world.robot_radius + arc_length * turned / 8.0 + PATH_CLEARANCE_M
     a = (start.x, start.y)
     b = (end.x, end.y)
@@ -419,16 +418,16 @@ def _segment_distance(
 
 
 def _free_motion(
-    world: World, start: Pose, ground: tuple[float, float], wheel_base_m: float, substeps: int
+    world: World, end: Pose, ground: tuple[float, float], wheel_base_m: float, substeps: int
 ) -> tuple[Pose, bool, float]:
     """The outcome of :meth:`World.move_robot` along the arc when no contact can occur.
 
     With no contact the body integrates the imposed velocities exactly: it ends where the arc
-    ends, and its centre travels the ``n`` chords of the substeps, each ``|d / n|
+    ends (``end``), and its centre travels the ``n`` chords of the substeps, each ``|d / n|
     sinc(delta / 2)`` long (``d`` the centre's arc length, ``delta`` the substep's turn).
     """
     left, right = float(ground[0]), float(ground[1])
-    pose = integrate_substeps(start, left, right, wheel_base_m, 1, "arc")
+    pose = end
     world.place_robot_on_clear_path(pose)  # _path_is_clear has shown the end free
     half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
     path_length = abs(0.5 * (left + right)) * abs(sinc(half_turn))

@@ -186,3 +186,23 @@ def test_the_run_prediction_in_closed_form_matches_the_per_command_prediction(co
         assert math.remainder(row[2] - pose.theta, 2 * math.pi) == pytest.approx(0.0, abs=1e-12)
     assert (poses[-1, 0], poses[-1, 1]) == pytest.approx((end.x, end.y), abs=1e-12)
     np.testing.assert_allclose(covariances[-1], end_covariance, rtol=1e-9, atol=1e-18)
+
+
+@pytest.mark.parametrize("commanded", [0.3, -0.05, 0.0, 2.5])
+def test_one_wheel_in_floats_rolls_and_reports_as_the_same_wheel_in_an_array(
+    commanded: float,
+) -> None:
+    config = OdometryNoise(0.005, 0.01, -0.01, 0.5, 0.3)
+    rng = np.random.default_rng(3)
+    for slip_draw, size_draw in rng.random((50, 2)).tolist():
+        alone = config.ground_travel(commanded, 0.01, slip_draw, size_draw)
+        many = config.ground_travel(
+            np.array([commanded]), np.array([0.01]), np.array([slip_draw]), np.array([size_draw])
+        )
+        assert isinstance(alone, float)
+        assert alone == float(many[0])
+        reported = config.encoder_increments(commanded, slip_draw - 0.5)
+        reported_many = config.encoder_increments(
+            np.array([commanded]), np.array([slip_draw - 0.5])
+        )
+        assert reported == float(reported_many[0])

@@ -221,16 +221,25 @@ class _FreeDistanceTable:
         self.cell_size_m = grid.cell_size_m
         self.direction_bins = direction_bins
         self.end_clearance_m = end_clearance_m
-        self.centers = grid.occupied_centers()
+        # column-major: the x and y columns are contiguous for the per-vote gathers
+        self.centers = np.asfortranarray(grid.occupied_centers())
+        self.obstacle_points = np.asfortranarray(grid.occupied_obstacle_points())
         step = 0.5 * grid.cell_size_m
         x_min, y_min, x_max, y_max = grid.bounds
         longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
         self.samples_m = end_clearance_m + step * np.arange(math.ceil(longest / step) + 1)
         self.distance = np.zeros((direction_bins, self.centers.shape[0]))
         self.filled = np.zeros(direction_bins, dtype=bool)
+        self.complete = False
+
+    def anchors(self, anchor: Anchor) -> FloatArray:
+        """``(K, 2)`` anchor points (m) of the occupied cells: centres or obstacle points."""
+        return self.centers if anchor == "cell_center" else self.obstacle_points
 
     def columns(self, direction_indices: npt.NDArray[np.intp]) -> FloatArray:
         """The table, with the given direction rows filled."""
+        if self.complete or self.filled.take(direction_indices).all():
+            return self.distance
         missing = np.unique(direction_indices[~self.filled[direction_indices]])
         if missing.size:
             per_direction = max(1, self.centers.shape[0] * self.samples_m.size)
@@ -239,6 +248,7 @@ class _FreeDistanceTable:
                 block = missing[start : start + chunk]
                 self.distance[block] = self._trace(block)
             self.filled[missing] = True
+            self.complete = bool(self.filled.all())
         return self.distance
 
     def _trace(self, directions: npt.NDArray[np.intp]) -> FloatArray:
@@ -362,19 +372,43 @@ def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
 class _Readings:
     """All valid readings moved into the first sweep's robot frame."""
 
-    end_xy: FloatArray  # (J, 2) end points (m)
+    end_x: FloatArray  # (J,) end points (m)
+    end_y: FloatArray
     beam_rad: FloatArray  # (J,) beam directions (rad)
     range_m: FloatArray  # (J,) ranges (m)
 
+    @property
+    def end_xy(self) -> FloatArray:
+        """``(J, 2)`` end points (m)."""
+        return np.column_stack((self.end_x, self.end_y))
+
 
 def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Readings:
-    ends, beams, ranges = [], [], []
+    """The readings of every sweep with an echo, as :func:`sweep_end_points` of each sweep at
+    its odometry, concatenated (the same arithmetic, element by element, in one pass)."""
+    angles = np.concatenate([sweep.angles for sweep in sweeps])
+    ranges = np.concatenate([sweep.ranges for sweep in sweeps])
+    counts = [sweep.ranges.size for sweep in sweeps]
+    per_sweep = []  # heading and sensor position of each sweep, in the first sweep's frame
     for sweep in sweeps:
-        sensor_xy, end_xy, beam = sweep_end_points(sweep, sweep.odometry, max_range_m)
-        ends.append(end_xy)
-        beams.append(beam)
-        ranges.append(np.linalg.norm(end_xy - sensor_xy, axis=1))
-    return _Readings(np.concatenate(ends), np.concatenate(beams), np.concatenate(ranges))
+        pose = sweep.odometry
+        offset_x, offset_y = sweep.sensor_offset
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        per_sweep.append(
+            (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
+        )
+    valid = np.isfinite(ranges)
+    if max_range_m is not None:
+        valid &= ranges < max_range_m
+    keep = np.flatnonzero(valid)
+    ranges = ranges.take(keep)
+    theta, from_x, from_y = np.repeat(np.array(per_sweep).T, counts, axis=1).take(keep, axis=1)
+    beam = theta + angles.take(keep)
+    end_x = from_x + ranges * np.cos(beam)
+    end_y = from_y + ranges * np.sin(beam)
+    run_x, run_y = end_x - from_x, end_y - from_y
+    length = np.sqrt(run_x * run_x + run_y * run_y)
+    return _Readings(end_x, end_y, beam, length)
 
 
 def _direction_index(
@@ -404,11 +438,12 @@ def _candidate_pairs(
         pair_j, pair_k = np.divmod(np.arange(n_readings * n_anchors), n_anchors)
         return pair_j, pair_k
     anchor_distance = np.hypot(anchors[:, 0] - center[0], anchors[:, 1] - center[1])
-    reach = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])
+    reach = np.hypot(readings.end_x, readings.end_y)
     slack = radius * (1.0 + 1e-9) + 1e-12
-    near = np.abs(anchor_distance[None, :] - reach[:, None]) <= slack  # (J, K)
-    pair_j, pair_k = np.nonzero(near)
-    return pair_j, pair_k
+    near = np.abs(anchor_distance - reach[:, None]) <= slack  # (J, K)
+    flat = np.flatnonzero(near)
+    pair_j = flat // n_anchors
+    return pair_j, flat - pair_j * n_anchors
 
 
 def _pairs_reachable_by_headings(
@@ -422,31 +457,41 @@ def _pairs_reachable_by_headings(
     """The ``pairs`` whose vote some candidate heading can bring into the search circle.
 
     ``|t - c|^2 = D^2 + E^2 - 2 D E cos(heading - psi*)`` (``D = |a - c|``, ``E = |e|``,
-    ``psi*`` the heading that turns ``e`` onto ``a - c``) is within ``radius^2`` only for
-    headings within ``delta = arccos((D^2 + E^2 - radius^2) / 2DE)`` of ``psi*``; every
-    candidate lies within ``spread`` of the middle one, so a pair with ``psi*`` farther than
-    ``spread + delta`` from it never votes inside. The test is padded so that rounding never
-    drops a pair that votes; the kept pairs keep their order. Without a circle: all pairs.
+    ``psi*`` the heading that turns ``e`` onto ``a - c``). Every candidate lies within
+    ``spread`` of the middle one; with ``phi`` the angle between ``psi*`` and the middle
+    heading, the largest ``cos(heading - psi*)`` over the candidates is 1 when ``phi <=
+    spread``, else ``cos(phi - spread)``. So a pair can vote inside only if ``phi <= spread``
+    or ``D E cos(phi - spread) >= (D^2 + E^2 - radius^2) / 2``, where ``D E cos(phi - spread)
+    = dot cos(spread) + |cross| sin(spread)`` with ``dot`` and ``cross`` the products of
+    ``a - c`` turned back by the middle heading and ``e``: no trigonometry per pair. The test
+    is padded (radius and spread) so that rounding never drops a pair that votes; the kept
+    pairs keep their order. Without a circle: all pairs.
     """
     pair_j, pair_k = pairs
     if center is None or radius is None or headings.size == 0 or pair_j.size == 0:
         return pairs
-    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
     middle = float(headings[headings.size // 2])
-    spread = float(np.max(np.abs(wrap_angles(headings - middle))))
-    distance = np.hypot(to_anchor_x, to_anchor_y)[pair_k]
-    length = np.hypot(readings.end_xy[:, 0], readings.end_xy[:, 1])[pair_j]
+    spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
+    spread += 1e-6
+    if spread >= np.pi:
+        return pairs
+    cos_m, sin_m = math.cos(middle), math.sin(middle)
+    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
+    # a - c in the frame of the middle heading, per anchor; the end points, per reading
+    back_x = (cos_m * to_anchor_x + sin_m * to_anchor_y).take(pair_k)
+    back_y = (cos_m * to_anchor_y - sin_m * to_anchor_x).take(pair_k)
+    end_x, end_y = readings.end_x.take(pair_j), readings.end_y.take(pair_j)
+    dot = back_x * end_x + back_y * end_y
+    cross = np.abs(back_x * end_y - back_y * end_x)
+    squared_d = (to_anchor_x * to_anchor_x + to_anchor_y * to_anchor_y).take(pair_k)
+    squared_e = (readings.end_x * readings.end_x + readings.end_y * readings.end_y).take(pair_j)
     padded = radius * (1.0 + 1e-9) + 1e-12
-    product = 2.0 * distance * length
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cosine = (distance * distance + length * length - padded * padded) / product
-    half_width = np.where(product > 1e-12, np.arccos(np.clip(cosine, -1.0, 1.0)), np.pi)
-    best = (
-        np.arctan2(to_anchor_y, to_anchor_x)[pair_k]
-        - np.arctan2(readings.end_xy[:, 1], readings.end_xy[:, 0])[pair_j]
-    )
-    reachable = np.abs(wrap_angles(best - middle)) <= spread + half_width + 1e-6
-    return pair_j[reachable], pair_k[reachable]
+    needed = 0.5 * (squared_d + squared_e - padded * padded) - 1e-12
+    cos_s, sin_s = math.cos(spread), math.sin(spread)
+    within_spread = dot >= cos_s * np.sqrt(squared_d * squared_e) - 1e-12  # cos(phi) >= cos(spread)
+    reachable = within_spread | (dot * cos_s + cross * sin_s >= needed)
+    kept = np.flatnonzero(reachable)
+    return pair_j.take(kept), pair_k.take(kept)
 
 
 def _vote_positions(
@@ -467,20 +512,16 @@ def _vote_positions(
     pair_j, pair_k = pairs
     n_anchors = table.shape[1]
     # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
-    flat = direction_index[:, pair_j] * n_anchors + pair_k[None, :]
-    free = table.ravel().take(flat) > readings.range_m.take(pair_j)[None, :]
-    heading_i, pair_i = np.nonzero(free)  # (h, P)
-    reading_i, cell_i = pair_j.take(pair_i), pair_k.take(pair_i)
-    cos_h, sin_h = np.cos(headings), np.sin(headings)
-    end_x = readings.end_xy[:, 0]
-    end_y = readings.end_xy[:, 1]
-    rotated_x = cos_h[:, None] * end_x[None, :] - sin_h[:, None] * end_y[None, :]
-    rotated_y = sin_h[:, None] * end_x[None, :] + cos_h[:, None] * end_y[None, :]
-    n_readings = end_x.size
-    rotated_at = heading_i * n_readings + reading_i
-    t_x = anchors[:, 0].take(cell_i) - rotated_x.ravel().take(rotated_at)
-    t_y = anchors[:, 1].take(cell_i) - rotated_y.ravel().take(rotated_at)
-    return heading_i, t_x, t_y
+    flat = (direction_index * n_anchors).take(pair_j, axis=1) + pair_k
+    free = table.take(flat) > readings.range_m.take(pair_j)
+    hits = np.flatnonzero(free)  # (h, P) row-major: heading by heading
+    cos_h, sin_h = np.cos(headings)[:, None], np.sin(headings)[:, None]
+    end_x, end_y = readings.end_x, readings.end_y
+    rotated_x = (cos_h * end_x - sin_h * end_y).take(pair_j, axis=1)  # (h, P)
+    rotated_y = (sin_h * end_x + cos_h * end_y).take(pair_j, axis=1)
+    t_x = (anchors[:, 0].take(pair_k) - rotated_x).take(hits)
+    t_y = (anchors[:, 1].take(pair_k) - rotated_y).take(hits)
+    return hits // pair_j.size, t_x, t_y
 
 
 @dataclass(frozen=True)
@@ -523,22 +564,51 @@ def _vote_window(
     return _VoteWindow((low_x, low_y), (high_x - low_x + 1, high_y - low_y + 1))
 
 
-def _vote_cells(
+@dataclass(frozen=True)
+class _Votes:
+    """The votes that count, in the order they were cast (heading by heading, so
+    ``heading_i`` is sorted): heading index within the block, continuous position ``t``
+    (m, {W}) and cell of the whole grid."""
+
+    heading_i: npt.NDArray[np.intp]
+    t_x: FloatArray
+    t_y: FloatArray
+    cell_x: npt.NDArray[np.int64]
+    cell_y: npt.NDArray[np.int64]
+
+
+def _counted_votes(
     grid: OccupancyGrid,
+    window: _VoteWindow,
+    heading_i: npt.NDArray[np.intp],
     t_x: FloatArray,
     t_y: FloatArray,
     center: FloatArray | None,
     radius: float | None,
-) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.bool_]]:
-    """Cells of vote positions and the mask of votes that count (in grid and search circle)."""
+) -> _Votes:
+    """The votes inside the search circle (if any) whose cell lies in ``window``.
+
+    The window lies inside the grid, so its test is also the test of the grid's bounds.
+    """
+    if center is not None and radius is not None:
+        inside = np.flatnonzero((t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius)
+        heading_i, t_x, t_y = heading_i.take(inside), t_x.take(inside), t_y.take(inside)
     x0, y0 = grid.origin_m
-    nx, ny = grid.shape
     cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
     cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
-    keep = (cell_x >= 0) & (cell_x < nx) & (cell_y >= 0) & (cell_y < ny)
-    if center is not None and radius is not None:
-        keep &= (t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius
-    return cell_x, cell_y, keep
+    (low_x, low_y), (wx, wy) = window.low, window.shape
+    if cell_x.size == 0 or (
+        low_x <= cell_x.min()
+        and cell_x.max() < low_x + wx
+        and low_y <= cell_y.min()
+        and cell_y.max() < low_y + wy
+    ):  # always inside a search circle: its window has a margin for rounding
+        return _Votes(heading_i, t_x, t_y, cell_x, cell_y)
+    keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
+    kept = np.flatnonzero(keep)
+    return _Votes(
+        heading_i.take(kept), t_x.take(kept), t_y.take(kept), cell_x.take(kept), cell_y.take(kept)
+    )
 
 
 def _failure(status: str, message: str) -> VoteLocalization:
@@ -638,7 +708,7 @@ def vote_localize(
     if readings.range_m.size == 0:
         return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
     table_cache = _free_distance_table(grid, direction_bins, clearance)
-    anchors = table_cache.centers if anchor == "cell_center" else grid.occupied_obstacle_points()
+    anchors = table_cache.anchors(anchor)
     if anchors.shape[0] == 0:
         return _failure(NO_VOTES, "the grid has no occupied cell")
 
@@ -654,6 +724,7 @@ def vote_localize(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
     block = max(1, _CHUNK_ELEMENTS // pairs[0].size)
+    counted: _Votes | None = None
     for start in range(0, headings.size, block):
         block_headings = headings[start : start + block]
         direction_index = _direction_index(block_headings, readings, direction_bins)
@@ -661,12 +732,16 @@ def vote_localize(
         heading_i, t_x, t_y = _vote_positions(
             readings, anchors, table, block_headings, direction_index, pairs
         )
-        cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
-        local_x, local_y = cell_x - low_x, cell_y - low_y
-        keep &= (local_x >= 0) & (local_x < wx) & (local_y >= 0) & (local_y < wy)
-        flat = heading_i[keep] * cells_per_layer + local_x[keep] * wy + local_y[keep]
+        counted = _counted_votes(grid, window, heading_i, t_x, t_y, center, radius)
+        flat = (
+            counted.heading_i * cells_per_layer
+            + (counted.cell_x - low_x) * wy
+            + (counted.cell_y - low_y)
+        )
         counts = np.bincount(flat, minlength=block_headings.size * cells_per_layer)
         volume[start : start + block_headings.size] = counts.reshape(-1, wx, wy)
+    if block < headings.size:
+        counted = None  # only the last block's votes are kept: recompute the chosen heading's
 
     if not volume.any():
         return _failure(
@@ -696,18 +771,22 @@ def vote_localize(
     if refine == "cell_center":
         position = choice.centre
     else:
-        position = _mean_vote_position(
-            grid,
-            readings,
-            table_cache,
-            anchors,
-            heading,
-            direction_bins,
-            choice,
-            center,
-            radius,
-            pairs,
-        )
+        if counted is None:
+            position = _mean_vote_position(
+                grid,
+                readings,
+                table_cache,
+                anchors,
+                heading,
+                direction_bins,
+                choice,
+                window,
+                center,
+                radius,
+                pairs,
+            )
+        else:
+            position = _mean_in_window(counted, choice.heading_index, choice)
     pose = Pose(float(position[0]), float(position[1]), heading)
     return VoteLocalization(
         status=OK,
@@ -768,14 +847,17 @@ def _choose(
         high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
         return _Choice(heading_index, cell, low, high, centroid, volume)
     score = _binomial_smooth(volume)
-    heading_index, local_x, local_y = (
-        int(i) for i in np.unravel_index(int(np.argmax(score)), score.shape)
-    )
+    heading_index, rest = divmod(int(np.argmax(score)), score.shape[1] * score.shape[2])
+    local_x, local_y = divmod(rest, score.shape[2])
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
     cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
-    return _Choice(heading_index, cell, low, high, grid.cell_to_world(np.array(cell)), score)
+    x0, y0 = grid.origin_m  # the centre of the cell, as OccupancyGrid.cell_to_world
+    centre = np.array(
+        [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
+    )
+    return _Choice(heading_index, cell, low, high, centre, score)
 
 
 def _rival_score(
@@ -805,18 +887,34 @@ def _mean_vote_position(
     heading: float,
     direction_bins: int,
     choice: _Choice,
+    window: _VoteWindow,
     center: FloatArray | None,
     radius: float | None,
     pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
 ) -> FloatArray:
-    """Mean of the continuous vote positions in the chosen window of cells."""
+    """Mean of the continuous vote positions in the chosen window of cells, the votes of
+    ``heading`` cast afresh."""
     headings = np.array([heading])
     direction_index = _direction_index(headings, readings, direction_bins)
     table = table_cache.columns(direction_index.ravel())
-    _, t_x, t_y = _vote_positions(readings, anchors, table, headings, direction_index, pairs)
-    cell_x, cell_y, keep = _vote_cells(grid, t_x, t_y, center, radius)
-    keep &= (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
+    heading_i, t_x, t_y = _vote_positions(
+        readings, anchors, table, headings, direction_index, pairs
+    )
+    return _mean_in_window(
+        _counted_votes(grid, window, heading_i, t_x, t_y, center, radius), 0, choice
+    )
+
+
+def _mean_in_window(votes: _Votes, heading_index: int, choice: _Choice) -> FloatArray:
+    """Mean of the positions of the ``votes`` of ``heading_index`` in the chosen window of
+    cells (its centre when none lies there)."""
+    first, end = votes.heading_i.searchsorted([heading_index, heading_index + 1])
+    cell_x, cell_y = votes.cell_x[first:end], votes.cell_y[first:end]
+    keep = (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
     keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
-    if not keep.any():
+    kept = np.flatnonzero(keep)
+    if kept.size == 0:
         return choice.centre
-    return np.array([t_x[keep].mean(), t_y[keep].mean()])
+    # sum / count is np.mean's own arithmetic (one pairwise sum, one division)
+    t_x, t_y = votes.t_x[first:end].take(kept), votes.t_y[first:end].take(kept)
+    return np.array([t_x.sum() / kept.size, t_y.sum() / kept.size])

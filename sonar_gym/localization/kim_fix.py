@@ -54,15 +54,13 @@ def vote_around_estimate(
         anchor: where a range vector ends in an occupied cell (see ``vote_localize``).
     """
     position_spread = math.sqrt(max(float(np.linalg.eigvalsh(covariance[:2, :2])[-1]), 0.0))
-    radius = float(
-        np.clip(3.0 * position_spread + grid.cell_size_m, MIN_SEARCH_RADIUS_M, MAX_SEARCH_RADIUS_M)
+    radius = _clipped(
+        3.0 * position_spread + grid.cell_size_m, MIN_SEARCH_RADIUS_M, MAX_SEARCH_RADIUS_M
     )
-    window = float(
-        np.clip(
-            3.0 * math.sqrt(max(covariance[2, 2], 0.0)) + heading_step_rad,
-            MIN_HEADING_WINDOW_RAD,
-            MAX_HEADING_WINDOW_RAD,
-        )
+    window = _clipped(
+        3.0 * math.sqrt(max(float(covariance[2, 2]), 0.0)) + heading_step_rad,
+        MIN_HEADING_WINDOW_RAD,
+        MAX_HEADING_WINDOW_RAD,
     )
     return vote_localize(
         grid,
@@ -75,6 +73,11 @@ def vote_around_estimate(
         anchor=anchor,
         return_vote_map=False,
     )
+
+
+def _clipped(value: float, low: float, high: float) -> float:
+    """``value`` clipped to [low, high] (as ``np.clip`` on one float)."""
+    return min(max(value, low), high)
 
 
 def fix_covariance(position_std_m: float, heading_std_rad: float) -> FloatArray:

@@ -126,12 +126,12 @@ class Sweep:
                 f"Sweep.ranges must have one entry per angle (got {ranges.size} ranges for "
                 f"{angles.size} angles)"
             )
-        if not np.all(np.isfinite(angles)):
+        if not np.isfinite(angles).all():
             raise ValueError("Sweep.angles must be finite (radians)")
-        if np.any(ranges < 0.0):
+        if (ranges < 0.0).any():
             raise ValueError("Sweep.ranges must be >= 0 m, or NaN / +inf for no echo")
         offset = np.asarray(self.sensor_offset, dtype=np.float64)
-        if offset.shape != (2,) or not np.all(np.isfinite(offset)):
+        if offset.shape != (2,) or not np.isfinite(offset).all():
             raise ValueError(
                 f"Sweep.sensor_offset must be a finite (x, y) in metres, got {self.sensor_offset!r}"
             )

@@ -813,3 +813,28 @@ def test_paper_table_1_errors_stay_below_one_cell() -> None:
     assert errors.max() == pytest.approx(math.hypot(0.0301, 0.0321), abs=1e-12)
     assert np.argmax(errors) == 6
     assert np.all(errors < CELL)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.floats(min_value=-8.0, max_value=2.0),
+    st.floats(min_value=-14.0, max_value=-6.0),
+    st.integers(min_value=0, max_value=2**31 - 1),
+)
+def test_ekf_symmetry_check_is_numpys_allclose(
+    scale_exp: float, skew_exp: float, seed: int
+) -> None:
+    from sonar_gym.localization import ekf
+
+    rng = np.random.default_rng(seed)
+    base = rng.normal(size=(3, 3)) * 10.0**scale_exp
+    matrix = base @ base.T + 10.0**skew_exp * rng.normal(size=(3, 3)) * 10.0**scale_exp
+    np.fill_diagonal(matrix, np.abs(np.diag(matrix)))  # variances stay valid
+    symmetric = np.allclose(
+        matrix, matrix.T, rtol=1e-9, atol=1e-12 * max(1.0, float(np.abs(matrix).max()))
+    )
+    if symmetric:
+        assert np.array_equal(ekf._covariance(matrix, 3, "covariance"), matrix)
+    else:
+        with pytest.raises(ValueError, match="symmetric"):
+            ekf._covariance(matrix, 3, "covariance")
