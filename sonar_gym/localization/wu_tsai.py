@@ -653,7 +653,7 @@ def localize_repeated(
         )
     n, n_receivers = table.shape[0], table.shape[1]
     codes = np.zeros(n, dtype=np.intp)
-    finite = np.isfinite(table).all(axis=(1, 2))
+    finite = np.all(np.isfinite(table), axis=(1, 2))
     all_finite = bool(finite.all())
     if not all_finite:
         codes[~finite] = _CODE_MISSING
