@@ -38,6 +38,7 @@ whose ``status`` says what went wrong (``"missing_distance"``, ``"inconsistent_d
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -619,6 +620,8 @@ _STATUS_CODES = (
     STATUS_HEADING_UNOBSERVABLE,
 )
 _CODE_OK, _CODE_MISSING, _CODE_INCONSISTENT, _CODE_UNOBSERVABLE = range(len(_STATUS_CODES))
+_STATUS_NAMES = np.array(_STATUS_CODES)
+_STATUS_NAMES.flags.writeable = False
 
 
 def localize_repeated(
@@ -646,12 +649,8 @@ def localize_repeated(
         raise ValueError(f"distances must have shape (n, n_receivers >= 1, 3), got {table.shape}")
     if (table < 0.0).any():
         raise ValueError("distances must be >= 0 metres (NaN marks a dropout)")
-    offsets = np.asarray(receiver_offsets, dtype=np.float64)
-    if offsets.shape != (table.shape[1], 2) or not np.isfinite(offsets).all():
-        raise ValueError(
-            f"receiver_offsets must be a finite ({table.shape[1]}, 2) array, got {offsets.shape}"
-        )
     n, n_receivers = table.shape[0], table.shape[1]
+    layout = _receiver_layout(_offsets_key(receiver_offsets), n_receivers)
     codes = np.zeros(n, dtype=np.intp)
     finite = np.all(np.isfinite(table), axis=(1, 2))
     all_finite = bool(finite.all())
@@ -681,8 +680,8 @@ def localize_repeated(
     receivers = np.empty((n, n_receivers, 3))  # (n, R, 3)
     receivers[..., 0], receivers[..., 1], receivers[..., 2] = x, y, z
 
-    offset_spread, mean_offset, observable = _offset_geometry(offsets)
-    if not observable:
+    offset_spread, mean_offset = layout.spread, layout.mean
+    if not layout.observable:
         codes[codes == _CODE_OK] = _CODE_UNOBSERVABLE
     with np.errstate(over="ignore", invalid="ignore"):
         mean_receiver = np.add.reduce(receivers, axis=1) / n_receivers  # (n, 3)
@@ -699,8 +698,11 @@ def localize_repeated(
         heading = np.arctan2(cross, dot)
         c, s = np.cos(heading), np.sin(heading)
         poses = np.empty((n, 3))
-        poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
-        poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
+        if layout.centred:  # the reference point is the receivers' mean: nothing to rotate
+            poses[:, :2] = mean_receiver[:, :2]
+        else:
+            poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
+            poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
         poses[:, 2] = heading
     if coincide.any():
         codes[(codes == _CODE_OK) & coincide] = _CODE_INCONSISTENT
@@ -712,17 +714,54 @@ def localize_repeated(
         poses[~good] = np.nan
         receivers[~good] = np.nan
         z_fix[~good] = np.nan
-    statuses = np.array(_STATUS_CODES)[codes]
+    statuses = _STATUS_NAMES[codes]
     return RepeatedFixes(statuses, poses, z_fix, receivers)
 
 
-def _offset_geometry(offsets: FloatArray) -> tuple[FloatArray, FloatArray, bool]:
-    """The receivers' offsets about their mean ({AMR}, metres), that mean, and whether they
-    are apart on the robot (else the heading is unobservable, Theorem 1)."""
-    mean_offset = offsets.mean(axis=0)
-    spread = offsets - mean_offset
+@dataclass(frozen=True)
+class _ReceiverLayout:
+    """The receivers' offsets in {AMR} as :func:`localize_repeated` uses them (metres).
+
+    Attributes:
+        spread: ``(R, 2)`` offsets about their mean.
+        mean: ``(2,)`` their mean.
+        observable: whether they are apart on the robot (else no heading, Theorem 1).
+        centred: whether their mean is the {AMR} origin (the paper's rig).
+    """
+
+    spread: FloatArray
+    mean: FloatArray
+    observable: bool
+    centred: bool
+
+
+def _offsets_key(receiver_offsets: npt.ArrayLike) -> tuple[tuple[float, ...], ...]:
+    """``receiver_offsets`` as nested tuples of floats (a cache key); ValueError if unusable."""
+    if isinstance(receiver_offsets, tuple) and all(
+        isinstance(row, tuple) and all(type(v) is float for v in row) for row in receiver_offsets
+    ):
+        return receiver_offsets
+    offsets = np.asarray(receiver_offsets, dtype=np.float64)
+    if offsets.ndim != 2:
+        raise ValueError(f"receiver_offsets must be a finite (n, 2) array, got {offsets.shape}")
+    return tuple(tuple(row) for row in offsets.tolist())
+
+
+@functools.lru_cache(maxsize=32)
+def _receiver_layout(
+    offsets_key: tuple[tuple[float, ...], ...], n_receivers: int
+) -> _ReceiverLayout:
+    offsets = np.asarray(offsets_key, dtype=np.float64)
+    if offsets.shape != (n_receivers, 2) or not np.isfinite(offsets).all():
+        raise ValueError(
+            f"receiver_offsets must be a finite ({n_receivers}, 2) array, got {offsets.shape}"
+        )
+    mean = offsets.mean(axis=0)
+    spread = offsets - mean
     observable = bool(np.any(np.hypot(spread[:, 0], spread[:, 1]) >= _MIN_BASELINE_M))
-    return spread, mean_offset, observable
+    for array in (mean, spread):
+        array.flags.writeable = False
+    return _ReceiverLayout(spread, mean, observable, bool(np.all(mean == 0.0)))
 
 
 def average_fixes(fixes: Sequence[Fix]) -> Fix:
