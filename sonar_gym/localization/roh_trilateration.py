@@ -695,7 +695,7 @@ def trilaterate_path(
             positions[rows] = centroid
             one_by_one = rows[:0]
         else:
-            positions[rows[met]] = centroid[met]
+            positions[rows[met]] = centroid
             centre = _radical_centres(centres, radii[~met])
             if centre is None:
                 one_by_one = rows[~met]
@@ -747,8 +747,9 @@ def _paper_centroids(
     The three circle pairs are computed side by side (arrays ``(m, 3)``, one column per
     pair), each element with the arithmetic of :func:`circle_intersections`.
 
-    Returns ``(centroids (m, 2), met (m,))``; ``met`` is False where some pair of circles does
-    not intersect (those rows need the radical-centre fallback; their centroid is garbage).
+    Returns ``(centroids (k, 2), met (m,))``: ``met`` is False where some pair of circles does
+    not intersect (those rows need the radical-centre fallback), and the centroids are those
+    of the ``k`` rows where ``met`` holds, in row order.
     """
     first_of, second_of = [i for i, _ in _CENTROID_PAIRS], [j for _, j in _CENTROID_PAIRS]
     third_of = [3 - i - j for i, j in _CENTROID_PAIRS]
@@ -756,15 +757,19 @@ def _paper_centroids(
     offset = cb - ca
     separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
     if 0.0 in separations:
-        return np.zeros((len(radii), 2)), np.zeros(len(radii), dtype=bool)
+        return np.zeros((0, 2)), np.zeros(len(radii), dtype=bool)
     separation = np.array(separations)
     separation_sq = np.array([value**2 for value in separations])
-    ra, rb, rk = radii[:, first_of], radii[:, second_of], radii[:, third_of]
+    ra, rb = radii[:, first_of], radii[:, second_of]
     ra_sq, rb_sq = ra * ra, rb * rb
     along = (ra_sq - rb_sq + separation_sq) / (2.0 * separation)
     half_chord_sq = ra_sq - along * along
     tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(np.maximum(ra_sq, rb_sq), separation_sq)
     met = (half_chord_sq >= -tolerance).all(axis=1)
+    rk = radii[:, third_of]
+    if not met.all():  # the rest only for the rows that keep their centroid
+        along, half_chord_sq, tolerance = along[met], half_chord_sq[met], tolerance[met]
+        rk = rk[met]
     unit = offset / separation[:, None]
     normal = np.column_stack([-unit[:, 1], unit[:, 0]])
     foot = ca + along[..., None] * unit
