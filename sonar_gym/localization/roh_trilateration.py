@@ -770,16 +770,52 @@ def _paper_centroids(
     if not met.all():  # the rest only for the rows that keep their centroid
         along, half_chord_sq, tolerance = along[met], half_chord_sq[met], tolerance[met]
         rk = rk[met]
-    unit = offset / separation[:, None]
-    normal = np.column_stack([-unit[:, 1], unit[:, 0]])
-    foot = ca + along[..., None] * unit
+    # x and y as separate (k, 3) arrays: the same arithmetic per element as (k, 3, 2) arrays,
+    # without numpy's slow inner loops of length 2
+    unit_x, unit_y = offset[:, 0] / separation, offset[:, 1] / separation
+    normal_x, normal_y = -unit_y, unit_x
+    foot_x, foot_y = ca[:, 0] + along * unit_x, ca[:, 1] + along * unit_y
     half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
-    along_chord = half_chord[..., None] * normal
-    first, second = foot + along_chord, foot - along_chord
-    miss_first = np.abs(np.hypot(first[..., 0] - ck[:, 0], first[..., 1] - ck[:, 1]) - rk)
-    miss_second = np.abs(np.hypot(second[..., 0] - ck[:, 0], second[..., 1] - ck[:, 1]) - rk)
-    kept = np.where((miss_second < miss_first)[..., None], second, first)
-    return np.mean(kept, axis=1), met
+    chord_x, chord_y = half_chord * normal_x, half_chord * normal_y
+    first_x, first_y = foot_x + chord_x, foot_y + chord_y
+    second_x, second_y = foot_x - chord_x, foot_y - chord_y
+    take_second = _second_misses_less(
+        first_x - ck[:, 0], first_y - ck[:, 1], second_x - ck[:, 0], second_y - ck[:, 1], rk
+    )
+    centroids = np.empty((len(rk), 2))
+    for column, (first_c, second_c) in enumerate(((first_x, second_x), (first_y, second_y))):
+        kept = np.where(take_second, second_c, first_c)
+        # the mean over the three pairs, summed in pair order as np.mean over that axis sums
+        centroids[:, column] = ((kept[:, 0] + kept[:, 1]) + kept[:, 2]) / 3
+    return centroids, met
+
+
+def _second_misses_less(
+    first_x: FloatArray,
+    first_y: FloatArray,
+    second_x: FloatArray,
+    second_y: FloatArray,
+    radius: FloatArray,
+) -> npt.NDArray[np.bool_]:
+    """``|hypot(second) - radius| < |hypot(first) - radius|``, elementwise (metres).
+
+    Which intersection point lies nearer the third circle (:func:`paper_centroid`). The
+    comparison is made on ``sqrt(x^2 + y^2)``, within a few ulps of ``hypot`` and several
+    times cheaper; where the two misses are too close for that to decide, or a square leaves
+    the float range, ``hypot`` itself decides, so the result is the ``hypot`` comparison's.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # such elements are decided by hypot
+        first = np.sqrt(first_x * first_x + first_y * first_y)
+        second = np.sqrt(second_x * second_x + second_y * second_y)
+        miss_first, miss_second = np.abs(first - radius), np.abs(second - radius)
+        take_second = miss_second < miss_first
+        margin = 1e-12 * (first + second + radius) + 1e-150
+        unsure = ~(np.abs(miss_second - miss_first) > margin)
+    if unsure.any():
+        exact_first = np.abs(np.hypot(first_x[unsure], first_y[unsure]) - radius[unsure])
+        exact_second = np.abs(np.hypot(second_x[unsure], second_y[unsure]) - radius[unsure])
+        take_second[unsure] = exact_second < exact_first
+    return take_second
 
 
 # ---------------------------------------------------------------------------------------------

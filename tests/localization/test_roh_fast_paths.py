@@ -239,3 +239,22 @@ def test_path_errors_sigma_prime_is_the_mean_distance_over_every_segment(seed: i
     _, sigma_prime = path_errors(points, path)
     reference = float(np.mean(distances_to_polyline_reference(points, path)))
     assert sigma_prime == pytest.approx(reference, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-170, 1e170])
+def test_the_nearer_intersection_is_chosen_as_hypot_would_choose_it(scale: float) -> None:
+    from sonar_gym.localization.roh_trilateration import _second_misses_less
+
+    rng = np.random.default_rng(8)
+    first_x, first_y = rng.normal(size=(2, 4000)) * scale
+    second_x, second_y = -first_x, first_y.copy()  # exact ties ...
+    second_x[1000:2000] *= 1.0 + 1e-15 * rng.normal(size=1000)  # ... near ties ...
+    second_x[2000:] = rng.normal(size=2000) * scale  # ... and clear cases
+    radius = rng.uniform(0.0, 3.0, 4000) * scale
+    radius[:500] = np.hypot(first_x[:500], first_y[:500])  # the first point on the circle
+    expected = np.abs(np.hypot(second_x, second_y) - radius) < np.abs(
+        np.hypot(first_x, first_y) - radius
+    )
+    chosen = _second_misses_less(first_x, first_y, second_x, second_y, radius)
+    np.testing.assert_array_equal(chosen, expected)
+    assert expected[1000:].any() and not expected[1000:].all()
