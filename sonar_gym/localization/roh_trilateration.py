@@ -857,6 +857,13 @@ def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> Fl
     return array
 
 
+def _cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``np.cross`` of two 3-vectors, with its products and differences in its order."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+
+
 def auto_calibrate(
     positions: npt.ArrayLike,
     distances: npt.ArrayLike,
@@ -921,7 +928,7 @@ def auto_calibrate(
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
-    area = 0.5 * float(np.linalg.norm(np.cross(displacements[0], displacements[1])))
+    area = 0.5 * float(np.linalg.norm(_cross3(displacements[0], displacements[1])))
     if singular_values[1] > 0.0:
         condition = float(singular_values[0] / singular_values[1])
     else:
@@ -955,7 +962,7 @@ def auto_calibrate(
             message="calibration positions are collinear to float precision",
         )
     e_y = across / along_y
-    e_z = np.cross(e_x, e_y)
+    e_z = _cross3(e_x, e_y)
     # Products, not ``**``: under an extreme (user-allowed) condition they overflow to inf
     # instead of raising OverflowError, and the check below reports it.
     x = (d1 * d1 - d2 * d2 + separation * separation) / (2.0 * separation)

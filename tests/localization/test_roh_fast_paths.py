@@ -258,3 +258,22 @@ def test_the_nearer_intersection_is_chosen_as_hypot_would_choose_it(scale: float
     chosen = _second_misses_less(first_x, first_y, second_x, second_y, radius)
     np.testing.assert_array_equal(chosen, expected)
     assert expected[1000:].any() and not expected[1000:].all()
+
+
+def test_the_cross_product_of_the_calibration_frame_is_numpys() -> None:
+    from sonar_gym.localization.roh_trilateration import _cross3
+
+    rng = np.random.default_rng(9)
+    for a, b in rng.normal(size=(500, 2, 3)) * 10.0 ** rng.integers(-6, 6, (500, 1, 1)):
+        np.testing.assert_array_equal(_cross3(a, b), np.cross(a, b))
+
+
+def test_the_extractors_point_distance_is_distance_to_segment() -> None:
+    from sonar_gym.localization.roh_block_expansion import distance_to_segment
+
+    rng = np.random.default_rng(10)
+    for _ in range(50):
+        a, b = rng.uniform(-3, 3, (2, 2))
+        extractor = ThreePointExtractor(a, b, (0.45, 0.25, 0.05))
+        for point in rng.uniform(-4, 4, (40, 2)):
+            assert extractor._point_distance(point) == float(distance_to_segment(point, a, b))
