@@ -277,3 +277,18 @@ def test_the_extractors_point_distance_is_distance_to_segment() -> None:
         extractor = ThreePointExtractor(a, b, (0.45, 0.25, 0.05))
         for point in rng.uniform(-4, 4, (40, 2)):
             assert extractor._point_distance(point) == float(distance_to_segment(point, a, b))
+
+
+@pytest.mark.parametrize("n_outliers", [1, 3, 200])
+def test_true_path_distances_of_outliers_are_the_general_search(n_outliers: int) -> None:
+    from sonar_gym.localization.roh_path_errors import TruePath
+
+    rng = np.random.default_rng(n_outliers)
+    path = parabolic_path(x_end_m=1.3)
+    points = path[rng.integers(0, len(path), 400)] + rng.normal(0.0, 0.01, (400, 2))
+    points[rng.choice(400, n_outliers, replace=False)] += rng.normal(0.0, 1.0, (n_outliers, 2))
+    true_path = TruePath(path)
+    y_difference = points[:, 1] - true_path.y_at(points[:, 0])
+    np.testing.assert_array_equal(
+        true_path._distances(points, y_difference), distances_to_polyline(points, path)
+    )
