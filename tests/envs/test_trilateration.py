@@ -461,7 +461,8 @@ def test_the_observation_vector_matches_the_feature_spec_written_by_name(seed: i
         heading_scale_rad=math.radians(3.0),
         n_decision_points=16,
     )
-    estimate = Pose(*rng.uniform(-4, 4, 2), rng.uniform(-3, 3))  # partly beyond the room
+    x, y = rng.uniform(-4, 4, 2).tolist()
+    estimate = Pose(x, y, float(rng.uniform(-3, 3)))  # partly beyond the room
     covariance, single = (np.diag(rng.uniform(0, 1e-3, 3)) for _ in range(2))
     vector = trilateration_observation(scales, estimate, covariance, single, 3.0, 12.0, 5)
     writer = OBSERVATION.writer()
@@ -476,7 +477,7 @@ def test_the_observation_vector_matches_the_feature_spec_written_by_name(seed: i
     offset = estimate.position - scales.transmitter_centroid_xy
     writer["transmitter_offset"] = np.clip(offset / scales.half_size_xy, -1.0, 1.0)
     writer["transmitter_distance"] = min(
-        np.linalg.norm(offset) / np.linalg.norm(scales.half_size_xy), 1.0
+        float(np.linalg.norm(offset)) / float(np.linalg.norm(scales.half_size_xy)), 1.0
     )
     writer["fix_position_std"] = saturate(position_std_m(single), 0.05)
     writer["fix_heading_std"] = saturate(heading_std_rad(single), math.radians(3))
