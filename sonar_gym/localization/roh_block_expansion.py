@@ -526,12 +526,19 @@ class BlockExpansionConfig:
     def __post_init__(self) -> None:
         beacons: dict[str, tuple[float, float, float]] = {}
         for name, xyz in dict(self.beacons_m).items():
-            values = np.asarray(xyz, dtype=np.float64)
-            if not isinstance(name, str) or values.shape != (3,) or not np.all(np.isfinite(values)):
+            if isinstance(xyz, tuple) and len(xyz) == 3 and all(type(v) is float for v in xyz):
+                triple = xyz  # already three floats (the usual case): no array needed
+            else:
+                values = np.asarray(xyz, dtype=np.float64)
+                if values.shape != (3,):
+                    triple = (math.nan, math.nan, math.nan)
+                else:
+                    triple = (float(values[0]), float(values[1]), float(values[2]))
+            if not isinstance(name, str) or not all(math.isfinite(v) for v in triple):
                 raise ValueError(
                     f"beacons_m must map names to finite (x, y, z) metres; bad entry {name!r}"
                 )
-            beacons[name] = (float(values[0]), float(values[1]), float(values[2]))
+            beacons[name] = triple
         object.__setattr__(self, "beacons_m", beacons)
         areas = tuple(tuple(area) for area in self.areas)
         if not areas:
