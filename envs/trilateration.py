@@ -500,13 +500,12 @@ class TrilaterationEnv(SonarEnv):
         measurement_time_s = 0.0
         if n_fixes > 0:
             with self._timed("sensing"):
-                truth = episode.true_pose
-                rounds = self.ranger.measure_route(
+                rounds = self.ranger.measure_repeated(
                     episode.world,
-                    np.repeat(truth.position[None, :], n_fixes, axis=0),
+                    episode.true_pose,
+                    n_fixes,
                     self.np_random,
                     self.transmitter_frame.names,
-                    headings_rad=np.full(n_fixes, truth.theta),
                 )
             measurement_time_s = float(np.sum(rounds.round_durations_s))
             with self._timed("localization"):

@@ -8,6 +8,8 @@ The table of features, their mappings and bounds is in the ``TrilaterationEnv`` 
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -85,6 +87,21 @@ class FeatureScales:
     heading_scale_rad: float
     n_decision_points: int
 
+    @functools.cached_property
+    def centre_values(self) -> tuple[float, float]:
+        """``centre_xy`` as two floats."""
+        return float(self.centre_xy[0]), float(self.centre_xy[1])
+
+    @functools.cached_property
+    def half_size_values(self) -> tuple[float, float]:
+        """``half_size_xy`` as two floats."""
+        return float(self.half_size_xy[0]), float(self.half_size_xy[1])
+
+    @functools.cached_property
+    def half_diagonal_m(self) -> float:
+        """The length of ``half_size_xy``: what maps to 1 in ``transmitter_distance``."""
+        return float(np.linalg.norm(self.half_size_xy))
+
 
 def trilateration_observation(
     scales: FeatureScales,
@@ -105,32 +122,37 @@ def trilateration_observation(
         time_since_fix_s, distance_since_fix_m: driving since the last fix (or the start).
         decisions: decision points already passed.
     """
-    observation = OBSERVATION.writer()
-    # the room's centre and half size, not its corners: the env's own form of the scaling
-    observation["estimated_xy"] = ScaledPosition.centred_values(
-        estimate.position, scales.centre_xy, scales.half_size_xy
-    )
-    observation["estimated_heading"] = Heading.values(estimate.theta)
-    observation["time_since_fix"] = time_since_fix_s / (time_since_fix_s + TIME_SINCE_FIX_SCALE_S)
-    observation["distance_since_fix"] = min(distance_since_fix_m / scales.route_length_m, 1.0)
-    position_scale, heading_scale = scales.position_scale_m, scales.heading_scale_rad
-    observation["dead_reckoning_position_std"] = saturate(
-        position_std_m(covariance), position_scale
-    )
-    observation["dead_reckoning_heading_std"] = saturate(heading_std_rad(covariance), heading_scale)
+    cx, cy = scales.centre_values
+    hx, hy = scales.half_size_values
+    x, y = estimate.x, estimate.y
     offset = estimate.position - scales.transmitter_centroid_xy
-    observation["transmitter_offset"] = np.clip(offset / scales.half_size_xy, -1.0, 1.0)
-    observation["transmitter_distance"] = min(
-        float(np.linalg.norm(offset)) / float(np.linalg.norm(scales.half_size_xy)), 1.0
-    )
-    observation["fix_position_std"] = saturate(
-        position_std_m(single_fix_covariance), position_scale
-    )
-    observation["fix_heading_std"] = saturate(heading_std_rad(single_fix_covariance), heading_scale)
+    offset_x, offset_y = offset.tolist()
+    offset_length = math.sqrt(offset.dot(offset))  # np.linalg.norm's own form
+    position_scale, heading_scale = scales.position_scale_m, scales.heading_scale_rad
     n = scales.n_decision_points
-    observation["progress"] = decisions / n
-    observation["steps_remaining"] = (n - decisions) / n
-    return observation.vector
+    # the room's centre and half size, not its corners: the env's own form of the scaling
+    values = (
+        _clip_unit((x - cx) / hx),  # estimated_xy
+        _clip_unit((y - cy) / hy),
+        *Heading.values(estimate.theta),  # estimated_heading
+        time_since_fix_s / (time_since_fix_s + TIME_SINCE_FIX_SCALE_S),  # time_since_fix
+        min(distance_since_fix_m / scales.route_length_m, 1.0),  # distance_since_fix
+        saturate(position_std_m(covariance), position_scale),  # dead_reckoning_position_std
+        saturate(heading_std_rad(covariance), heading_scale),  # dead_reckoning_heading_std
+        _clip_unit(offset_x / hx),  # transmitter_offset
+        _clip_unit(offset_y / hy),
+        min(offset_length / scales.half_diagonal_m, 1.0),  # transmitter_distance
+        saturate(position_std_m(single_fix_covariance), position_scale),  # fix_position_std
+        saturate(heading_std_rad(single_fix_covariance), heading_scale),  # fix_heading_std
+        decisions / n,  # progress
+        (n - decisions) / n,  # steps_remaining
+    )
+    return np.array(values, dtype=np.float32)
+
+
+def _clip_unit(value: float) -> float:
+    """``value`` clipped to [-1, 1] (``np.clip`` of a finite float)."""
+    return min(max(value, -1.0), 1.0)
 
 
 def episode_info(

@@ -117,9 +117,8 @@ def leg_is_free(
     if margin_m is None:
         margin_m = world.robot_radius + ROUTE_CLEARANCE_M
     count = max(2, math.ceil(float(np.linalg.norm(stop - start)) / step_m) + 1)
-    return all(
-        world.is_free(start + f * (stop - start), margin_m) for f in np.linspace(0.0, 1.0, count)
-    )
+    points = start + np.linspace(0.0, 1.0, count)[:, None] * (stop - start)
+    return all(world.is_free(point, margin_m) for point in points)
 
 
 def draw_polyline(

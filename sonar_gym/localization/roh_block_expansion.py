@@ -158,8 +158,8 @@ def distance_to_segment(
     if length_sq == 0.0:
         return np.hypot(p[..., 0] - a[0], p[..., 1] - a[1])
     t = np.clip(((p - a) @ direction) / length_sq, 0.0, 1.0)
-    foot = a + t[..., None] * direction
-    return np.hypot(p[..., 0] - foot[..., 0], p[..., 1] - foot[..., 1])
+    foot_x, foot_y = a[0] + t * direction[0], a[1] + t * direction[1]
+    return np.hypot(p[..., 0] - foot_x, p[..., 1] - foot_y)
 
 
 MAX_PATH_SAMPLES = 1_000_000
@@ -296,6 +296,8 @@ class ThreePointExtractor:
                 f"distances must be three finite non-negative metres, got {distances!r}"
             )
         self.distances_m: tuple[float, ...] = tuple(float(d) for d in targets)
+        self._direction = self.boundary_b - self.boundary_a
+        self._length_sq = float(self._direction @ self._direction)
         self._indices: list[int] = []
         self._samples: list[FloatArray] = []
         self._points: list[FloatArray] = []
@@ -373,8 +375,19 @@ class ThreePointExtractor:
             current += 1
         return current
 
+    def _point_distance(self, point: FloatArray) -> float:
+        """:meth:`boundary_distance` of one ``(2,)`` point, with :func:`distance_to_segment`'s
+        arithmetic on floats."""
+        if self._length_sq == 0.0:
+            return self.boundary_distance(point)
+        along = float((point - self.boundary_a) @ self._direction) / self._length_sq
+        t = min(max(along, 0.0), 1.0)
+        foot_x = float(self.boundary_a[0]) + t * float(self._direction[0])
+        foot_y = float(self.boundary_a[1]) + t * float(self._direction[1])
+        return float(np.hypot(float(point[0]) - foot_x, float(point[1]) - foot_y))
+
     def _update(self, point: FloatArray, index: int) -> None:
-        boundary_distance = self.boundary_distance(point)
+        boundary_distance = self._point_distance(point)
         if self._reference_sign is not None and not self.done:
             target = self.distances_m[self.found]
             side = float(np.sign(boundary_distance - target))
@@ -513,12 +526,19 @@ class BlockExpansionConfig:
     def __post_init__(self) -> None:
         beacons: dict[str, tuple[float, float, float]] = {}
         for name, xyz in dict(self.beacons_m).items():
-            values = np.asarray(xyz, dtype=np.float64)
-            if not isinstance(name, str) or values.shape != (3,) or not np.all(np.isfinite(values)):
+            if isinstance(xyz, tuple) and len(xyz) == 3 and all(type(v) is float for v in xyz):
+                triple = xyz  # already three floats (the usual case): no array needed
+            else:
+                values = np.asarray(xyz, dtype=np.float64)
+                if values.shape != (3,):
+                    triple = (math.nan, math.nan, math.nan)
+                else:
+                    triple = (float(values[0]), float(values[1]), float(values[2]))
+            if not isinstance(name, str) or not all(math.isfinite(v) for v in triple):
                 raise ValueError(
                     f"beacons_m must map names to finite (x, y, z) metres; bad entry {name!r}"
                 )
-            beacons[name] = (float(values[0]), float(values[1]), float(values[2]))
+            beacons[name] = triple
         object.__setattr__(self, "beacons_m", beacons)
         areas = tuple(tuple(area) for area in self.areas)
         if not areas:

@@ -147,6 +147,11 @@ MAX_WINDOW_SEGMENTS = 8
 """Most segments :meth:`TruePath.distances` searches per point as one window."""
 
 
+MAX_EXHAUSTIVE_PAIRS = 4096
+"""Point-segment pairs up to which :meth:`TruePath.errors` measures its wide-window points
+against every segment instead of the blocked search (both give the exact minimum)."""
+
+
 class TruePath:
     """A true path ``y = f(x)`` (x strictly monotonic), prepared for :meth:`errors`.
 
@@ -228,9 +233,14 @@ class TruePath:
             return np.sqrt(self._segments.nearest_sq(points, members))
         result = np.empty(len(points))
         wide = ~narrow
-        if self._blocked is None:
-            self._blocked = _BlockedPolyline(line)
-        result[wide] = self._blocked.distances(points[wide])
+        n_wide = int(np.count_nonzero(wide))
+        if n_wide * n_segments <= MAX_EXHAUSTIVE_PAIRS:  # a few points: every segment at once
+            members = np.broadcast_to(np.arange(n_segments), (n_wide, n_segments))
+            result[wide] = np.sqrt(self._segments.nearest_sq(points[wide], members))
+        else:
+            if self._blocked is None:
+                self._blocked = _BlockedPolyline(line)
+            result[wide] = self._blocked.distances(points[wide])
         if np.any(narrow):
             width = int(count[narrow].max())
             members = np.minimum(first[narrow, None] + np.arange(width), last[narrow, None])

@@ -695,7 +695,7 @@ def trilaterate_path(
             positions[rows] = centroid
             one_by_one = rows[:0]
         else:
-            positions[rows[met]] = centroid[met]
+            positions[rows[met]] = centroid
             centre = _radical_centres(centres, radii[~met])
             if centre is None:
                 one_by_one = rows[~met]
@@ -747,8 +747,9 @@ def _paper_centroids(
     The three circle pairs are computed side by side (arrays ``(m, 3)``, one column per
     pair), each element with the arithmetic of :func:`circle_intersections`.
 
-    Returns ``(centroids (m, 2), met (m,))``; ``met`` is False where some pair of circles does
-    not intersect (those rows need the radical-centre fallback; their centroid is garbage).
+    Returns ``(centroids (k, 2), met (m,))``: ``met`` is False where some pair of circles does
+    not intersect (those rows need the radical-centre fallback), and the centroids are those
+    of the ``k`` rows where ``met`` holds, in row order.
     """
     first_of, second_of = [i for i, _ in _CENTROID_PAIRS], [j for _, j in _CENTROID_PAIRS]
     third_of = [3 - i - j for i, j in _CENTROID_PAIRS]
@@ -756,25 +757,65 @@ def _paper_centroids(
     offset = cb - ca
     separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
     if 0.0 in separations:
-        return np.zeros((len(radii), 2)), np.zeros(len(radii), dtype=bool)
+        return np.zeros((0, 2)), np.zeros(len(radii), dtype=bool)
     separation = np.array(separations)
     separation_sq = np.array([value**2 for value in separations])
-    ra, rb, rk = radii[:, first_of], radii[:, second_of], radii[:, third_of]
+    ra, rb = radii[:, first_of], radii[:, second_of]
     ra_sq, rb_sq = ra * ra, rb * rb
     along = (ra_sq - rb_sq + separation_sq) / (2.0 * separation)
     half_chord_sq = ra_sq - along * along
     tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(np.maximum(ra_sq, rb_sq), separation_sq)
     met = (half_chord_sq >= -tolerance).all(axis=1)
-    unit = offset / separation[:, None]
-    normal = np.column_stack([-unit[:, 1], unit[:, 0]])
-    foot = ca + along[..., None] * unit
+    rk = radii[:, third_of]
+    if not met.all():  # the rest only for the rows that keep their centroid
+        along, half_chord_sq, tolerance = along[met], half_chord_sq[met], tolerance[met]
+        rk = rk[met]
+    # x and y as separate (k, 3) arrays: the same arithmetic per element as (k, 3, 2) arrays,
+    # without numpy's slow inner loops of length 2
+    unit_x, unit_y = offset[:, 0] / separation, offset[:, 1] / separation
+    normal_x, normal_y = -unit_y, unit_x
+    foot_x, foot_y = ca[:, 0] + along * unit_x, ca[:, 1] + along * unit_y
     half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
-    along_chord = half_chord[..., None] * normal
-    first, second = foot + along_chord, foot - along_chord
-    miss_first = np.abs(np.hypot(first[..., 0] - ck[:, 0], first[..., 1] - ck[:, 1]) - rk)
-    miss_second = np.abs(np.hypot(second[..., 0] - ck[:, 0], second[..., 1] - ck[:, 1]) - rk)
-    kept = np.where((miss_second < miss_first)[..., None], second, first)
-    return np.mean(kept, axis=1), met
+    chord_x, chord_y = half_chord * normal_x, half_chord * normal_y
+    first_x, first_y = foot_x + chord_x, foot_y + chord_y
+    second_x, second_y = foot_x - chord_x, foot_y - chord_y
+    take_second = _second_misses_less(
+        first_x - ck[:, 0], first_y - ck[:, 1], second_x - ck[:, 0], second_y - ck[:, 1], rk
+    )
+    centroids = np.empty((len(rk), 2))
+    for column, (first_c, second_c) in enumerate(((first_x, second_x), (first_y, second_y))):
+        kept = np.where(take_second, second_c, first_c)
+        # the mean over the three pairs, summed in pair order as np.mean over that axis sums
+        centroids[:, column] = ((kept[:, 0] + kept[:, 1]) + kept[:, 2]) / 3
+    return centroids, met
+
+
+def _second_misses_less(
+    first_x: FloatArray,
+    first_y: FloatArray,
+    second_x: FloatArray,
+    second_y: FloatArray,
+    radius: FloatArray,
+) -> npt.NDArray[np.bool_]:
+    """``|hypot(second) - radius| < |hypot(first) - radius|``, elementwise (metres).
+
+    Which intersection point lies nearer the third circle (:func:`paper_centroid`). The
+    comparison is made on ``sqrt(x^2 + y^2)``, within a few ulps of ``hypot`` and several
+    times cheaper; where the two misses are too close for that to decide, or a square leaves
+    the float range, ``hypot`` itself decides, so the result is the ``hypot`` comparison's.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # such elements are decided by hypot
+        first = np.sqrt(first_x * first_x + first_y * first_y)
+        second = np.sqrt(second_x * second_x + second_y * second_y)
+        miss_first, miss_second = np.abs(first - radius), np.abs(second - radius)
+        take_second = miss_second < miss_first
+        margin = 1e-12 * (first + second + radius) + 1e-150
+        unsure = ~(np.abs(miss_second - miss_first) > margin)
+    if unsure.any():
+        exact_first = np.abs(np.hypot(first_x[unsure], first_y[unsure]) - radius[unsure])
+        exact_second = np.abs(np.hypot(second_x[unsure], second_y[unsure]) - radius[unsure])
+        take_second[unsure] = exact_second < exact_first
+    return take_second
 
 
 # ---------------------------------------------------------------------------------------------
@@ -814,6 +855,13 @@ def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> Fl
     if array.shape[1] == 2:
         array = np.column_stack([array, np.full(3, sensor_height)])
     return array
+
+
+def _cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """``np.cross`` of two 3-vectors, with its products and differences in its order."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 def auto_calibrate(
@@ -880,7 +928,7 @@ def auto_calibrate(
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
-    area = 0.5 * float(np.linalg.norm(np.cross(displacements[0], displacements[1])))
+    area = 0.5 * float(np.linalg.norm(_cross3(displacements[0], displacements[1])))
     if singular_values[1] > 0.0:
         condition = float(singular_values[0] / singular_values[1])
     else:
@@ -914,7 +962,7 @@ def auto_calibrate(
             message="calibration positions are collinear to float precision",
         )
     e_y = across / along_y
-    e_z = np.cross(e_x, e_y)
+    e_z = _cross3(e_x, e_y)
     # Products, not ``**``: under an extreme (user-allowed) condition they overflow to inf
     # instead of raising OverflowError, and the check below reports it.
     x = (d1 * d1 - d2 * d2 + separation * separation) / (2.0 * separation)

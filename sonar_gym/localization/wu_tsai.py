@@ -38,6 +38,7 @@ whose ``status`` says what went wrong (``"missing_distance"``, ``"inconsistent_d
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -380,12 +381,15 @@ class Fix:
                 raise ValueError(f"Fix.{name} must be finite, got {value!r}")
             object.__setattr__(self, name, value)
         object.__setattr__(self, "heading", wrap_angle(self.heading))
-        receivers = np.asarray(self.receiver_positions, dtype=np.float64).reshape(-1, 3)
-        if not np.all(np.isfinite(receivers)):
+        rows = self.receiver_positions
+        if all(isinstance(row, (tuple, list)) and len(row) == 3 for row in rows):
+            triples = tuple((float(row[0]), float(row[1]), float(row[2])) for row in rows)
+        else:  # a flat sequence or an array: read as (n, 3)
+            receivers = np.asarray(rows, dtype=np.float64).reshape(-1, 3)
+            triples = tuple((float(x), float(y), float(z)) for x, y, z in receivers)
+        if not all(math.isfinite(value) for row in triples for value in row):
             raise ValueError("Fix.receiver_positions must be finite")
-        object.__setattr__(
-            self, "receiver_positions", tuple(tuple(float(v) for v in row) for row in receivers)
-        )
+        object.__setattr__(self, "receiver_positions", triples)
 
     @property
     def position(self) -> FloatArray:
@@ -583,20 +587,41 @@ class RepeatedFixes:
     def average(self) -> Fix | None:
         """eqs (12)-(16) over the fixes that succeeded (:func:`average_fixes`); None if none."""
         good = self.ok
-        if not np.any(good):
+        if good.all():
+            poses, z, receivers = self.poses, self.z, self.receivers
+        elif good.any():
+            poses, z, receivers = self.poses[good], self.z[good], self.receivers[good]
+        else:
             return None
-        positions = np.column_stack([self.poses[good, :2], self.z[good]])
-        headings = self.poses[good, 2]
-        x, y, z = positions.mean(axis=0)  # eqs (13)-(15)
-        heading = math.atan2(float(np.mean(np.sin(headings))), float(np.mean(np.cos(headings))))
-        receivers = np.mean(self.receivers[good], axis=0)
-        return Fix(
-            x=float(x),
-            y=float(y),
-            z=float(z),
-            heading=heading,
-            receiver_positions=tuple(_as_triple(row) for row in receivers),
+        count = len(poses)
+        positions = np.empty((count, 3))
+        positions[:, :2] = poses[:, :2]
+        positions[:, 2] = z
+        x, y, z_mean = (np.add.reduce(positions, axis=0) / count).tolist()  # eqs (13)-(15)
+        headings = poses[:, 2].copy()  # contiguous, as the sums below assume
+        heading = math.atan2(
+            float(np.add.reduce(np.sin(headings)) / count),
+            float(np.add.reduce(np.cos(headings)) / count),
         )
+        mean_receivers = np.add.reduce(receivers, axis=0) / count
+        return Fix(
+            x=x,
+            y=y,
+            z=z_mean,
+            heading=heading,
+            receiver_positions=tuple(map(tuple, mean_receivers.tolist())),
+        )
+
+
+_STATUS_CODES = (
+    OK,
+    STATUS_MISSING_DISTANCE,
+    STATUS_INCONSISTENT_DISTANCES,
+    STATUS_HEADING_UNOBSERVABLE,
+)
+_CODE_OK, _CODE_MISSING, _CODE_INCONSISTENT, _CODE_UNOBSERVABLE = range(len(_STATUS_CODES))
+_STATUS_NAMES = np.array(_STATUS_CODES)
+_STATUS_NAMES.flags.writeable = False
 
 
 def localize_repeated(
@@ -622,64 +647,121 @@ def localize_repeated(
     table = np.asarray(distances, dtype=np.float64)
     if table.ndim != 3 or table.shape[1] < 1 or table.shape[2] != 3:
         raise ValueError(f"distances must have shape (n, n_receivers >= 1, 3), got {table.shape}")
-    if np.any(table < 0.0):
+    if (table < 0.0).any():
         raise ValueError("distances must be >= 0 metres (NaN marks a dropout)")
-    offsets = np.asarray(receiver_offsets, dtype=np.float64)
-    if offsets.shape != (table.shape[1], 2) or not np.all(np.isfinite(offsets)):
-        raise ValueError(
-            f"receiver_offsets must be a finite ({table.shape[1]}, 2) array, got {offsets.shape}"
-        )
-    n = table.shape[0]
-    statuses = np.full(n, OK, dtype=object)
+    n, n_receivers = table.shape[0], table.shape[1]
+    layout = _receiver_layout(_offsets_key(receiver_offsets), n_receivers)
+    codes = np.zeros(n, dtype=np.intp)
     finite = np.all(np.isfinite(table), axis=(1, 2))
-    statuses[~finite] = STATUS_MISSING_DISTANCE
-    clean = np.where(finite[:, None, None], table, 0.0)
+    all_finite = bool(finite.all())
+    if not all_finite:
+        codes[~finite] = _CODE_MISSING
+    clean = table if all_finite else np.where(finite[:, None, None], table, 0.0)
     with np.errstate(over="ignore", invalid="ignore"):
-        d0_sq, d1_sq, d2_sq = clean[..., 0] ** 2, clean[..., 1] ** 2, clean[..., 2] ** 2
+        squares = clean * clean
+        d0_sq, d1_sq, d2_sq = squares[..., 0], squares[..., 1], squares[..., 2]
         x = (d0_sq - d1_sq + a * a) / (2.0 * a)
         y = (d0_sq - d2_sq + a * a) / (2.0 * a)
         radicand = d0_sq - x * x - y * y
-    representable = np.all(np.isfinite(x) & np.isfinite(y) & np.isfinite(radicand), axis=1)
-    inconsistent = np.any(radicand < -_RELATIVE_RADICAND_TOLERANCE * (d0_sq + a * a), axis=1)
-    statuses[finite & representable & inconsistent] = STATUS_INCONSISTENT_DISTANCES
-    with np.errstate(over="ignore", invalid="ignore"):
+        # a sum that overflows only sends a row through the safe form, which agrees
+        representable = np.isfinite(x + y + radicand).all(axis=1)
         z = z_sign * np.sqrt(np.maximum(radicand, 0.0))
-    for index in np.flatnonzero(finite & ~representable):  # beyond float range: the safe form
-        try:
-            point = np.array([receiver_position(row, a, z_sign) for row in table[index]])
-        except InconsistentDistances:
-            statuses[index] = STATUS_INCONSISTENT_DISTANCES
-            continue
-        x[index], y[index], z[index] = point[:, 0], point[:, 1], point[:, 2]
-    receivers = np.stack([x, y, z], axis=-1)  # (n, R, 3)
+    inconsistent = (radicand < -_RELATIVE_RADICAND_TOLERANCE * (d0_sq + a * a)).any(axis=1)
+    if inconsistent.any():
+        codes[finite & representable & inconsistent] = _CODE_INCONSISTENT
+    if not representable.all():
+        for index in np.flatnonzero(finite & ~representable):  # beyond float range: safe form
+            try:
+                point = np.array([receiver_position(row, a, z_sign) for row in table[index]])
+            except InconsistentDistances:
+                codes[index] = _CODE_INCONSISTENT
+                continue
+            x[index], y[index], z[index] = point[:, 0], point[:, 1], point[:, 2]
+    receivers = np.empty((n, n_receivers, 3))  # (n, R, 3)
+    receivers[..., 0], receivers[..., 1], receivers[..., 2] = x, y, z
 
-    offset_spread = offsets - offsets.mean(axis=0)
-    if not np.any(np.hypot(offset_spread[:, 0], offset_spread[:, 1]) >= _MIN_BASELINE_M):
-        statuses[statuses == OK] = STATUS_HEADING_UNOBSERVABLE
+    offset_spread, mean_offset = layout.spread, layout.mean
+    if not layout.observable:
+        codes[codes == _CODE_OK] = _CODE_UNOBSERVABLE
     with np.errstate(over="ignore", invalid="ignore"):
-        mean_receiver = _mean_without_overflow(receivers, axis=1)  # (n, 3)
+        mean_receiver = np.add.reduce(receivers, axis=1) / n_receivers  # (n, 3)
+        if not np.isfinite(mean_receiver).all():
+            mean_receiver = _mean_without_overflow(receivers, axis=1)
         measured_spread = receivers[:, :, :2] - mean_receiver[:, None, :2]
-        cross = np.sum(
+        cross = np.add.reduce(
             offset_spread[None, :, 0] * measured_spread[:, :, 1]
             - offset_spread[None, :, 1] * measured_spread[:, :, 0],
             axis=1,
         )
-        dot = np.sum(offset_spread[None] * measured_spread, axis=(1, 2))
+        dot = np.add.reduce(offset_spread[None] * measured_spread, axis=(1, 2))
         coincide = ~(np.hypot(cross, dot) >= _MIN_BASELINE_M**2)
-        statuses[(statuses == OK) & coincide] = STATUS_INCONSISTENT_DISTANCES
         heading = np.arctan2(cross, dot)
         c, s = np.cos(heading), np.sin(heading)
-        mean_offset = offsets.mean(axis=0)
-        fix_x = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
-        fix_y = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
-    poses = np.stack([fix_x, fix_y, heading], axis=1)
-    good = statuses == OK
-    good &= np.all(np.isfinite(poses), axis=1) & np.isfinite(mean_receiver[:, 2])
-    statuses[(statuses == OK) & ~good] = STATUS_INCONSISTENT_DISTANCES
-    poses[~good] = np.nan
-    receivers[~good] = np.nan
-    z_fix = np.where(good, mean_receiver[:, 2], np.nan)
-    return RepeatedFixes(statuses.astype(str), poses, z_fix, receivers)
+        poses = np.empty((n, 3))
+        if layout.centred:  # the reference point is the receivers' mean: nothing to rotate
+            poses[:, :2] = mean_receiver[:, :2]
+        else:
+            poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
+            poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
+        poses[:, 2] = heading
+    if coincide.any():
+        codes[(codes == _CODE_OK) & coincide] = _CODE_INCONSISTENT
+    good = codes == _CODE_OK
+    good &= np.isfinite(poses).all(axis=1) & np.isfinite(mean_receiver[:, 2])
+    z_fix = mean_receiver[:, 2].copy()
+    if not good.all():
+        codes[(codes == _CODE_OK) & ~good] = _CODE_INCONSISTENT
+        poses[~good] = np.nan
+        receivers[~good] = np.nan
+        z_fix[~good] = np.nan
+    statuses = _STATUS_NAMES[codes]
+    return RepeatedFixes(statuses, poses, z_fix, receivers)
+
+
+@dataclass(frozen=True)
+class _ReceiverLayout:
+    """The receivers' offsets in {AMR} as :func:`localize_repeated` uses them (metres).
+
+    Attributes:
+        spread: ``(R, 2)`` offsets about their mean.
+        mean: ``(2,)`` their mean.
+        observable: whether they are apart on the robot (else no heading, Theorem 1).
+        centred: whether their mean is the {AMR} origin (the paper's rig).
+    """
+
+    spread: FloatArray
+    mean: FloatArray
+    observable: bool
+    centred: bool
+
+
+def _offsets_key(receiver_offsets: npt.ArrayLike) -> tuple[tuple[float, ...], ...]:
+    """``receiver_offsets`` as nested tuples of floats (a cache key); ValueError if unusable."""
+    if isinstance(receiver_offsets, tuple) and all(
+        isinstance(row, tuple) and all(type(v) is float for v in row) for row in receiver_offsets
+    ):
+        return receiver_offsets
+    offsets = np.asarray(receiver_offsets, dtype=np.float64)
+    if offsets.ndim != 2:
+        raise ValueError(f"receiver_offsets must be a finite (n, 2) array, got {offsets.shape}")
+    return tuple(tuple(row) for row in offsets.tolist())
+
+
+@functools.lru_cache(maxsize=32)
+def _receiver_layout(
+    offsets_key: tuple[tuple[float, ...], ...], n_receivers: int
+) -> _ReceiverLayout:
+    offsets = np.asarray(offsets_key, dtype=np.float64)
+    if offsets.shape != (n_receivers, 2) or not np.isfinite(offsets).all():
+        raise ValueError(
+            f"receiver_offsets must be a finite ({n_receivers}, 2) array, got {offsets.shape}"
+        )
+    mean = offsets.mean(axis=0)
+    spread = offsets - mean
+    observable = bool(np.any(np.hypot(spread[:, 0], spread[:, 1]) >= _MIN_BASELINE_M))
+    for array in (mean, spread):
+        array.flags.writeable = False
+    return _ReceiverLayout(spread, mean, observable, bool(np.all(mean == 0.0)))
 
 
 def average_fixes(fixes: Sequence[Fix]) -> Fix:

@@ -16,6 +16,7 @@ Units: metres, radians; covariances over ``[x, y, theta]`` in m^2, m rad, rad^2.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -211,33 +212,60 @@ def predicted_fix_covariance(
         range_variance_m2: variance of one range error, m^2.
         receivers_xy: receiver positions in the robot frame, metres (two, apart).
     """
-    transmitters = np.array([[0.0, 0.0], [spacing_m, 0.0], [0.0, spacing_m]])
-    receivers = np.array([pose_in_t.transform_point(xy) for xy in receivers_xy])
+    a = spacing_m
+    transmitters = ((0.0, 0.0), (a, 0.0), (0.0, a))
+    c, s = math.cos(pose_in_t.theta), math.sin(pose_in_t.theta)
+    x, y = pose_in_t.x, pose_in_t.y
+    receivers = [(x + c * px - s * py, y + s * px + c * py) for px, py in receivers_xy]
     n_receivers = len(receivers)
-    receiver_covariance = np.zeros((2 * n_receivers, 2 * n_receivers))
-    for j, point in enumerate(receivers):
-        d0, d1, d2 = np.sqrt(np.sum((transmitters - point) ** 2, axis=1) + z_m * z_m)
-        ranges_to_xy = np.array([[d0, -d1, 0.0], [d0, 0.0, -d2]]) / spacing_m
-        receiver_covariance[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = (
-            range_variance_m2 * ranges_to_xy @ ranges_to_xy.T
+    z_sq = z_m * z_m
+    ranges_to_xy = []  # per receiver J = [[d0, -d1, 0], [d0, 0, -d2]] / a
+    for rx, ry in receivers:
+        d0, d1, d2 = (
+            math.sqrt(((tx - rx) * (tx - rx) + (ty - ry) * (ty - ry)) + z_sq)
+            for tx, ty in transmitters
         )
-    # pose = (midpoint of the receivers, direction of the baseline from the last to the first)
-    baseline = receivers[0] - receivers[-1]
-    length_sq = float(baseline @ baseline)
-    across = np.array([-baseline[1], baseline[0]]) / length_sq
-    jacobian = np.zeros((3, 2 * n_receivers))
+        ranges_to_xy.append(((d0 / a, -d1 / a, 0.0), (d0 / a, 0.0, -d2 / a)))
+    jacobians = np.array(ranges_to_xy)  # (R, 2, 3)
+    blocks = (range_variance_m2 * jacobians) @ jacobians.transpose(0, 2, 1)
+    receiver_covariance = np.zeros((2 * n_receivers, 2 * n_receivers))
     for j in range(n_receivers):
-        jacobian[0, 2 * j] = jacobian[1, 2 * j + 1] = 1.0 / n_receivers
-    jacobian[2, 0:2] += across
-    jacobian[2, 2 * n_receivers - 2 :] -= across
+        receiver_covariance[2 * j : 2 * j + 2, 2 * j : 2 * j + 2] = blocks[j]
+    # pose = (midpoint of the receivers, direction of the baseline from the last to the first)
+    (front_x, front_y), (back_x, back_y) = receivers[0], receivers[-1]
+    baseline = np.array([front_x - back_x, front_y - back_y])
+    length_sq = float(baseline @ baseline)
+    if not length_sq > 0.0:
+        raise ValueError(
+            "argument 'receivers_xy' must place the first and last receivers apart (their "
+            f"baseline gives the heading); got {receivers_xy!r}"
+        )
+    across = (-(front_y - back_y) / length_sq, (front_x - back_x) / length_sq)
+    heading_row = [0.0] * (2 * n_receivers)
+    heading_row[0] += across[0]
+    heading_row[1] += across[1]
+    heading_row[-2] -= across[0]
+    heading_row[-1] -= across[1]
+    share = 1.0 / n_receivers
+    jacobian = np.array(
+        [[share, 0.0] * n_receivers, [0.0, share] * n_receivers, heading_row]
+    )  # d pose / d (x_1, y_1, ..., x_R, y_R)
     return jacobian @ receiver_covariance @ jacobian.T
 
 
 def rotate_covariance(covariance: FloatArray, angle_rad: float) -> FloatArray:
     """A 3x3 ``[x, y, theta]`` covariance seen from a frame rotated by ``angle_rad``."""
+    rotation = _planar_rotation(float(angle_rad))
+    return rotation @ covariance @ rotation.T
+
+
+@functools.lru_cache(maxsize=64)
+def _planar_rotation(angle_rad: float) -> FloatArray:
+    """The 3x3 rotation of ``[x, y, theta]`` by ``angle_rad`` (read-only: it is shared)."""
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     rotation = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    return rotation @ covariance @ rotation.T
+    rotation.flags.writeable = False
+    return rotation
 
 
 def position_std_m(covariance: FloatArray) -> float:

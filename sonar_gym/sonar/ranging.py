@@ -241,6 +241,24 @@ class BeaconRanger:
             self.route_geometry(world, xy, emitter_names, headings_rad), world.temperature_c, rng
         )
 
+    def measure_repeated(
+        self,
+        world: WorldLike,
+        pose: Pose,
+        n_rounds: int,
+        rng: np.random.Generator | None,
+        emitter_names: Sequence[str] | None = None,
+    ) -> RouteMeasurement:
+        """``n_rounds`` ranging rounds at one fixed pose ({W}), as :meth:`measure_route` of a
+        route that repeats ``pose`` ``n_rounds`` times would give them (same jitter draws).
+
+        The geometry (distances, occlusion) is worked out once and shared by every round.
+        """
+        if isinstance(n_rounds, bool) or int(n_rounds) != n_rounds or n_rounds < 1:
+            raise ValueError(f"argument 'n_rounds' must be an integer >= 1; got {n_rounds!r}")
+        single = self.route_geometry(world, pose.position[None, :], emitter_names, [pose.theta])
+        return self._rounds(single, int(n_rounds), world.temperature_c, rng)
+
     def route_geometry(
         self,
         world: WorldLike,
@@ -265,29 +283,22 @@ class BeaconRanger:
                     f"sample); got shape {headings.shape}"
                 )
         emitters = self._emitters(world, emitter_names)
-        n_emitters = len(emitters)
         scenario = world.scenario
         height = scenario.robot.sensor_height if self.height_m is None else self.height_m
         offsets = np.asarray(self.receivers_xy, dtype=np.float64)  # (R, 2) in {R}
         cos, sin = np.cos(headings)[:, None], np.sin(headings)[:, None]
-        receivers = np.stack(
-            (
-                positions[:, None, 0] + cos * offsets[:, 0] - sin * offsets[:, 1],
-                positions[:, None, 1] + sin * offsets[:, 0] + cos * offsets[:, 1],
-            ),
-            axis=-1,
-        )  # (n, R, 2) in {W}
-        n_receivers = offsets.shape[0]
+        # receivers in {W}, (n, R) each
+        receiver_x = positions[:, 0, None] + cos * offsets[:, 0] - sin * offsets[:, 1]
+        receiver_y = positions[:, 1, None] + sin * offsets[:, 0] + cos * offsets[:, 1]
         emitter_xyz = np.array([e.position for e in emitters], dtype=np.float64).reshape(-1, 3)
+        emitter_x, emitter_y = emitter_xyz[:, 0], emitter_xyz[:, 1]
 
-        horizontal = emitter_xyz[None, None, :, :2] - receivers[:, :, None, :]  # (n, R, E, 2)
-        distance = np.sqrt(
-            (horizontal**2).sum(axis=-1) + (emitter_xyz[None, None, :, 2] - height) ** 2
-        )
-        blocked = _blocked_by_walls(world, receivers.reshape(-1, 2), emitter_xyz[:, :2])
-        heard = (distance <= self.max_range_m) & ~blocked.reshape(
-            n_samples, n_receivers, n_emitters
-        )
+        path_x = emitter_x - receiver_x[:, :, None]  # (n, R, E), receiver to emitter
+        path_y = emitter_y - receiver_y[:, :, None]
+        rise = emitter_xyz[:, 2] - height
+        distance = np.sqrt((path_x * path_x + path_y * path_y) + rise * rise)
+        blocked = _blocked_by_walls(world, receiver_x, receiver_y, path_x, path_y)
+        heard = (distance <= self.max_range_m) & ~blocked
 
         distance.flags.writeable = False
         heard.flags.writeable = False
@@ -299,16 +310,32 @@ class BeaconRanger:
         """One ranging round at every sample of a route whose geometry is known (see
         :meth:`route_geometry`), in air at ``temperature_c`` degrees Celsius; the jitter is
         drawn as :meth:`measure_route` draws it."""
+        return self._rounds(geometry, None, temperature_c, rng)
+
+    def _rounds(
+        self,
+        geometry: RouteGeometry,
+        n_repeats: int | None,
+        temperature_c: float,
+        rng: np.random.Generator | None,
+    ) -> RouteMeasurement:
+        """:meth:`measure_geometry`, or with ``n_repeats`` given, that many rounds at the one
+        sample of ``geometry`` (its arrays broadcast over the rounds)."""
         distance, heard = geometry.true_distances, geometry.heard
+        shape = distance.shape if n_repeats is None else (n_repeats, *distance.shape[1:])
         n_emitters = len(geometry.emitter_names)
         true_speed = speed_of_sound_mps(temperature_c)
         tof = distance / true_speed
         if self.noise and self.range_noise_std_m > 0.0:
             if rng is None:
                 raise ValueError("argument 'rng' is needed: the ranger adds noise")
-            tof = tof + rng.standard_normal(tof.shape) * (self.range_noise_std_m / true_speed)
+            tof = tof + rng.standard_normal(shape) * (self.range_noise_std_m / true_speed)
         if self.quantisation and self.timer_period_s > 0.0:
             tof = np.floor(tof / self.timer_period_s) * self.timer_period_s
+        if tof.shape != shape:
+            tof = np.broadcast_to(tof, shape)
+        if n_repeats is not None:
+            distance = np.broadcast_to(distance, shape)
         start = self.firing_interval_s * np.arange(n_emitters, dtype=np.float64)
         return RouteMeasurement(
             distances=np.where(heard, tof * self.assumed_speed_of_sound_mps, np.nan),
@@ -340,21 +367,32 @@ def _route_positions(xy: npt.ArrayLike) -> FloatArray:
     return positions
 
 
-def _blocked_by_walls(world: WorldLike, receivers: FloatArray, emitters: FloatArray) -> np.ndarray:
-    """``(receivers, emitters)``: whether each path's floor projection crosses a room/free wall."""
+def _blocked_by_walls(
+    world: WorldLike,
+    receiver_x: FloatArray,
+    receiver_y: FloatArray,
+    path_x: FloatArray,
+    path_y: FloatArray,
+) -> npt.NDArray[np.bool_]:
+    """``(n, R, E)``: whether each path's floor projection crosses a room or free wall.
+
+    ``receiver_x``, ``receiver_y``: ``(n, R)`` receivers in {W}; ``path_x``, ``path_y``:
+    ``(n, R, E)`` the vectors from each receiver to each emitter (metres).
+    """
     scenario = world.scenario
     # StaticGeometry lists the room's four walls first, then the free walls, then the boxes.
     n_walls = (4 if scenario.room is not None else 0) + len(scenario.walls)
     geometry = world.geometry
     a = geometry.segment_starts[:n_walls]
     d = geometry.segment_ends[:n_walls] - a
-    p = receivers[:, None, None, :]  # (R, 1, 1, 2)
-    path = emitters[None, :, None, :] - p  # (R, E, 1, 2)
-    w = a[None, None, :, :] - p  # (R, 1, S, 2)
-    denominator = path[..., 0] * d[:, 1] - path[..., 1] * d[:, 0]
+    d_x, d_y = d[:, 0], d[:, 1]
+    path_x, path_y = path_x[..., None], path_y[..., None]  # (n, R, E, 1)
+    w_x = (a[:, 0] - receiver_x[..., None])[:, :, None, :]  # (n, R, 1, S)
+    w_y = (a[:, 1] - receiver_y[..., None])[:, :, None, :]
+    denominator = path_x * d_y - path_y * d_x
     with np.errstate(divide="ignore", invalid="ignore"):
-        u = (w[..., 0] * d[:, 1] - w[..., 1] * d[:, 0]) / denominator
-        v = (w[..., 0] * path[..., 1] - w[..., 1] * path[..., 0]) / denominator
+        u = (w_x * d_y - w_y * d_x) / denominator
+        v = (w_x * path_y - w_y * path_x) / denominator
     limit = 1.0 - PATH_END_TOLERANCE
     crossing = (u > PATH_END_TOLERANCE) & (u < limit) & (v >= 0.0) & (v <= 1.0)
-    return np.asarray(crossing.any(axis=2))
+    return np.asarray(crossing.any(axis=-1))

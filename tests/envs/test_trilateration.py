@@ -433,3 +433,55 @@ def test_adaptive_agent_skips_fixes_when_dead_reckoning_is_good_and_measures_whe
         counts_after_drift.append(env.unwrapped.fix_count(agent.act(observation)))
     assert counts_first == [0] * 5
     assert min(counts_after_drift) >= 5
+
+
+def test_fix_covariance_of_receivers_at_one_place_raises_naming_the_argument() -> None:
+    with pytest.raises(ValueError, match="receivers_xy"):
+        predicted_fix_covariance(Pose(0.3, 0.2, 0.1), -1.9, A_M, 1e-6, ((0.1, 0.0), (0.1, 0.0)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_observation_vector_matches_the_feature_spec_written_by_name(seed: int) -> None:
+    from sonar_gym.envs.features import Heading, ScaledPosition
+    from sonar_gym.envs.trilateration_observation import (
+        OBSERVATION,
+        FeatureScales,
+        saturate,
+        trilateration_observation,
+    )
+    from sonar_gym.localization.wu_tsai_models import heading_std_rad, position_std_m
+
+    rng = np.random.default_rng(seed)
+    scales = FeatureScales(
+        centre_xy=rng.uniform(-1, 1, 2),
+        half_size_xy=rng.uniform(1, 3, 2),
+        transmitter_centroid_xy=rng.uniform(-1, 1, 2),
+        route_length_m=8.0,
+        position_scale_m=0.05,
+        heading_scale_rad=math.radians(3.0),
+        n_decision_points=16,
+    )
+    x, y = rng.uniform(-4, 4, 2).tolist()
+    estimate = Pose(x, y, float(rng.uniform(-3, 3)))  # partly beyond the room
+    covariance, single = (np.diag(rng.uniform(0, 1e-3, 3)) for _ in range(2))
+    vector = trilateration_observation(scales, estimate, covariance, single, 3.0, 12.0, 5)
+    writer = OBSERVATION.writer()
+    writer["estimated_xy"] = ScaledPosition.centred_values(
+        estimate.position, scales.centre_xy, scales.half_size_xy
+    )
+    writer["estimated_heading"] = Heading.values(estimate.theta)
+    writer["time_since_fix"] = 3.0 / 13.0
+    writer["distance_since_fix"] = 1.0
+    writer["dead_reckoning_position_std"] = saturate(position_std_m(covariance), 0.05)
+    writer["dead_reckoning_heading_std"] = saturate(heading_std_rad(covariance), math.radians(3))
+    offset = estimate.position - scales.transmitter_centroid_xy
+    writer["transmitter_offset"] = np.clip(offset / scales.half_size_xy, -1.0, 1.0)
+    writer["transmitter_distance"] = min(
+        float(np.linalg.norm(offset)) / float(np.linalg.norm(scales.half_size_xy)), 1.0
+    )
+    writer["fix_position_std"] = saturate(position_std_m(single), 0.05)
+    writer["fix_heading_std"] = saturate(heading_std_rad(single), math.radians(3))
+    writer["progress"] = 5 / 16
+    writer["steps_remaining"] = 11 / 16
+    assert vector.dtype == np.float32
+    np.testing.assert_array_equal(vector, writer.vector)

@@ -239,3 +239,56 @@ def test_path_errors_sigma_prime_is_the_mean_distance_over_every_segment(seed: i
     _, sigma_prime = path_errors(points, path)
     reference = float(np.mean(distances_to_polyline_reference(points, path)))
     assert sigma_prime == pytest.approx(reference, rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-170, 1e170])
+def test_the_nearer_intersection_is_chosen_as_hypot_would_choose_it(scale: float) -> None:
+    from sonar_gym.localization.roh_trilateration import _second_misses_less
+
+    rng = np.random.default_rng(8)
+    first_x, first_y = rng.normal(size=(2, 4000)) * scale
+    second_x, second_y = -first_x, first_y.copy()  # exact ties ...
+    second_x[1000:2000] *= 1.0 + 1e-15 * rng.normal(size=1000)  # ... near ties ...
+    second_x[2000:] = rng.normal(size=2000) * scale  # ... and clear cases
+    radius = rng.uniform(0.0, 3.0, 4000) * scale
+    radius[:500] = np.hypot(first_x[:500], first_y[:500])  # the first point on the circle
+    expected = np.abs(np.hypot(second_x, second_y) - radius) < np.abs(
+        np.hypot(first_x, first_y) - radius
+    )
+    chosen = _second_misses_less(first_x, first_y, second_x, second_y, radius)
+    np.testing.assert_array_equal(chosen, expected)
+    assert expected[1000:].any() and not expected[1000:].all()
+
+
+def test_the_cross_product_of_the_calibration_frame_is_numpys() -> None:
+    from sonar_gym.localization.roh_trilateration import _cross3
+
+    rng = np.random.default_rng(9)
+    for a, b in rng.normal(size=(500, 2, 3)) * 10.0 ** rng.integers(-6, 6, (500, 1, 1)):
+        np.testing.assert_array_equal(_cross3(a, b), np.cross(a, b))
+
+
+def test_the_extractors_point_distance_is_distance_to_segment() -> None:
+    from sonar_gym.localization.roh_block_expansion import distance_to_segment
+
+    rng = np.random.default_rng(10)
+    for _ in range(50):
+        a, b = rng.uniform(-3, 3, (2, 2))
+        extractor = ThreePointExtractor(a, b, (0.45, 0.25, 0.05))
+        for point in rng.uniform(-4, 4, (40, 2)):
+            assert extractor._point_distance(point) == float(distance_to_segment(point, a, b))
+
+
+@pytest.mark.parametrize("n_outliers", [1, 3, 200])
+def test_true_path_distances_of_outliers_are_the_general_search(n_outliers: int) -> None:
+    from sonar_gym.localization.roh_path_errors import TruePath
+
+    rng = np.random.default_rng(n_outliers)
+    path = parabolic_path(x_end_m=1.3)
+    points = path[rng.integers(0, len(path), 400)] + rng.normal(0.0, 0.01, (400, 2))
+    points[rng.choice(400, n_outliers, replace=False)] += rng.normal(0.0, 1.0, (n_outliers, 2))
+    true_path = TruePath(path)
+    y_difference = points[:, 1] - true_path.y_at(points[:, 0])
+    np.testing.assert_array_equal(
+        true_path._distances(points, y_difference), distances_to_polyline(points, path)
+    )

@@ -220,3 +220,32 @@ def test_a_known_route_geometry_ranges_as_the_whole_route_call() -> None:
         np.testing.assert_array_equal(again.timestamps_s, whole.timestamps_s)
     assert geometry.emitter_names == ("T3", "T1")
     assert not geometry.heard.flags.writeable
+
+
+@pytest.mark.parametrize("noise", [True, False])
+def test_repeated_rounds_at_one_pose_match_a_route_that_repeats_the_pose(noise: bool) -> None:
+    room = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    ranger = BeaconRanger.wu_tsai(range_noise_std_m=0.01, max_range_m=2.9, noise=noise)
+    for pose in (Pose(1.6, 1.6, -2.0), Pose(0.5, 0.0, 0.6), Pose(1.5, 0.0, 0.0)):
+        repeated = ranger.measure_repeated(room, pose, 7, np.random.default_rng(5), ["T2", "T1"])
+        route = ranger.measure_route(
+            room,
+            np.repeat(pose.position[None, :], 7, axis=0),
+            np.random.default_rng(5),
+            ["T2", "T1"],
+            headings_rad=np.full(7, pose.theta),
+        )
+        for field in ("distances", "true_distances", "timestamps_s"):
+            np.testing.assert_array_equal(getattr(repeated, field), getattr(route, field))
+            assert getattr(repeated, field).shape == (7, 2, 2)
+        assert repeated.round_duration_s == route.round_duration_s
+        assert repeated.emitter_names == ("T2", "T1")
+    # the rounds differ by their jitter only when there is jitter
+    rounds = ranger.measure_repeated(room, Pose(0.5, 0.0, 0.6), 7, np.random.default_rng(5))
+    assert (np.ptp(rounds.distances, axis=0) > 0).any() == noise
+
+
+@pytest.mark.parametrize("n_rounds", [0, -2, 1.5, True])
+def test_bad_round_counts_raise_naming_the_argument(n_rounds) -> None:
+    with pytest.raises(ValueError, match="n_rounds"):
+        BeaconRanger(noise=False).measure_repeated(ceiling_room(), Pose(0.0, 0.0), n_rounds, None)
