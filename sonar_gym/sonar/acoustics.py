@@ -340,9 +340,11 @@ class PistonBeam:
         """:meth:`two_way_from_cos` for cosines known to be positive (in front of the transducer);
         elsewhere the result is meaningless."""
         scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
-        index = scaled.astype(np.intp)
-        cells = self._cells.take(index, axis=0)
-        return cells[:, 0] + (scaled - index) * cells[:, 1]
+        # scaled >= 0, so its floor is the truncated cell index; the fraction then comes from
+        # a float-float subtraction, not a slower mixed integer-float one (the same numbers).
+        whole = np.floor(scaled)
+        cells = self._cells.take(whole.astype(np.intp), axis=0)
+        return cells[:, 0] + (scaled - whole) * cells[:, 1]
 
     def two_way(self, theta_rad: npt.ArrayLike) -> FloatArray:
         """The pattern of this beam at off-axis angles in radians."""
@@ -364,11 +366,16 @@ class PistonBeam:
         clipped = levels if reachable else np.minimum(levels, 1.0)
         cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
         # (level - value) / slope: the fraction of the cell at which the falling pattern reaches
-        # the level (read with the pattern's own table: one table less in the cache).
+        # the level (read with the pattern's own table: one table less in the cache; the cell
+        # number as a float from a table, sparing a mixed integer-float addition).
         cells = self._cells.take(cell, axis=0)
-        s_limit = (cell + (clipped - cells[:, 0]) / cells[:, 1]) * (1.0 / _TABLE_STEPS_PER_UNIT)
+        s_limit = (_CELL_NUMBERS.take(cell) + (clipped - cells[:, 0]) / cells[:, 1]) * (
+            1.0 / _TABLE_STEPS_PER_UNIT
+        )
         limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
         return limits if reachable else np.where(levels > 1.0, 2.0, limits)
 
 
 _SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))
+_CELL_NUMBERS = np.arange(_TABLE_SIZE + 1, dtype=np.float64)
+_CELL_NUMBERS.flags.writeable = False

@@ -69,6 +69,8 @@ class EchoTables:
         has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
             T-junction test whatever its concavity).
         not_encloses: ``(S,)`` the complement of ``encloses``.
+        all_primitives: all-True ``(S + C,)``, the row vector whose boolean dot product with an
+            ``(S + C, K)`` array ORs its columns.
         rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
             slices of the product of ``position_and_occlusion_map`` with ``(px, py, 1)`` that
             hold each quantity.
@@ -99,6 +101,7 @@ class EchoTables:
     radius_sq_column: FloatArray
     has_t_junctions: bool
     not_encloses: np.ndarray
+    all_primitives: np.ndarray
     rel_rows: slice
     along_rows: slice
     distance_rows: slice
@@ -236,6 +239,7 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         radius_sq_column=(geometry.circles[:, 2] ** 2)[:, None],
         has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
         not_encloses=~encloses,
+        all_primitives=np.ones(n_segments + n_circles, dtype=bool),
         rel_rows=slice(0, n_rel),
         along_rows=slice(n_rel, n_rel + n_segments),
         distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),

@@ -214,7 +214,7 @@ def echo_candidates(
     n_specular = n_segments + tables.n_circles
     wedge_end = n_specular + tables.n_wedges
 
-    mapped = tables.position_and_occlusion_map @ np.array((px, py, 1.0))
+    mapped = np.dot(tables.position_and_occlusion_map, np.array((px, py, 1.0)))
     rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
     concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
@@ -330,7 +330,7 @@ def _unoccluded(
     n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
         return np.zeros(0, dtype=bool)
-    products = matrix @ rel.T  # (3 S + C, K)
+    products = np.dot(matrix, rel.T)  # (3 S + C, K)
     if n_segments and n_circles:
         return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
     return _unoccluded_kind_by_kind(tables, products, ranges, centre_distance, occluders)
@@ -409,5 +409,6 @@ def _unoccluded_by_both(
     gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
     np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
     half = n_segments + n_circles
-    blocked = np.logical_or.reduce(tests[:half] & tests[half:], axis=0)
+    # A boolean dot product is the OR of the ANDs: one call for the reduction over primitives.
+    blocked = np.dot(tables.all_primitives, tests[:half] & tests[half:])
     return ~blocked

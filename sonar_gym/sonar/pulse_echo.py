@@ -193,6 +193,31 @@ _LAST_CANDIDATES: dict[
     str, tuple[StaticGeometry, Transducer, tuple[float | str, ...], EchoCandidates]
 ] = {}
 """The last sensor position's echo candidates (see :meth:`PulseEchoSonar.candidates`)."""
+_LAST_AIR: list[tuple[Transducer, float, tuple[float, float, PistonBeam]]] = []
+"""The last transducer and air temperature asked of :func:`air_at` and its answer."""
+
+
+def air_at(transducer: Transducer, temperature_c: float) -> tuple[float, float, PistonBeam]:
+    """``(speed of sound m/s, wavenumber rad/m, two-way beam)`` of ``transducer`` in air at
+    ``temperature_c`` (deg C).
+
+    Remembered for the last transducer object and temperature: every ping of a pan, sweep or
+    sample asks again, and the answer depends on nothing else.
+    """
+    if _LAST_AIR:
+        last_transducer, last_temperature, answer = _LAST_AIR[0]
+        if last_transducer is transducer and last_temperature == temperature_c:
+            return answer
+    speed = speed_of_sound_mps(temperature_c)
+    answer = (
+        speed,
+        wavenumber_per_m(transducer.frequency_hz, speed),
+        PistonBeam.for_ka(
+            transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
+        ),
+    )
+    _LAST_AIR[:] = [(transducer, temperature_c, answer)]
+    return answer
 
 
 @dataclass(frozen=True)
@@ -274,12 +299,12 @@ class PulseEchoSonar:
     def _search_candidates(
         self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
     ) -> EchoCandidates:
-        speed = speed_of_sound_mps(world.temperature_c)
         transducer = self.transducer
+        _, wavenumber, _ = air_at(transducer, world.temperature_c)
         return echo_candidates(
             world.geometry,
             sensor_xy,
-            wavenumber=wavenumber_per_m(transducer.frequency_hz, speed),
+            wavenumber=wavenumber,
             absorption_db_per_m=transducer.absorption_db_per_m,
             min_range_m=transducer.min_range_m,
             detection_threshold=transducer.detection_threshold,
@@ -336,15 +361,10 @@ class PulseEchoSonar:
 
         The same numbers as :meth:`readings` of :meth:`first_echoes_at`, in one pass.
         """
-        true_speed = speed_of_sound_mps(world.temperature_c)
-        candidates = self.candidates(world, robot_pose, sensor_xy)
         transducer = self.transducer
-        beam = PistonBeam.for_ka(
-            transducer.wavenumber_ka(true_speed),
-            transducer.side_lobes,
-            transducer.side_lobe_leakage,
-        )
-        if beam.side_lobes or len(candidates) == 0:
+        true_speed, _, beam = air_at(transducer, world.temperature_c)
+        candidates = self.candidates(world, robot_pose, sensor_xy)
+        if beam.side_lobes or len(candidates.path_lengths) == 0:
             echoes = first_echoes(
                 candidates,
                 beam_directions,
@@ -392,11 +412,11 @@ def _main_lobe_readings(
     front: its cosine reaches a positive limit).
     """
     threshold = transducer.detection_threshold
-    n, n_candidates = len(beam_directions), len(candidates)
+    amplitudes, path_lengths = candidates.amplitudes, candidates.path_lengths
+    n, n_candidates = len(beam_directions), len(path_lengths)
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     in_frame = np.array(((c, s), (-s, c))) @ candidates.directions.T  # (2, candidates)
     cosines = beam_directions @ in_frame  # (pings, candidates)
-    amplitudes = candidates.amplitudes
     detected = cosines >= beam.main_lobe_cos_limits(
         threshold / amplitudes, reachable=candidates.threshold >= threshold
     )
@@ -405,7 +425,7 @@ def _main_lobe_readings(
     hit = detected.ravel().take(flat)
     first_amplitude = beam.two_way_in_front(cosines.ravel().take(flat)) * amplitudes.take(first)
     # measured_times and echo_readings, steps 1-5 of the module docstring:
-    tof = candidates.path_lengths.take(first) * (2.0 / true_speed_mps)
+    tof = path_lengths.take(first) * (2.0 / true_speed_mps)
     if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
         safe = np.where(hit, first_amplitude, threshold)
         tof = tof + (transducer.echo_rise_time_s * threshold) / safe
