@@ -284,11 +284,19 @@ class PistonBeam:
     side_lobe_leakage: float = 0.0
     _values: FloatArray = field(init=False, repr=False)
     _slopes: FloatArray = field(init=False, repr=False)
+    _main_lobe_cells: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         # (value, slope) of a cell side by side: a lookup reads one cache line, not two.
         object.__setattr__(self, "_values", self._cells[:, 0])
         object.__setattr__(self, "_slopes", self._cells[:, 1])
+        # Row i: (cell number, value, slope) of the cell that main_lobe_cos_limits finds for a
+        # level placed at i in the rising table (cell len - 1 - i), so that one lookup serves.
+        last = len(self._main_lobe_rising) - 1
+        numbers = np.arange(last, -2, -1, dtype=np.float64)
+        main_lobe_cells = np.column_stack([numbers, self._cells.take(numbers.astype(np.intp), 0)])
+        main_lobe_cells.flags.writeable = False
+        object.__setattr__(self, "_main_lobe_cells", main_lobe_cells)
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
@@ -364,12 +372,11 @@ class PistonBeam:
         """
         rising = self._main_lobe_rising
         clipped = levels if reachable else np.minimum(levels, 1.0)
-        cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
-        # (level - value) / slope: the fraction of the cell at which the falling pattern reaches
-        # the level (read with the pattern's own table: one table less in the cache; the cell
-        # number as a float from a table, sparing a mixed integer-float addition).
-        cells = self._cells.take(cell, axis=0)
-        s_limit = (_CELL_NUMBERS.take(cell) + (clipped - cells[:, 0]) / cells[:, 1]) * (
+        # The cell is (len(rising) - 1) - searchsorted; (level - value) / slope the fraction of
+        # it at which the falling pattern reaches the level. One lookup gives the cell's number
+        # (as a float: no mixed integer-float arithmetic), value and slope.
+        cells = self._main_lobe_cells.take(rising.searchsorted(clipped, side="left"), axis=0)
+        s_limit = (cells[:, 0] + (clipped - cells[:, 1]) / cells[:, 2]) * (
             1.0 / _TABLE_STEPS_PER_UNIT
         )
         limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
@@ -377,5 +384,3 @@ class PistonBeam:
 
 
 _SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))
-_CELL_NUMBERS = np.arange(_TABLE_SIZE + 1, dtype=np.float64)
-_CELL_NUMBERS.flags.writeable = False

@@ -147,6 +147,15 @@ def _ping_rows(n: int) -> np.ndarray:
     return rows
 
 
+@functools.lru_cache(maxsize=256)
+def _ping_offsets(n: int, n_candidates: int) -> np.ndarray:
+    """``arange(n) * n_candidates``: where each ping's row starts in a flattened
+    ``(n, n_candidates)`` array, read-only (cached: pans repeat their ping counts)."""
+    offsets = _ping_rows(n) * n_candidates
+    offsets.flags.writeable = False
+    return offsets
+
+
 def measured_times(
     echoes: FirstEchoes,
     transducer: Transducer,
@@ -421,7 +430,7 @@ def _main_lobe_readings(
         threshold / amplitudes, reachable=candidates.threshold >= threshold
     )
     first = detected.argmax(axis=1)  # candidates are sorted nearest first
-    flat = _ping_rows(n) * n_candidates + first  # index of (ping, first) in the flat arrays
+    flat = _ping_offsets(n, n_candidates) + first  # index of (ping, first) in the flat arrays
     hit = detected.ravel().take(flat)
     first_amplitude = beam.two_way_in_front(cosines.ravel().take(flat)) * amplitudes.take(first)
     # measured_times and echo_readings, steps 1-5 of the module docstring:
