@@ -16,7 +16,7 @@ a rebuilt geometry gets new tables).
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -74,6 +74,17 @@ class EchoTables:
         rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
             slices of the product of ``position_and_occlusion_map`` with ``(px, py, 1)`` that
             hold each quantity.
+        search_map: ``position_and_occlusion_map`` followed by ``3 (S+C+V)`` rows: per
+            candidate, the foot position along its segment, its negative, and the signed
+            distance of ``p`` from the segment's line times minus the solid side (for other
+            candidates, rows of zeros). With ``n_search_rows`` its row count, the echo search
+            writes the product with ``(px, py, 1)`` and then the ranges and amplitudes of the
+            candidates into one array of ``n_search_rows + 2 (S+C+V)`` numbers, whose last
+            ``5 (S+C+V)`` hold every per-candidate test as a comparison with a bound: the first
+            ``2 (S+C+V)`` strictly (``>``, :attr:`strict_bounds`), the rest inclusively (``>=``,
+            :meth:`inclusive_bounds`).
+        strict_bounds: ``(2 (S+C+V),)`` 0 and -1 for segments (foot strictly inside the
+            segment: ``along > 0`` and ``-along > -1``), -1 for the other candidates.
     """
 
     position_map: FloatArray
@@ -108,6 +119,28 @@ class EchoTables:
     wedge_a_rows: slice
     wedge_b_rows: slice
     occlusion_rows: slice
+    search_map: FloatArray
+    n_search_rows: int
+    strict_bounds: FloatArray
+    _inclusive_bounds: dict[tuple[float, float], FloatArray] = field(
+        default_factory=dict, repr=False
+    )
+
+    def inclusive_bounds(self, min_range_m: float, detection_threshold: float) -> FloatArray:
+        """``(3 (S+C+V),)`` the bounds of the inclusive tests (``>=``) of the echo search: 0 for
+        the facing test (a segment not seen from its solid side; 0 for other candidates), then
+        ``min_range_m`` for the ranges and ``detection_threshold`` for the amplitudes
+        (remembered per pair: a sonar asks with the same two at every position)."""
+        key = (min_range_m, detection_threshold)
+        bounds = self._inclusive_bounds.get(key)
+        if bounds is None:
+            n = self.n_segments + self.n_circles + self.n_vertices
+            bounds = np.concatenate(
+                [np.zeros(n), np.full(n, min_range_m), np.full(n, detection_threshold)]
+            )
+            bounds.flags.writeable = False
+            self._inclusive_bounds[key] = bounds
+        return bounds
 
 
 _CACHE: weakref.WeakKeyDictionary[StaticGeometry, EchoTables] = weakref.WeakKeyDictionary()
@@ -205,10 +238,22 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         [np.full(n_segments + n_circles, path_centre), np.full(n_segments, 0.5)]
     )[:, None]
     n_position_rows = len(position_map)
+    position_and_occlusion_map = np.concatenate([position_map, occlusion.reshape(-1, 3)])
+    # The per-candidate test rows of the search map (zeros but for segments; see EchoTables).
+    along_all = np.zeros((n_candidates, 3))
+    along_all[:n_segments] = along
+    facing_all = np.zeros((n_candidates, 3))
+    facing_all[:n_segments] = -solid_side[:, None] * distance
+    search_map = np.concatenate([position_and_occlusion_map, along_all, -along_all, facing_all])
+    strict_bounds = np.concatenate(
+        [np.zeros(n_segments), np.full(2 * n_candidates - n_segments, -1.0)]
+    )
+    for array in (search_map, strict_bounds):
+        array.flags.writeable = False
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
-        position_and_occlusion_map=np.concatenate([position_map, occlusion.reshape(-1, 3)]),
+        position_and_occlusion_map=position_and_occlusion_map,
         n_position_rows=len(position_map),
         n_segments=n_segments,
         n_circles=n_circles,
@@ -245,7 +290,10 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),
         wedge_a_rows=slice(n_rel + 2 * n_segments, n_rel + 2 * n_segments + n_wedges),
         wedge_b_rows=slice(n_rel + 2 * n_segments + n_wedges, n_position_rows),
-        occlusion_rows=slice(n_position_rows, None),
+        occlusion_rows=slice(n_position_rows, len(position_and_occlusion_map)),
+        search_map=search_map,
+        n_search_rows=len(search_map),
+        strict_bounds=strict_bounds,
     )
 
 

@@ -214,7 +214,12 @@ def echo_candidates(
     n_specular = n_segments + tables.n_circles
     wedge_end = n_specular + tables.n_wedges
 
-    mapped = np.dot(tables.position_and_occlusion_map, np.array((px, py, 1.0)))
+    n_candidates = n_specular + tables.n_vertices
+    # One array for the map's product, then the ranges, then the amplitudes: its last
+    # 5 n_candidates numbers are then every per-candidate test, two comparisons in all.
+    n_rows = tables.n_search_rows
+    search = np.empty(n_rows + 2 * n_candidates)
+    mapped = np.dot(tables.search_map, np.array((px, py, 1.0)), out=search[:n_rows])
     rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
     concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
@@ -223,7 +228,7 @@ def echo_candidates(
     # slices: on arrays this small, numpy's in-place operators cost more than the operation.)
     distance = np.hypot(rel[:, 0], rel[:, 1])
     centre_distance = distance[n_segments:n_specular]
-    ranges = distance - tables.radius_padded
+    ranges = np.subtract(distance, tables.radius_padded, out=search[n_rows : n_rows + n_candidates])
     rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
         :, None
     ]
@@ -235,39 +240,54 @@ def echo_candidates(
         edges = EDGE_ECHO_STRENGTH_M / (vertex_ranges * vertex_ranges)
     else:
         edges = edge_echo_amplitude(vertex_ranges, wavenumber, edge_law)
-    amplitudes = np.concatenate(
-        (
-            inverse_square_law[:n_segments],
-            inverse_square_law[n_segments:n_specular]
-            * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
-            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
-            edges[tables.n_wedges :],
-        )
+    echo_laws = (
+        inverse_square_law[:n_segments],
+        inverse_square_law[n_segments:n_specular]
+        * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
+        np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
+        edges[tables.n_wedges :],
     )
-    if absorption_db_per_m > 0.0:
-        # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-        amplitudes = amplitudes * np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
-    if receiver_gain is not None:
-        amplitudes = amplitudes * receiver_gain.gain(safe)
+    amplitudes = search[n_rows + n_candidates :]
+    absorbs = absorption_db_per_m > 0.0
+    if not absorbs and receiver_gain is None:
+        np.concatenate(echo_laws, out=amplitudes)
+    else:
+        on_axis = np.concatenate(echo_laws)
+        if absorbs:
+            # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
+            absorption = np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
+            if receiver_gain is None:
+                np.multiply(on_axis, absorption, out=amplitudes)
+            else:
+                on_axis = on_axis * absorption
+        if receiver_gain is not None:
+            np.multiply(on_axis, receiver_gain.gain(safe), out=amplitudes)
 
-    facing = tables.solid_side * mapped[tables.distance_rows] <= 0.0  # not on the solid side
-    along = mapped[tables.along_rows]
-    segment_tests = (along > 0.0) & (along < 1.0) & facing
+    # The tests, as rows of `search` against bounds: strictly, the foot inside the segment
+    # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
+    # minimum range and the threshold. A candidate is valid if it passes all five.
+    tests = np.empty(5 * n_candidates, dtype=bool)
+    first_test = n_rows - 3 * n_candidates
+    np.greater(
+        search[first_test : n_rows - n_candidates],
+        tables.strict_bounds,
+        out=tests[: 2 * n_candidates],
+    )
+    np.greater_equal(
+        search[n_rows - n_candidates :],
+        tables.inclusive_bounds(max(min_range_m, 1e-9), detection_threshold),
+        out=tests[2 * n_candidates :],
+    )
+    facing = tests[2 * n_candidates : 2 * n_candidates + n_segments]
+    valid = np.logical_and.reduce(tests.reshape(5, n_candidates), axis=0)
     if tables.has_t_junctions:
         # A T-junction yields one echo: from its concave side if it has one, else from its
-        # first vertex (where the twins differ, the concave one passes).
+        # first vertex (where the twins differ, the concave one passes). Other vertices, and
+        # every vertex of a geometry without T-junctions, pass.
         twin_concave = concave.take(tables.twin)
-        kind_tests = np.concatenate(
-            (
-                segment_tests,
-                tables.circles_pass,
-                np.where(twin_concave == concave, tables.twin_comes_last, concave),
-                tables.edges_pass,
-            )
+        valid[n_specular:wedge_end] &= np.where(
+            twin_concave == concave, tables.twin_comes_last, concave
         )
-    else:  # every vertex is its own twin: all circles and vertices pass
-        kind_tests = np.concatenate((segment_tests, tables.others_pass))
-    valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold) & kind_tests
 
     keep = valid.nonzero()[0]
     if footprint_center is not None and footprint_radius_m > 0.0:
