@@ -215,11 +215,10 @@ def echo_candidates(
     wedge_end = n_specular + tables.n_wedges
 
     n_candidates = n_specular + tables.n_vertices
-    # One array for the map's product, then the ranges, then the amplitudes: its last
-    # 5 n_candidates numbers are then every per-candidate test, two comparisons in all.
-    n_rows = tables.n_search_rows
-    search = np.empty(n_rows + 2 * n_candidates)
-    mapped = np.dot(tables.search_map, np.array((px, py, 1.0)), out=search[:n_rows])
+    # The map's product holds every quantity affine in the position, and gets the ranges and
+    # amplitudes written into its rows for them: from first_test_row on it is then every
+    # per-candidate test, two comparisons in all.
+    mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
     rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
     concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
@@ -228,7 +227,7 @@ def echo_candidates(
     # slices: on arrays this small, numpy's in-place operators cost more than the operation.)
     distance = np.hypot(rel[:, 0], rel[:, 1])
     centre_distance = distance[n_segments:n_specular]
-    ranges = np.subtract(distance, tables.radius_padded, out=search[n_rows : n_rows + n_candidates])
+    ranges = np.subtract(distance, tables.radius_padded, out=mapped[tables.ranges_rows])
     rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
         :, None
     ]
@@ -247,7 +246,7 @@ def echo_candidates(
         np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
         edges[tables.n_wedges :],
     )
-    amplitudes = search[n_rows + n_candidates :]
+    amplitudes = mapped[tables.amplitudes_rows]
     absorbs = absorption_db_per_m > 0.0
     if not absorbs and receiver_gain is None:
         np.concatenate(echo_laws, out=amplitudes)
@@ -263,23 +262,23 @@ def echo_candidates(
         if receiver_gain is not None:
             np.multiply(on_axis, receiver_gain.gain(safe), out=amplitudes)
 
-    # The tests, as rows of `search` against bounds: strictly, the foot inside the segment
+    # The tests, as rows of `mapped` against bounds: strictly, the foot inside the segment
     # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
-    # minimum range and the threshold. A candidate is valid if it passes all five.
-    tests = np.empty(5 * n_candidates, dtype=bool)
-    first_test = n_rows - 3 * n_candidates
+    # minimum range and the threshold (a candidate is valid if it passes all five), then
+    # which segments and circles may occlude.
+    first_test, tests_end = tables.first_test_row, 5 * n_candidates
+    tests = np.empty(tests_end + n_specular, dtype=bool)
     np.greater(
-        search[first_test : n_rows - n_candidates],
+        mapped[first_test : first_test + 2 * n_candidates],
         tables.strict_bounds,
         out=tests[: 2 * n_candidates],
     )
     np.greater_equal(
-        search[n_rows - n_candidates :],
+        mapped[first_test + 2 * n_candidates :],
         tables.inclusive_bounds(max(min_range_m, 1e-9), detection_threshold),
         out=tests[2 * n_candidates :],
     )
-    facing = tests[2 * n_candidates : 2 * n_candidates + n_segments]
-    valid = np.logical_and.reduce(tests.reshape(5, n_candidates), axis=0)
+    valid = np.logical_and.reduce(tests[:tests_end].reshape(5, n_candidates), axis=0)
     if tables.has_t_junctions:
         # A T-junction yields one echo: from its concave side if it has one, else from its
         # first vertex (where the twins differ, the concave one passes). Other vertices, and
@@ -304,7 +303,7 @@ def echo_candidates(
             rel.take(keep, axis=0),
             ranges.take(keep),
             centre_distance,
-            facing & tables.not_encloses,
+            tests[tests_end:],
         )
     ]
     keep = keep[ranges.take(keep).argsort(kind="stable")]
@@ -345,7 +344,7 @@ def _unoccluded(
         rel: ``(K, 3)`` rows ``(rel_x, rel_y, 1)``.
         ranges: ``(K,)`` path lengths ``|rel|``.
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
-        occluders: ``(S,)`` which segments may occlude.
+        occluders: ``(S + C,)`` which segments may occlude, then True for every circle.
     """
     n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
@@ -353,7 +352,9 @@ def _unoccluded(
     products = np.dot(matrix, rel.T)  # (3 S + C, K)
     if n_segments and n_circles:
         return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
-    return _unoccluded_kind_by_kind(tables, products, ranges, centre_distance, occluders)
+    return _unoccluded_kind_by_kind(
+        tables, products, ranges, centre_distance, occluders[:n_segments]
+    )
 
 
 def _unoccluded_kind_by_kind(
@@ -404,14 +405,16 @@ def _unoccluded_by_both(
     The ratios ``u``, ``u*`` and ``v`` share one interval test, and each blocking pair of
     conditions (``u`` and ``v`` for a segment, ``u*`` and the gap for a circle) sits in the
     top and bottom halves of one boolean array, so one ``&`` and one reduction cover both.
+    A segment that may not occlude is left out of the reduction (``occluders``, ``(S + C,)``:
+    the segments that may occlude, then True for every circle) rather than given a zero
+    denominator.
     """
     n_segments, n_circles = tables.n_segments, tables.n_circles
     n_paths = len(ranges)
     ratios = np.empty((2 * n_segments + n_circles, n_paths))  # u, then u*, then v
     tests = np.empty((2 * (n_segments + n_circles), n_paths), dtype=bool)
     dots = products[3 * n_segments :]
-    # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
-    crossing_denominator = products[:n_segments] * occluders[:, None]
+    crossing_denominator = products[:n_segments]
     with np.errstate(divide="ignore", invalid="ignore"):
         np.divide(
             products[n_segments : 2 * n_segments], crossing_denominator, out=ratios[:n_segments]
@@ -430,5 +433,5 @@ def _unoccluded_by_both(
     np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
     half = n_segments + n_circles
     # A boolean dot product is the OR of the ANDs: one call for the reduction over primitives.
-    blocked = np.dot(tables.all_primitives, tests[:half] & tests[half:])
+    blocked = np.dot(occluders, tests[:half] & tests[half:])
     return ~blocked
