@@ -284,11 +284,19 @@ class PistonBeam:
     side_lobe_leakage: float = 0.0
     _values: FloatArray = field(init=False, repr=False)
     _slopes: FloatArray = field(init=False, repr=False)
+    _main_lobe_cells: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         # (value, slope) of a cell side by side: a lookup reads one cache line, not two.
         object.__setattr__(self, "_values", self._cells[:, 0])
         object.__setattr__(self, "_slopes", self._cells[:, 1])
+        # Row i: (cell number, value, slope) of the cell that main_lobe_cos_limits finds for a
+        # level placed at i in the rising table (cell len - 1 - i), so that one lookup serves.
+        last = len(self._main_lobe_rising) - 1
+        numbers = np.arange(last, -2, -1, dtype=np.float64)
+        main_lobe_cells = np.column_stack([numbers, self._cells.take(numbers.astype(np.intp), 0)])
+        main_lobe_cells.flags.writeable = False
+        object.__setattr__(self, "_main_lobe_cells", main_lobe_cells)
 
     @staticmethod
     @functools.lru_cache(maxsize=8)
@@ -340,9 +348,11 @@ class PistonBeam:
         """:meth:`two_way_from_cos` for cosines known to be positive (in front of the transducer);
         elsewhere the result is meaningless."""
         scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
-        index = scaled.astype(np.intp)
-        cells = self._cells.take(index, axis=0)
-        return cells[:, 0] + (scaled - index) * cells[:, 1]
+        # scaled >= 0, so its floor is the truncated cell index; the fraction then comes from
+        # a float-float subtraction, not a slower mixed integer-float one (the same numbers).
+        whole = np.floor(scaled)
+        cells = self._cells.take(whole.astype(np.intp), axis=0)
+        return cells[:, 0] + (scaled - whole) * cells[:, 1]
 
     def two_way(self, theta_rad: npt.ArrayLike) -> FloatArray:
         """The pattern of this beam at off-axis angles in radians."""
@@ -362,11 +372,13 @@ class PistonBeam:
         """
         rising = self._main_lobe_rising
         clipped = levels if reachable else np.minimum(levels, 1.0)
-        cell = (len(rising) - 1) - rising.searchsorted(clipped, side="left")
-        # (level - value) / slope: the fraction of the cell at which the falling pattern reaches
-        # the level (read with the pattern's own table: one table less in the cache).
-        cells = self._cells.take(cell, axis=0)
-        s_limit = (cell + (clipped - cells[:, 0]) / cells[:, 1]) * (1.0 / _TABLE_STEPS_PER_UNIT)
+        # The cell is (len(rising) - 1) - searchsorted; (level - value) / slope the fraction of
+        # it at which the falling pattern reaches the level. One lookup gives the cell's number
+        # (as a float: no mixed integer-float arithmetic), value and slope.
+        cells = self._main_lobe_cells.take(rising.searchsorted(clipped, side="left"), axis=0)
+        s_limit = (cells[:, 0] + (clipped - cells[:, 1]) / cells[:, 2]) * (
+            1.0 / _TABLE_STEPS_PER_UNIT
+        )
         limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
         return limits if reachable else np.where(levels > 1.0, 2.0, limits)
 

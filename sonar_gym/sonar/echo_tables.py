@@ -16,7 +16,7 @@ a rebuilt geometry gets new tables).
 from __future__ import annotations
 
 import weakref
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -52,8 +52,6 @@ class EchoTables:
         n_segments, n_circles, n_vertices, n_wedges: the counts ``S, C, V, W``.
         radius, radius_sq: ``(C,)`` cylinder radii and their squares.
         radius_padded: ``(S+C+V,)`` the radius of every candidate (0 but for cylinders).
-        circles_pass, edges_pass: all-True ``(C,)`` and ``(V - W,)``: the candidates that no
-            per-kind test (along the segment, facing, T-junction) can drop.
         solid_side: ``(S,)`` +1 when the solid lies left of the segment, -1 right, 0 for open
             chains (see :func:`convex_loops`).
         encloses: ``(S,)`` whether the segment belongs to an enclosure (the room).
@@ -61,17 +59,31 @@ class EchoTables:
             itself; ``twin_comes_first``: whether that twin has the lower index, and
             ``twin_comes_last`` its complement.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
-        others_pass: all-True ``(C + V,)``.
         ratio_centres, ratio_half_widths: ``(2 S + C, 1)`` the middle and half width of the
             interval each occlusion ratio must fall in to block (``u`` of every segment, ``u*``
             of every circle: ``[0, 1 - tol]``; ``v`` of every segment: ``[0, 1]``).
         radius_sq_column: ``(C, 1)`` the squared radii.
         has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
             T-junction test whatever its concavity).
-        not_encloses: ``(S,)`` the complement of ``encloses``.
         rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
             slices of the product of ``position_and_occlusion_map`` with ``(px, py, 1)`` that
             hold each quantity.
+        search_map: ``position_and_occlusion_map`` followed by the rows of the per-candidate
+            tests of the echo search, ``N = S+C+V`` each: the foot position along the
+            candidate's segment, its negative, the signed distance of ``p`` from the segment's
+            line times minus the solid side (zeros for other candidates), then two blocks of
+            zeros where the search writes the candidates' ranges and amplitudes, then ``S + C``
+            occluder rows (a segment that is not part of an enclosure occludes when seen from
+            its open side: its facing row; enclosure segments and circles: zeros). Its product
+            with ``(px, py, 1)`` from row ``first_test_row`` on is compared with bounds: the
+            first ``2 N`` strictly (``>``, :attr:`strict_bounds`), the rest inclusively
+            (``>=``, :meth:`inclusive_bounds`).
+        first_test_row, ranges_rows, amplitudes_rows: where the tests start and where the
+            search writes the ranges and amplitudes.
+        strict_bounds: ``(2 N,)`` 0 and -1 for segments (foot strictly inside the segment:
+            ``along > 0`` and ``-along > -1``), -1 for the other candidates.
+        occluder_bounds: ``(S + C,)`` 0 for segments that may occlude, 1 for enclosure
+            segments (never), -1 for circles (always).
     """
 
     position_map: FloatArray
@@ -85,26 +97,52 @@ class EchoTables:
     radius: FloatArray
     radius_sq: FloatArray
     radius_padded: FloatArray
-    circles_pass: np.ndarray
-    edges_pass: np.ndarray
     solid_side: FloatArray
     encloses: np.ndarray
     twin: np.ndarray
     twin_comes_first: np.ndarray
     twin_comes_last: np.ndarray
     kinds_template: np.ndarray
-    others_pass: np.ndarray
     ratio_centres: FloatArray
     ratio_half_widths: FloatArray
     radius_sq_column: FloatArray
     has_t_junctions: bool
-    not_encloses: np.ndarray
     rel_rows: slice
     along_rows: slice
     distance_rows: slice
     wedge_a_rows: slice
     wedge_b_rows: slice
     occlusion_rows: slice
+    search_map: FloatArray
+    first_test_row: int
+    ranges_rows: slice
+    amplitudes_rows: slice
+    strict_bounds: FloatArray
+    occluder_bounds: FloatArray
+    _inclusive_bounds: dict[tuple[float, float], FloatArray] = field(
+        default_factory=dict, repr=False
+    )
+
+    def inclusive_bounds(self, min_range_m: float, detection_threshold: float) -> FloatArray:
+        """``(3 N + S + C,)`` the bounds of the inclusive tests (``>=``) of the echo search: 0
+        for the facing test (a segment not seen from its solid side; 0 for other candidates),
+        ``min_range_m`` for the ranges, ``detection_threshold`` for the amplitudes, then the
+        occluder bounds (remembered per pair: a sonar asks with the same two everywhere)."""
+        key = (min_range_m, detection_threshold)
+        bounds = self._inclusive_bounds.get(key)
+        if bounds is None:
+            n = self.n_segments + self.n_circles + self.n_vertices
+            bounds = np.concatenate(
+                [
+                    np.zeros(n),
+                    np.full(n, min_range_m),
+                    np.full(n, detection_threshold),
+                    self.occluder_bounds,
+                ]
+            )
+            bounds.flags.writeable = False
+            self._inclusive_bounds[key] = bounds
+        return bounds
 
 
 _CACHE: weakref.WeakKeyDictionary[StaticGeometry, EchoTables] = weakref.WeakKeyDictionary()
@@ -202,10 +240,36 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         [np.full(n_segments + n_circles, path_centre), np.full(n_segments, 0.5)]
     )[:, None]
     n_position_rows = len(position_map)
+    position_and_occlusion_map = np.concatenate([position_map, occlusion.reshape(-1, 3)])
+    # The per-candidate test rows of the search map (zeros but for segments; see EchoTables).
+    along_all = np.zeros((n_candidates, 3))
+    along_all[:n_segments] = along
+    facing_all = np.zeros((n_candidates, 3))
+    facing_all[:n_segments] = -solid_side[:, None] * distance
+    occluder_rows = np.zeros((n_segments + n_circles, 3))
+    occluder_rows[:n_segments] = np.where(encloses[:, None], 0.0, facing_all[:n_segments])
+    search_map = np.concatenate(
+        [
+            position_and_occlusion_map,
+            along_all,
+            -along_all,
+            facing_all,
+            np.zeros((2 * n_candidates, 3)),  # the ranges and amplitudes go here
+            occluder_rows,
+        ]
+    )
+    first_test_row = len(position_and_occlusion_map)
+    ranges_start = first_test_row + 3 * n_candidates
+    strict_bounds = np.concatenate(
+        [np.zeros(n_segments), np.full(2 * n_candidates - n_segments, -1.0)]
+    )
+    occluder_bounds = np.concatenate([np.where(encloses, 1.0, 0.0), np.full(n_circles, -1.0)])
+    for array in (search_map, strict_bounds, occluder_bounds):
+        array.flags.writeable = False
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
-        position_and_occlusion_map=np.concatenate([position_map, occlusion.reshape(-1, 3)]),
+        position_and_occlusion_map=position_and_occlusion_map,
         n_position_rows=len(position_map),
         n_segments=n_segments,
         n_circles=n_circles,
@@ -216,8 +280,6 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         radius_padded=np.concatenate(
             [np.zeros(n_segments), geometry.circles[:, 2], np.zeros(n_vertices)]
         ),
-        circles_pass=np.ones(n_circles, dtype=bool),
-        edges_pass=np.ones(n_vertices - n_wedges, dtype=bool),
         solid_side=solid_side,
         encloses=encloses,
         twin=twin,
@@ -230,18 +292,22 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
                 np.full(n_vertices, edge, dtype=np.int8),
             ]
         ),
-        others_pass=np.ones(n_circles + n_vertices, dtype=bool),
         ratio_centres=ratio_centres,
         ratio_half_widths=ratio_centres.copy(),
         radius_sq_column=(geometry.circles[:, 2] ** 2)[:, None],
         has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
-        not_encloses=~encloses,
         rel_rows=slice(0, n_rel),
         along_rows=slice(n_rel, n_rel + n_segments),
         distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),
         wedge_a_rows=slice(n_rel + 2 * n_segments, n_rel + 2 * n_segments + n_wedges),
         wedge_b_rows=slice(n_rel + 2 * n_segments + n_wedges, n_position_rows),
-        occlusion_rows=slice(n_position_rows, None),
+        occlusion_rows=slice(n_position_rows, len(position_and_occlusion_map)),
+        search_map=search_map,
+        first_test_row=first_test_row,
+        ranges_rows=slice(ranges_start, ranges_start + n_candidates),
+        amplitudes_rows=slice(ranges_start + n_candidates, ranges_start + 2 * n_candidates),
+        strict_bounds=strict_bounds,
+        occluder_bounds=occluder_bounds,
     )
 
 

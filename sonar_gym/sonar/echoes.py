@@ -214,7 +214,11 @@ def echo_candidates(
     n_specular = n_segments + tables.n_circles
     wedge_end = n_specular + tables.n_wedges
 
-    mapped = tables.position_and_occlusion_map @ np.array((px, py, 1.0))
+    n_candidates = n_specular + tables.n_vertices
+    # The map's product holds every quantity affine in the position, and gets the ranges and
+    # amplitudes written into its rows for them: from first_test_row on it is then every
+    # per-candidate test, two comparisons in all.
+    mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
     rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
     concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
 
@@ -223,7 +227,7 @@ def echo_candidates(
     # slices: on arrays this small, numpy's in-place operators cost more than the operation.)
     distance = np.hypot(rel[:, 0], rel[:, 1])
     centre_distance = distance[n_segments:n_specular]
-    ranges = distance - tables.radius_padded
+    ranges = np.subtract(distance, tables.radius_padded, out=mapped[tables.ranges_rows])
     rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
         :, None
     ]
@@ -235,39 +239,54 @@ def echo_candidates(
         edges = EDGE_ECHO_STRENGTH_M / (vertex_ranges * vertex_ranges)
     else:
         edges = edge_echo_amplitude(vertex_ranges, wavenumber, edge_law)
-    amplitudes = np.concatenate(
-        (
-            inverse_square_law[:n_segments],
-            inverse_square_law[n_segments:n_specular]
-            * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
-            np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
-            edges[tables.n_wedges :],
-        )
+    echo_laws = (
+        inverse_square_law[:n_segments],
+        inverse_square_law[n_segments:n_specular]
+        * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
+        np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
+        edges[tables.n_wedges :],
     )
-    if absorption_db_per_m > 0.0:
-        # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-        amplitudes = amplitudes * np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
-    if receiver_gain is not None:
-        amplitudes = amplitudes * receiver_gain.gain(safe)
+    amplitudes = mapped[tables.amplitudes_rows]
+    absorbs = absorption_db_per_m > 0.0
+    if not absorbs and receiver_gain is None:
+        np.concatenate(echo_laws, out=amplitudes)
+    else:
+        on_axis = np.concatenate(echo_laws)
+        if absorbs:
+            # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
+            absorption = np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
+            if receiver_gain is None:
+                np.multiply(on_axis, absorption, out=amplitudes)
+            else:
+                on_axis = on_axis * absorption
+        if receiver_gain is not None:
+            np.multiply(on_axis, receiver_gain.gain(safe), out=amplitudes)
 
-    facing = tables.solid_side * mapped[tables.distance_rows] <= 0.0  # not on the solid side
-    along = mapped[tables.along_rows]
-    segment_tests = (along > 0.0) & (along < 1.0) & facing
+    # The tests, as rows of `mapped` against bounds: strictly, the foot inside the segment
+    # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
+    # minimum range and the threshold (a candidate is valid if it passes all five), then
+    # which segments and circles may occlude.
+    first_test, tests_end = tables.first_test_row, 5 * n_candidates
+    tests = np.empty(tests_end + n_specular, dtype=bool)
+    np.greater(
+        mapped[first_test : first_test + 2 * n_candidates],
+        tables.strict_bounds,
+        out=tests[: 2 * n_candidates],
+    )
+    np.greater_equal(
+        mapped[first_test + 2 * n_candidates :],
+        tables.inclusive_bounds(max(min_range_m, 1e-9), detection_threshold),
+        out=tests[2 * n_candidates :],
+    )
+    valid = np.logical_and.reduce(tests[:tests_end].reshape(5, n_candidates), axis=0)
     if tables.has_t_junctions:
         # A T-junction yields one echo: from its concave side if it has one, else from its
-        # first vertex (where the twins differ, the concave one passes).
+        # first vertex (where the twins differ, the concave one passes). Other vertices, and
+        # every vertex of a geometry without T-junctions, pass.
         twin_concave = concave.take(tables.twin)
-        kind_tests = np.concatenate(
-            (
-                segment_tests,
-                tables.circles_pass,
-                np.where(twin_concave == concave, tables.twin_comes_last, concave),
-                tables.edges_pass,
-            )
+        valid[n_specular:wedge_end] &= np.where(
+            twin_concave == concave, tables.twin_comes_last, concave
         )
-    else:  # every vertex is its own twin: all circles and vertices pass
-        kind_tests = np.concatenate((segment_tests, tables.others_pass))
-    valid = (ranges >= max(min_range_m, 1e-9)) & (amplitudes >= detection_threshold) & kind_tests
 
     keep = valid.nonzero()[0]
     if footprint_center is not None and footprint_radius_m > 0.0:
@@ -284,7 +303,7 @@ def echo_candidates(
             rel.take(keep, axis=0),
             ranges.take(keep),
             centre_distance,
-            facing & tables.not_encloses,
+            tests[tests_end:],
         )
     ]
     keep = keep[ranges.take(keep).argsort(kind="stable")]
@@ -325,15 +344,17 @@ def _unoccluded(
         rel: ``(K, 3)`` rows ``(rel_x, rel_y, 1)``.
         ranges: ``(K,)`` path lengths ``|rel|``.
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
-        occluders: ``(S,)`` which segments may occlude.
+        occluders: ``(S + C,)`` which segments may occlude, then True for every circle.
     """
     n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
         return np.zeros(0, dtype=bool)
-    products = matrix @ rel.T  # (3 S + C, K)
+    products = np.dot(matrix, rel.T)  # (3 S + C, K)
     if n_segments and n_circles:
         return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
-    return _unoccluded_kind_by_kind(tables, products, ranges, centre_distance, occluders)
+    return _unoccluded_kind_by_kind(
+        tables, products, ranges, centre_distance, occluders[:n_segments]
+    )
 
 
 def _unoccluded_kind_by_kind(
@@ -384,14 +405,16 @@ def _unoccluded_by_both(
     The ratios ``u``, ``u*`` and ``v`` share one interval test, and each blocking pair of
     conditions (``u`` and ``v`` for a segment, ``u*`` and the gap for a circle) sits in the
     top and bottom halves of one boolean array, so one ``&`` and one reduction cover both.
+    A segment that may not occlude is left out of the reduction (``occluders``, ``(S + C,)``:
+    the segments that may occlude, then True for every circle) rather than given a zero
+    denominator.
     """
     n_segments, n_circles = tables.n_segments, tables.n_circles
     n_paths = len(ranges)
     ratios = np.empty((2 * n_segments + n_circles, n_paths))  # u, then u*, then v
     tests = np.empty((2 * (n_segments + n_circles), n_paths), dtype=bool)
     dots = products[3 * n_segments :]
-    # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
-    crossing_denominator = products[:n_segments] * occluders[:, None]
+    crossing_denominator = products[:n_segments]
     with np.errstate(divide="ignore", invalid="ignore"):
         np.divide(
             products[n_segments : 2 * n_segments], crossing_denominator, out=ratios[:n_segments]
@@ -409,5 +432,6 @@ def _unoccluded_by_both(
     gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
     np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
     half = n_segments + n_circles
-    blocked = np.logical_or.reduce(tests[:half] & tests[half:], axis=0)
+    # A boolean dot product is the OR of the ANDs: one call for the reduction over primitives.
+    blocked = np.dot(occluders, tests[:half] & tests[half:])
     return ~blocked

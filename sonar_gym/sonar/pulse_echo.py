@@ -147,6 +147,15 @@ def _ping_rows(n: int) -> np.ndarray:
     return rows
 
 
+@functools.lru_cache(maxsize=256)
+def _ping_offsets(n: int, n_candidates: int) -> np.ndarray:
+    """``arange(n) * n_candidates``: where each ping's row starts in a flattened
+    ``(n, n_candidates)`` array, read-only (cached: pans repeat their ping counts)."""
+    offsets = _ping_rows(n) * n_candidates
+    offsets.flags.writeable = False
+    return offsets
+
+
 def measured_times(
     echoes: FirstEchoes,
     transducer: Transducer,
@@ -193,6 +202,31 @@ _LAST_CANDIDATES: dict[
     str, tuple[StaticGeometry, Transducer, tuple[float | str, ...], EchoCandidates]
 ] = {}
 """The last sensor position's echo candidates (see :meth:`PulseEchoSonar.candidates`)."""
+_LAST_AIR: list[tuple[Transducer, float, tuple[float, float, PistonBeam]]] = []
+"""The last transducer and air temperature asked of :func:`air_at` and its answer."""
+
+
+def air_at(transducer: Transducer, temperature_c: float) -> tuple[float, float, PistonBeam]:
+    """``(speed of sound m/s, wavenumber rad/m, two-way beam)`` of ``transducer`` in air at
+    ``temperature_c`` (deg C).
+
+    Remembered for the last transducer object and temperature: every ping of a pan, sweep or
+    sample asks again, and the answer depends on nothing else.
+    """
+    if _LAST_AIR:
+        last_transducer, last_temperature, answer = _LAST_AIR[0]
+        if last_transducer is transducer and last_temperature == temperature_c:
+            return answer
+    speed = speed_of_sound_mps(temperature_c)
+    answer = (
+        speed,
+        wavenumber_per_m(transducer.frequency_hz, speed),
+        PistonBeam.for_ka(
+            transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
+        ),
+    )
+    _LAST_AIR[:] = [(transducer, temperature_c, answer)]
+    return answer
 
 
 @dataclass(frozen=True)
@@ -274,12 +308,12 @@ class PulseEchoSonar:
     def _search_candidates(
         self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
     ) -> EchoCandidates:
-        speed = speed_of_sound_mps(world.temperature_c)
         transducer = self.transducer
+        _, wavenumber, _ = air_at(transducer, world.temperature_c)
         return echo_candidates(
             world.geometry,
             sensor_xy,
-            wavenumber=wavenumber_per_m(transducer.frequency_hz, speed),
+            wavenumber=wavenumber,
             absorption_db_per_m=transducer.absorption_db_per_m,
             min_range_m=transducer.min_range_m,
             detection_threshold=transducer.detection_threshold,
@@ -336,15 +370,10 @@ class PulseEchoSonar:
 
         The same numbers as :meth:`readings` of :meth:`first_echoes_at`, in one pass.
         """
-        true_speed = speed_of_sound_mps(world.temperature_c)
-        candidates = self.candidates(world, robot_pose, sensor_xy)
         transducer = self.transducer
-        beam = PistonBeam.for_ka(
-            transducer.wavenumber_ka(true_speed),
-            transducer.side_lobes,
-            transducer.side_lobe_leakage,
-        )
-        if beam.side_lobes or len(candidates) == 0:
+        true_speed, _, beam = air_at(transducer, world.temperature_c)
+        candidates = self.candidates(world, robot_pose, sensor_xy)
+        if beam.side_lobes or len(candidates.path_lengths) == 0:
             echoes = first_echoes(
                 candidates,
                 beam_directions,
@@ -392,20 +421,25 @@ def _main_lobe_readings(
     front: its cosine reaches a positive limit).
     """
     threshold = transducer.detection_threshold
-    n, n_candidates = len(beam_directions), len(candidates)
+    amplitudes, path_lengths = candidates.amplitudes, candidates.path_lengths
+    n, n_candidates = len(beam_directions), len(path_lengths)
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
-    in_frame = np.array(((c, s), (-s, c))) @ candidates.directions.T  # (2, candidates)
-    cosines = beam_directions @ in_frame  # (pings, candidates)
-    amplitudes = candidates.amplitudes
+    # np.dot: the products first_echoes takes with @, through one call layer less.
+    in_frame = np.dot(np.array(((c, s), (-s, c))), candidates.directions.T)  # (2, candidates)
+    cosines = np.dot(beam_directions, in_frame)  # (pings, candidates)
     detected = cosines >= beam.main_lobe_cos_limits(
         threshold / amplitudes, reachable=candidates.threshold >= threshold
     )
     first = detected.argmax(axis=1)  # candidates are sorted nearest first
-    flat = _ping_rows(n) * n_candidates + first  # index of (ping, first) in the flat arrays
+    flat = _ping_offsets(n, n_candidates) + first  # index of (ping, first) in the flat arrays
     hit = detected.ravel().take(flat)
-    first_amplitude = beam.two_way_in_front(cosines.ravel().take(flat)) * amplitudes.take(first)
+    # Ranges and amplitudes in the rows of one array, so that one np.where masks both.
+    readings = np.empty((2, n))
+    first_amplitude = np.multiply(
+        beam.two_way_in_front(cosines.ravel().take(flat)), amplitudes.take(first), out=readings[1]
+    )
     # measured_times and echo_readings, steps 1-5 of the module docstring:
-    tof = candidates.path_lengths.take(first) * (2.0 / true_speed_mps)
+    tof = path_lengths.take(first) * (2.0 / true_speed_mps)
     if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
         safe = np.where(hit, first_amplitude, threshold)
         tof = tof + (transducer.echo_rise_time_s * threshold) / safe
@@ -417,9 +451,15 @@ def _main_lobe_readings(
     if readout.quantisation and transducer.timer_period_s > 0.0:
         period = transducer.timer_period_s
         tof = np.floor(tof * (1.0 / period)) * period
-    ranges = tof * (assumed_speed_mps / 2.0)
+    ranges = np.multiply(tof, assumed_speed_mps / 2.0, out=readings[0])
     valid = hit & (ranges <= transducer.max_range_m)
-    return np.where(valid, ranges, np.nan), np.where(valid, first_amplitude, 0.0)
+    masked = np.where(valid, readings, _DROPOUT_READING)
+    return masked[0], masked[1]
+
+
+_DROPOUT_READING = np.array([[np.nan], [0.0]])
+"""The ``(range, amplitude)`` column of a dropout: NaN metres, amplitude 0."""
+_DROPOUT_READING.flags.writeable = False
 
 
 def concatenate_echoes(parts: list[FirstEchoes]) -> FirstEchoes:

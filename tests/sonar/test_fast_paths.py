@@ -152,7 +152,7 @@ def test_joint_occlusion_test_blocks_what_the_kind_by_kind_test_blocks(world_nam
             products,
             ranges,
             centre_distance,
-            occluders,
+            np.concatenate([occluders, np.ones(tables.n_circles, dtype=bool)]),
         )
         plain = echo_module._unoccluded_kind_by_kind(
             tables,
