@@ -6,10 +6,12 @@ sonars, the two random streams) and the tracker
 that runs the paper's Fig. 2 loop. :meth:`APCSRoute.drive_to` drives towards a target in
 straight commands, steering from the estimate every few commands; between two steering
 corrections the commands, the readings taken along them and the tracker's work are arrays:
-:func:`~sonar_gym.straight_drive.drive_straight_run` for the motion,
-:meth:`~sonar_gym.sonar.swept.SideSonars.sample_along` for the readings and
+:func:`~sonar_gym.straight_drive.drive_commands` for the motion,
+:meth:`~sonar_gym.sonar.swept.SideSonars.first_echoes_along` (of the sonars the leg runs) and
+:meth:`~sonar_gym.sonar.swept.SideSonars.read_echoes` for the readings and
 :meth:`~sonar_gym.localization.apcs_online.APCSTracker.run` for dead reckoning, ERPs, walls and
-corrections.
+corrections. When a correction cuts a run short, the kept readings' noise is replayed from
+their echoes, so the random streams stand where the shorter run would have left them.
 """
 
 from __future__ import annotations
