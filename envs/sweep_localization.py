@@ -464,7 +464,7 @@ class SweepLocalizationEnv(SonarEnv):
             "sensing_cost": -(config.sensing_cost_per_s * step_sensing_s),
         }
         done = episode.decisions >= len(stations)
-        info = self._info("ok" if done else _RUNNING)
+        info = self._info("ok" if done else _RUNNING, true_pose)
         info.update(fix_info)
         info.update(
             n_sweeps=n_sweeps, sector=SECTOR_NAMES[sector], step_sensing_time_s=step_sensing_s
@@ -491,7 +491,8 @@ class SweepLocalizationEnv(SonarEnv):
                 self._drive_to(
                     episode, min(episode.progress_m + config.sweep_spacing_m, next_station_m)
                 )
-            true_pose = episode.world.robot_pose
+            # the first sweep is taken where the robot stood at the decision
+            true_pose = first_truth if index == 0 else episode.world.robot_pose
             with self._timed("sensing"):
                 scan = self.sonar.sweep(
                     episode.world, true_pose, self.np_random, SECTOR_CENTRES_RAD[sector]
@@ -603,9 +604,11 @@ class SweepLocalizationEnv(SonarEnv):
         )
         return episode.route.point_at(station)
 
-    def _info(self, status: str) -> dict[str, Any]:
+    def _info(self, status: str, truth: Pose | None = None) -> dict[str, Any]:
+        """The info dict; ``truth`` is the robot's true pose if the caller has just read it."""
         episode = self._require_episode()
-        truth = episode.world.robot_pose
+        if truth is None:
+            truth = episode.world.robot_pose
         return {
             "position_error_m": position_error_m(episode.estimate, truth),
             "heading_error_rad": heading_error_rad(episode.estimate, truth),
@@ -613,7 +616,7 @@ class SweepLocalizationEnv(SonarEnv):
             "status": status,
             "true_pose": truth.as_array(),
             "estimated_pose": episode.estimate.as_array(),
-            "covariance_diagonal": np.diag(episode.covariance).copy(),
+            "covariance_diagonal": episode.covariance.diagonal().copy(),
             "distance_since_fix_m": episode.distance_since_fix_m,
         }
 

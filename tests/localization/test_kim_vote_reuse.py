@@ -83,4 +83,5 @@ def test_mean_from_the_counted_votes_is_the_mean_of_the_votes_cast_again(
     assert fast.status == slow.status == "ok"
     assert fast.pose == slow.pose
     assert fast.votes == slow.votes
+    assert fast.vote_map is not None and slow.vote_map is not None
     assert np.array_equal(fast.vote_map, slow.vote_map)
