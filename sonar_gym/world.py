@@ -279,7 +279,10 @@ class World:
     def robot_pose(self) -> Pose:
         """The true robot pose in {W}, from the pymunk body (metres, radians)."""
         x, y = self._robot_body.position
-        return Pose(float(x), float(y), float(self._robot_body.angle))
+        x, y, theta = float(x), float(y), float(self._robot_body.angle)
+        if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
+            return Pose.unchecked(x, y, theta)  # read many times a step: skip the checks
+        return Pose(x, y, theta)  # raises, naming the non-finite field
 
     def set_robot_pose(self, pose: Pose) -> None:
         """Teleport the robot to ``pose``; raises ``ValueError`` if the footprint is not free."""
