@@ -204,22 +204,21 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         base_names = [f.name for f in fields(BeaconScanConfig)]
         super().__init__(render_mode, **{name: getattr(config, name) for name in base_names})
         self.config = config
-        self.action_type = make_action_type(
-            "multi_discrete",
-            DiscreteChoices(
-                (
-                    len(ACTION_KINDS),
-                    config.n_sector_centres,
-                    len(config.sector_widths_deg),
-                    len(config.increments_deg),
-                    len(config.turn_angles_deg),
-                )
-            ),
+        self._use_action_type(
+            make_action_type(
+                "multi_discrete",
+                DiscreteChoices(
+                    (
+                        len(ACTION_KINDS),
+                        config.n_sector_centres,
+                        len(config.sector_widths_deg),
+                        len(config.increments_deg),
+                        len(config.turn_angles_deg),
+                    )
+                ),
+            )
         )
-        self.action_space = self.action_type.space
-        self.observation_spec = self.observation_spec.extended(FIX_FEATURES)
-        self.observation_layout = self.observation_spec.observation_layout()
-        self.observation_space = self.observation_spec.space
+        self._use_observation_spec(self.observation_spec.extended(FIX_FEATURES))
         self._fix = _FixState()
         self._motion_time_s = 0.0
         self._collided = False

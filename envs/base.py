@@ -129,6 +129,18 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
         self._record = EpisodeRecord()
         self._action_check: ActionCheck | None = None
 
+    def _use_action_type(self, action_type: ActionType) -> None:
+        """Present the task's choices as ``action_type`` (sets ``action_space`` from it)."""
+        self.action_type = action_type
+        self.action_space = action_type.space
+
+    def _use_observation_spec(self, spec: ObservationSpec) -> None:
+        """Build the observation from ``spec`` (sets ``observation_space`` and
+        ``observation_layout`` from it)."""
+        self.observation_spec = spec
+        self.observation_layout = spec.observation_layout()
+        self.observation_space = spec.space
+
     # --- the agent API -----------------------------------------------------------------
     @property
     def episode_count(self) -> int:

@@ -331,39 +331,40 @@ class BeaconScanEnv(SonarEnv):
         self._centres_deg = [
             k * 360 // config.n_sector_centres for k in range(config.n_sector_centres)
         ]
-        self.action_type = make_action_type(
-            config.action_type,
-            DiscreteChoices(
-                (
-                    len(ACTION_KINDS),
-                    config.n_sector_centres,
-                    len(config.sector_widths_deg),
-                    len(config.increments_deg),
+        self._use_action_type(
+            make_action_type(
+                config.action_type,
+                DiscreteChoices(
+                    (
+                        len(ACTION_KINDS),
+                        config.n_sector_centres,
+                        len(config.sector_widths_deg),
+                        len(config.increments_deg),
+                    ),
+                    parameterless_kinds=(CALIBRATE, LOCALIZE),
                 ),
-                parameterless_kinds=(CALIBRATE, LOCALIZE),
-            ),
+            )
         )
-        self.action_space = self.action_type.space
         n = config.n_range_bins
         self._range_bins = RangeBins("bin_ranges", n)
         self._scanned_bins = ScannedBins("bin_scanned", n)
-        self.observation_spec = ObservationSpec(
-            [
-                self._range_bins,
-                self._scanned_bins,
-                ScaledPosition("prior_xy"),
-                Heading("prior_heading"),
-                Feature("small_beacon", 3),
-                Feature("large_beacon", 3),
-                Fraction("sensing_time"),
-                Flag("calibrated"),
-                Fraction("steps"),
-                Flag("calibration_allowed"),
-                Fraction("coverage"),
-            ]
+        self._use_observation_spec(
+            ObservationSpec(
+                [
+                    self._range_bins,
+                    self._scanned_bins,
+                    ScaledPosition("prior_xy"),
+                    Heading("prior_heading"),
+                    Feature("small_beacon", 3),
+                    Feature("large_beacon", 3),
+                    Fraction("sensing_time"),
+                    Flag("calibrated"),
+                    Fraction("steps"),
+                    Flag("calibration_allowed"),
+                    Fraction("coverage"),
+                ]
+            )
         )
-        self.observation_layout = self.observation_spec.observation_layout()
-        self.observation_space = self.observation_spec.space
         # the progress features run from sensing_time to the end of the vector
         self._progress_start = self.observation_spec.layout["sensing_time"].start
         self._episode: _Episode | None = None

@@ -369,11 +369,8 @@ class BlockExpansionEnv(SonarEnv):
         self.sensor_height_m = self._base_scenario.robot.sensor_height
         self.ranger = make_ranger(config, self.sensor_height_m)
         per_step = 3 if config.decisions == "per_boundary" else 3 * config.n_boundaries
-        self.action_type = make_action_type("box", ContinuousRange.unit(per_step))
-        self.action_space = self.action_type.space  # type: ignore[assignment]
-        self.observation_spec = OBSERVATION
-        self.observation_layout = OBSERVATION.observation_layout()
-        self.observation_space = OBSERVATION.space
+        self._use_action_type(make_action_type("box", ContinuousRange.unit(per_step)))
+        self._use_observation_spec(OBSERVATION)
         self._episode: _Episode | None = None
 
     @property

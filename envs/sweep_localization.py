@@ -338,27 +338,28 @@ class SweepLocalizationEnv(SonarEnv):
             preset=self._scenario.sensor.preset_or(PAPER_SENSOR_PRESET),
             step_rad=math.radians(config.sweep_step_deg),
         )
-        self.action_type = make_action_type(
-            "multi_discrete", DiscreteChoices((config.max_sweeps + 1, len(SECTOR_NAMES)))
+        self._use_action_type(
+            make_action_type(
+                "multi_discrete", DiscreteChoices((config.max_sweeps + 1, len(SECTOR_NAMES)))
+            )
         )
-        self.action_space = self.action_type.space
         self._sweep_bins = RangeBins("last_sweep_ranges", config.n_range_bins)
-        self.observation_spec = ObservationSpec(
-            [
-                ScaledPosition("estimate_xy"),
-                Heading("estimate_heading"),
-                Fraction("estimate_std", 3),
-                Fraction("distance_since_fix"),
-                Fraction("route_progress"),
-                self._sweep_bins,
-                Heading("last_sweep_sector"),
-                Flag("last_fix_ok"),
-                Heading("route_heading"),
-                Fraction("steps_remaining"),
-            ]
+        self._use_observation_spec(
+            ObservationSpec(
+                [
+                    ScaledPosition("estimate_xy"),
+                    Heading("estimate_heading"),
+                    Fraction("estimate_std", 3),
+                    Fraction("distance_since_fix"),
+                    Fraction("route_progress"),
+                    self._sweep_bins,
+                    Heading("last_sweep_sector"),
+                    Flag("last_fix_ok"),
+                    Heading("route_heading"),
+                    Fraction("steps_remaining"),
+                ]
+            )
         )
-        self.observation_layout = self.observation_spec.observation_layout()
-        self.observation_space = self.observation_spec.space
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self._scenario, temperature_c=config.temperature_c)

@@ -353,11 +353,10 @@ class TrilaterationEnv(SonarEnv):
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self.scenario, temperature_c=config.temperature_c)
         self._check_route_fits()
-        self.action_type = make_action_type("discrete", DiscreteChoices((len(config.fix_counts),)))
-        self.action_space = self.action_type.space
-        self.observation_spec = OBSERVATION
-        self.observation_layout = OBSERVATION.observation_layout()
-        self.observation_space = OBSERVATION.space
+        self._use_action_type(
+            make_action_type("discrete", DiscreteChoices((len(config.fix_counts),)))
+        )
+        self._use_observation_spec(OBSERVATION)
         self._feature_scales = FeatureScales(
             centre_xy=self._centre,
             half_size_xy=self._half_size,

@@ -409,14 +409,15 @@ class WallCorrectionEnv(SonarEnv):
             self.sonars.transducer.max_range_m,
         )
 
-        self.action_type = make_action_type(
-            config.action_type,
-            DiscreteChoices((len(SIDES), len(config.sample_spacings_cm), len(config.standoffs_m))),
+        self._use_action_type(
+            make_action_type(
+                config.action_type,
+                DiscreteChoices(
+                    (len(SIDES), len(config.sample_spacings_cm), len(config.standoffs_m))
+                ),
+            )
         )
-        self.action_space = self.action_type.space
-        self.observation_spec = OBSERVATION
-        self.observation_layout = OBSERVATION.observation_layout()
-        self.observation_space = OBSERVATION.space
+        self._use_observation_spec(OBSERVATION)
         steps_per_leg = math.ceil(self.leg_length_m / config.motion_step_m) + 2
         instants_per_leg = steps_per_leg * config.motion_step_cm // min(config.sample_spacings_cm)
         self._max_samples_per_leg = 2 * instants_per_leg
