@@ -23,7 +23,6 @@ methods (``encode_action`` and the like), through :func:`unwrap_sonar_env`.
 from __future__ import annotations
 
 import math
-import time
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -31,6 +30,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
+
+from sonar_gym.phase_timer import PhaseTimer
 
 if TYPE_CHECKING:  # listing agents imports this module, and must load no task code
     from sonar_gym.envs.action_types import ActionType
@@ -258,10 +259,10 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
             raise RuntimeError(f"{type(self).__name__}: non-finite observation")
         return observation
 
-    def _timed(self, phase: str) -> _PhaseTimer:
+    def _timed(self, phase: str) -> PhaseTimer:
         """A context that adds the wall-clock time of its block to ``self.timing[phase]``
         (seconds)."""
-        return _PhaseTimer(self.timing, phase)
+        return PhaseTimer(self.timing, phase)
 
 
 def _sum_in_order(values: list[float]) -> float:
@@ -274,25 +275,6 @@ def _sum_in_order(values: list[float]) -> float:
         if value != 0.0:
             total += value
     return total
-
-
-class _PhaseTimer:
-    """The context behind :meth:`SonarEnv._timed` (a plain class: a generator-based context
-    costs several times more per block)."""
-
-    __slots__ = ("phase", "start", "timing")
-
-    def __init__(self, timing: dict[str, float], phase: str) -> None:
-        self.timing = timing
-        self.phase = phase
-        self.start = 0.0
-
-    def __enter__(self) -> None:
-        self.start = time.perf_counter()
-
-    def __exit__(self, *exc_info: object) -> None:
-        timing = self.timing
-        timing[self.phase] = timing.get(self.phase, 0.0) + time.perf_counter() - self.start
 
 
 class ActionCheck:

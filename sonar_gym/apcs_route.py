@@ -18,15 +18,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from sonar_gym.localization.apcs import DetectedWall, MatchResult
 from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
+from sonar_gym.phase_timer import PhaseTimer
 from sonar_gym.pose import FloatArray, Pose, angle_difference, wrap_angle
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Box, Scenario
@@ -196,13 +195,8 @@ class APCSRoute:
             (robot.odometry_pose or tracker.estimate).as_array()[None, :],
         )
 
-    @contextmanager
-    def _timed(self, phase: str) -> Iterator[None]:
-        start = time.perf_counter()
-        try:
-            yield
-        finally:
-            self.timing[phase] = self.timing.get(phase, 0.0) + time.perf_counter() - start
+    def _timed(self, phase: str) -> PhaseTimer:
+        return PhaseTimer(self.timing, phase)
 
     @property
     def true_pose(self) -> Pose:
