@@ -5,7 +5,12 @@ calibration against the reflector when the environment allows it (section II.A),
 
 ``sector``: pans only around where the beacons should be, as predicted from the odometry prior
 (the beacon bearings are in the observation), at 1 deg; then calibrates and localizes. The
-sector is wide enough for a beacon's RCD (about 24 deg) plus the prior's bearing uncertainty.
+sector is wide enough for a beacon's RCD (about 26 deg) plus the prior's bearing uncertainty on
+each side: 3 sigma of the heading prior (15 deg at the default 5 deg) and the bearing error of
+the position prior (0.1 m seen from 1-2 m: 3-6 deg), 20 deg in all, so the default sectors are
+90 deg wide. A 15 deg margin (60 deg sectors) saves 0.8 s of panning but misses a beacon
+more often: over 20,000 paired seeds from 3,010,000 (neither validation nor evaluation seeds)
+the 20 deg margin scores +0.06 [+0.01, +0.10] more reward per episode.
 """
 
 from __future__ import annotations
@@ -75,7 +80,7 @@ class SectorAgent(_ScriptedBeaconAgent):
     name = "sector"
     rcd_half_width_deg = 13.0
 
-    def __init__(self, env: gym.Env[Any, Any], margin_deg: float = 15.0) -> None:
+    def __init__(self, env: gym.Env[Any, Any], margin_deg: float = 20.0) -> None:
         super().__init__(env)
         self.margin_deg = margin_deg
 
