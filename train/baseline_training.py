@@ -109,9 +109,9 @@ _RANDOM_LAYOUT = {"layout": "random", "path": "random"}
 RECIPES: dict[str, BaselineRecipe] = {
     recipe.env_id: recipe
     for recipe in (
-        BaselineRecipe("SonarGym/BeaconScan-v0", ("paper", "sector"), 40_000,
-                       demo_episodes=3000, demo_variants=({}, {"scenario": "random"}),
-                       clone_epochs=150, hyperparameters=_FINE_TUNING),
+        BaselineRecipe("SonarGym/BeaconScan-v0", ("paper", "sector"), 20_000,
+                       demo_episodes=15_000, demo_variants=({}, {"scenario": "random"}),
+                       clone_epochs=100, validation_episodes=1000, hyperparameters=_FINE_TUNING),
         BaselineRecipe("SonarGym/ActiveBeaconScan-v0", ("paper", "retry"), 40_000,
                        demo_episodes=3000, clone_epochs=150, hyperparameters=_FINE_TUNING),
         BaselineRecipe("SonarGym/SweepLocalization-v0", ("paper", "covariance"), 20_000,

@@ -143,13 +143,15 @@ def test_calibration_after_the_pan_still_corrects_it() -> None:
 
 
 def test_sector_agent_senses_for_less_time_than_the_paper_agent() -> None:
+    # 100 seeds: over 15 one missed beacon moves the success count by a whole step
     env = gym.make(ENV_ID, temperature_c=20.0)
-    paper = [run_episode(env, "paper", s)[1] for s in range(15)]
-    sector = [run_episode(env, "sector", s)[1] for s in range(15)]
+    paper = [run_episode(env, "paper", s)[1] for s in range(100)]
+    sector = [run_episode(env, "sector", s)[1] for s in range(100)]
     assert np.mean([i["sensing_time_s"] for i in sector]) < 0.6 * np.mean(
         [i["sensing_time_s"] for i in paper]
     )
-    assert sum(i["status"] == "ok" for i in sector) >= 13
+    successes = [sum(i["status"] == "ok" for i in infos) for infos in (paper, sector)]
+    assert successes[1] >= successes[0] - 3, successes
 
 
 def test_truncation_counts_as_failure() -> None:
