@@ -79,7 +79,8 @@ def test_the_shipped_policy_scores_what_its_trainer_measured(env_id: str) -> Non
     assert float(np.mean(rewards)) == pytest.approx(recorded, abs=1e-6)
 
 
-# what README's table claims, on the evaluation seeds nobody trained or selected on
+# what README's table claims, on the evaluation seeds nobody trained or selected on; over
+# 200 seeds BeaconScan's interval is too wide to decide (see the next test)
 BEATS_THE_PAPER = tuple(env_id for env_id in ENV_IDS if env_id != "SonarGym/BeaconScan-v0")
 BEATS_THE_HEURISTIC = ("SonarGym/SweepLocalization-v0", "SonarGym/ActiveBeaconScan-v0")
 
@@ -119,3 +120,21 @@ def test_moving_learned_agent_localizes_from_95_percent_of_lab_poses() -> None:
     summary = summarize(result.records)
     assert summary.success_rate >= 0.95
     assert summary.position_error_p95_m is not None and summary.position_error_p95_m <= 0.03
+
+
+@pytest.mark.slow
+def test_beacon_scan_learned_agent_beats_the_paper_over_the_wide_evaluation() -> None:
+    from sonar_gym.train.baselines import beats, paired_difference
+    from sonar_gym.train.evaluation import evaluate_agents
+
+    results = {
+        result.agent: result.records
+        for result in evaluate_agents(
+            ["SonarGym/BeaconScan-v0"],
+            ["learned", "paper"],
+            episodes=pretrained.WIDE_EVALUATION_EPISODES,
+            seed=pretrained.EVALUATION_SEED_START,
+        )
+    }
+    versus_paper = paired_difference(results["learned"], results["paper"])
+    assert beats(versus_paper), versus_paper
