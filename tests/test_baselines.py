@@ -360,6 +360,19 @@ def test_learning_curve_band_is_the_student_t_interval_over_training_seeds(tmp_p
     np.testing.assert_allclose(means - lows, [half_width, half_width], rtol=1e-9)
 
 
+def test_the_reward_axis_frames_the_curves_and_levels_but_not_random():
+    curves = baselines_plots.LearningCurves(
+        BEACON_SCAN,
+        {0: [(0, -4.36), (4096, -4.31)], 1: [(0, -4.38)]},
+        {"paper": -4.51, "sector": -4.37, "random": -19.2},
+    )
+    low, high = baselines_plots.reward_axis_limits(curves)
+    # span 0.20 (-4.51 .. -4.31): padded by the 0.25 floor on each side, random left out
+    assert (low, high) == pytest.approx((-4.76, -4.06))
+    only_random = baselines_plots.LearningCurves(BEACON_SCAN, {}, {"random": -19.2})
+    assert baselines_plots.reward_axis_limits(only_random) is None
+
+
 def test_a_learning_curve_without_its_columns_is_refused(tmp_path):
     (tmp_path / pretrained.LEARNING_CURVE_FILE).write_text("timesteps,mean_reward\n0,1\n")
     with pytest.raises(ValueError, match="lacks the columns"):

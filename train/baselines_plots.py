@@ -163,6 +163,21 @@ def _mean(interval: ConfidenceInterval | None) -> float:
     return math.nan if interval is None else interval.mean
 
 
+def reward_axis_limits(curve: LearningCurves, margin: float = 0.25) -> tuple[float, float] | None:
+    """Reward-axis limits that show the curves and every scripted level but ``random``, padded
+    by ``margin`` of their span (at least 0.5 in all): the random level usually lies so far
+    below that on a shared axis the learned, paper and heuristic levels merge into one line.
+    None when there is nothing to frame."""
+    values = [reward for points in curve.by_seed.values() for _, reward in points]
+    values += [level for name, level in curve.levels.items() if name != "random"]
+    values = [value for value in values if math.isfinite(value)]
+    if not values:
+        return None
+    low, high = min(values), max(values)
+    pad = max(margin * (high - low), 0.25)
+    return low - pad, high + pad
+
+
 def plot_learning_curves(curves: Sequence[LearningCurves], path: Path) -> Path:
     """One panel per env: mean validation reward against training timesteps, every training
     seed thin, their mean thick with a 95 % Student-t band over seeds, and the scripted
@@ -188,8 +203,14 @@ def plot_learning_curves(curves: Sequence[LearningCurves], path: Path) -> Path:
                 axis.fill_between(
                     timesteps_common, lows, highs, color="black", alpha=0.15, label="95% CI"
                 )
+        limits = reward_axis_limits(curve)
         for colour, (name, level) in zip(LEVEL_COLOURS, curve.levels.items(), strict=False):
-            axis.axhline(level, color=colour, linestyle="--", linewidth=1.2, label=f"{name} level")
+            label = f"{name} level"
+            if limits is not None and not limits[0] <= level <= limits[1]:
+                label += f" ({level:.1f}, off the axis)"
+            axis.axhline(level, color=colour, linestyle="--", linewidth=1.2, label=label)
+        if limits is not None:
+            axis.set_ylim(*limits)
         axis.set_title(curve.env_id, loc="left")
         axis.set_xlabel("training timesteps")
         axis.set_ylabel("mean validation reward\n(deterministic policy)")
