@@ -88,6 +88,26 @@ def _sweep(
     return Sweep(angles, ranges, offset, odometry)
 
 
+def noisy_sweeps(
+    truth: Pose,
+    moves: list[Pose],
+    rng: np.random.Generator,
+    range_std_m: float = 0.01,
+    dropout_fraction: float = 0.0,
+) -> list[Sweep]:
+    """One sweep per odometry move from ``truth``, ranges with Gaussian noise of
+    ``range_std_m`` metres (folded at zero) and, with ``dropout_fraction``, that share of
+    readings lost (NaN)."""
+    sweeps = []
+    for move in moves:
+        exact = _sweep(truth, move)
+        noisy = np.abs(exact.ranges + rng.normal(0.0, range_std_m, exact.ranges.size))
+        if dropout_fraction:
+            noisy[rng.random(noisy.size) < dropout_fraction] = np.nan
+        sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
+    return sweeps
+
+
 @pytest.fixture(scope="module")
 def arena_grid() -> OccupancyGrid:
     return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, CELL)
@@ -635,11 +655,7 @@ def test_four_noisy_sweeps_still_localize_within_one_cell(arena_grid: OccupancyG
     truth = Pose(0.93, 0.71, 0.4)
     prior = Pose(truth.x + 0.05, truth.y - 0.04, truth.theta + math.radians(3.0))
     for _ in range(5):
-        sweeps = []
-        for move in MOVES:
-            exact = _sweep(truth, move)
-            noisy = np.abs(exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size))
-            sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
+        sweeps = noisy_sweeps(truth, MOVES, rng)
         for anchor in ("cell_center", "obstacle_point"):
             result = vote_localize(arena_grid, sweeps, search_center=prior, anchor=anchor)
             assert result.status == "ok"

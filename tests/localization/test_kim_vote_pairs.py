@@ -8,9 +8,16 @@ import numpy as np
 import pytest
 
 from sonar_gym.localization import kim
-from sonar_gym.localization.kim import OccupancyGrid, Sweep, vote_localize
+from sonar_gym.localization.kim import OccupancyGrid, vote_localize
 from sonar_gym.pose import Pose
-from tests.localization.test_kim import ARENA_BOUNDS, ARENA_CIRCLES, ARENA_SEGMENTS, MOVES, _sweep
+from tests.localization.test_kim import (
+    ARENA_BOUNDS,
+    ARENA_CIRCLES,
+    ARENA_SEGMENTS,
+    MOVES,
+    _sweep,
+    noisy_sweeps,
+)
 
 
 _PRE_SELECTED_PAIRS = kim._candidate_pairs
@@ -32,13 +39,8 @@ def grid() -> OccupancyGrid:
 def test_pre_selected_pairs_give_the_same_result_as_the_full_product(
     grid: OccupancyGrid, monkeypatch: pytest.MonkeyPatch, anchor: str, radius: float, count: int
 ) -> None:
-    rng = np.random.default_rng(7)
     truth = Pose(0.93, 0.71, 0.4)
-    sweeps = []
-    for move in MOVES[:count]:
-        exact = _sweep(truth, move)
-        noisy = np.abs(exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size))
-        sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
+    sweeps = noisy_sweeps(truth, MOVES[:count], np.random.default_rng(7))
     prior = Pose(truth.x + 0.04, truth.y - 0.03, truth.theta + math.radians(2.0))
     arguments = dict(
         search_center=prior,

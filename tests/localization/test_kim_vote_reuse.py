@@ -10,7 +10,13 @@ import pytest
 from sonar_gym.localization import kim
 from sonar_gym.localization.kim import OccupancyGrid, Sweep, sweep_end_points, vote_localize
 from sonar_gym.pose import Pose
-from tests.localization.test_kim import ARENA_BOUNDS, ARENA_CIRCLES, ARENA_SEGMENTS, MOVES, _sweep
+from tests.localization.test_kim import (
+    ARENA_BOUNDS,
+    ARENA_CIRCLES,
+    ARENA_SEGMENTS,
+    MOVES,
+    noisy_sweeps,
+)
 
 
 @pytest.fixture(scope="module")
@@ -19,14 +25,7 @@ def grid() -> OccupancyGrid:
 
 
 def _noisy_sweeps(truth: Pose, count: int, seed: int) -> list[Sweep]:
-    rng = np.random.default_rng(seed)
-    sweeps = []
-    for move in MOVES[:count]:
-        exact = _sweep(truth, move)
-        noisy = np.abs(exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size))
-        noisy[rng.random(noisy.size) < 0.1] = np.nan  # some dropouts
-        sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
-    return sweeps
+    return noisy_sweeps(truth, MOVES[:count], np.random.default_rng(seed), dropout_fraction=0.1)
 
 
 @pytest.mark.parametrize("count", [1, 3])

@@ -8,9 +8,16 @@ import numpy as np
 import pytest
 
 from sonar_gym.localization import kim
-from sonar_gym.localization.kim import OccupancyGrid, Sweep, vote_localize
+from sonar_gym.localization.kim import OccupancyGrid, vote_localize
 from sonar_gym.pose import Pose
-from tests.localization.test_kim import ARENA_BOUNDS, ARENA_CIRCLES, ARENA_SEGMENTS, MOVES, _sweep
+from tests.localization.test_kim import (
+    ARENA_BOUNDS,
+    ARENA_CIRCLES,
+    ARENA_SEGMENTS,
+    MOVES,
+    _sweep,
+    noisy_sweeps,
+)
 
 
 _CIRCLE_WINDOW = kim._vote_window
@@ -40,12 +47,7 @@ def test_windowed_votes_give_the_result_of_the_whole_grid(
     radius: float,
     truth: Pose,
 ) -> None:
-    rng = np.random.default_rng(11)
-    sweeps = []
-    for move in MOVES[:3]:
-        exact = _sweep(truth, move)
-        noisy = np.abs(exact.ranges + rng.normal(0.0, 0.01, exact.ranges.size))
-        sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
+    sweeps = noisy_sweeps(truth, MOVES[:3], np.random.default_rng(11))
     prior = Pose(truth.x + 0.04, truth.y - 0.03, truth.theta + math.radians(2.0))
     arguments = dict(
         search_center=prior,
@@ -97,11 +99,7 @@ def test_pairs_dropped_for_their_heading_never_vote(
 ) -> None:
     rng = np.random.default_rng(int(window_deg * 100 + radius * 10))
     truth = Pose(0.93, 0.71, theta)
-    sweeps = []
-    for move in MOVES[:2]:
-        exact = _sweep(truth, move)
-        noisy = np.abs(exact.ranges + rng.normal(0.0, 0.02, exact.ranges.size))
-        sweeps.append(Sweep(exact.angles, noisy, exact.sensor_offset, move))
+    sweeps = noisy_sweeps(truth, MOVES[:2], rng, range_std_m=0.02)
     prior = Pose(truth.x - 0.05, truth.y + 0.04, truth.theta - math.radians(2.5))
     arguments = dict(
         search_center=prior,
