@@ -79,6 +79,16 @@ def test_the_shipped_policy_scores_what_its_trainer_measured(env_id: str) -> Non
     assert float(np.mean(rewards)) == pytest.approx(recorded, abs=1e-6)
 
 
+def _evaluation_records(env_id: str, agents: list[str], episodes: int) -> dict[str, list]:
+    """Each agent's episodes on the first ``episodes`` evaluation seeds, by agent name."""
+    from sonar_gym.train.evaluation import evaluate_agents
+
+    results = evaluate_agents(
+        [env_id], agents, episodes=episodes, seed=pretrained.EVALUATION_SEED_START
+    )
+    return {result.agent: list(result.records) for result in results}
+
+
 # what README's table claims, on the evaluation seeds nobody trained or selected on; over
 # 200 seeds BeaconScan's interval is too wide to decide (see the next test)
 BEATS_THE_PAPER = tuple(env_id for env_id in ENV_IDS if env_id != "SonarGym/BeaconScan-v0")
@@ -89,18 +99,11 @@ BEATS_THE_HEURISTIC = ("SonarGym/SweepLocalization-v0", "SonarGym/ActiveBeaconSc
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_the_learned_agent_against_the_paper_and_the_heuristic(env_id: str) -> None:
     from sonar_gym.train.baselines import beats, heuristic_agent, paired_difference
-    from sonar_gym.train.evaluation import evaluate_agents
 
     heuristic = heuristic_agent(env_id)
-    results = {
-        result.agent: result.records
-        for result in evaluate_agents(
-            [env_id],
-            ["learned", "paper", heuristic],
-            episodes=pretrained.DEFAULT_EVALUATION_EPISODES,
-            seed=pretrained.EVALUATION_SEED_START,
-        )
-    }
+    results = _evaluation_records(
+        env_id, ["learned", "paper", heuristic], pretrained.DEFAULT_EVALUATION_EPISODES
+    )
     versus_paper = paired_difference(results["learned"], results["paper"])
     versus_heuristic = paired_difference(results["learned"], results[heuristic])
     assert beats(versus_paper) is (env_id in BEATS_THE_PAPER), versus_paper
@@ -125,16 +128,9 @@ def test_moving_learned_agent_localizes_from_95_percent_of_lab_poses() -> None:
 @pytest.mark.slow
 def test_beacon_scan_learned_agent_beats_the_paper_over_the_wide_evaluation() -> None:
     from sonar_gym.train.baselines import beats, paired_difference
-    from sonar_gym.train.evaluation import evaluate_agents
 
-    results = {
-        result.agent: result.records
-        for result in evaluate_agents(
-            ["SonarGym/BeaconScan-v0"],
-            ["learned", "paper"],
-            episodes=pretrained.WIDE_EVALUATION_EPISODES,
-            seed=pretrained.EVALUATION_SEED_START,
-        )
-    }
+    results = _evaluation_records(
+        "SonarGym/BeaconScan-v0", ["learned", "paper"], pretrained.WIDE_EVALUATION_EPISODES
+    )
     versus_paper = paired_difference(results["learned"], results["paper"])
     assert beats(versus_paper), versus_paper
