@@ -315,7 +315,7 @@ class BlockExpansionEnv(SonarEnv):
     | ordering | ``"free"`` | or ``"decreasing"`` (see Action Space) |
     | distance_range_m | (0.02, 0.8) | range of the d's, metres |
     | range_noise_std_m | 0.001 | ranging jitter as a distance, metres |
-    | timer_period_s | 1e-6 | time-of-flight counter period, seconds (0 = exact) |
+    | timer_period_s | 1e-6 | time-of-flight counter period, seconds (0 = exact, else >= 1e-12) |
     | max_range_m | 5.0 | beacons farther away drop out, metres |
     | beacon_prior_std_m | 0.2 | noise of the rough new-beacon positions in the observation |
     | sigma_scale_m | 0.03 | sigma' that costs one unit of reward, metres |

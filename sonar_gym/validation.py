@@ -32,6 +32,10 @@ MIN_LENGTH_M = 1e-3
 """Least positive length in metres (one millimetre)."""
 MIN_DURATION_S = 1e-6
 """Least positive duration, interval or time budget, seconds (one microsecond)."""
+MIN_TIMER_PERIOD_S = 1e-12
+"""Least positive period of a time-of-flight counter, seconds (a 1 THz counter; 0 means no
+counter). A period near the float minimum would put ``time / period`` past the float range,
+so every reading would overflow to a dropout instead of staying unquantised."""
 MIN_VARIANCE = MIN_SCALE**2
 """Least positive variance: the square of :data:`MIN_SCALE` in the variance's unit."""
 MAX_SHOWN_CHARS = 60

@@ -90,9 +90,12 @@ def quantised_range_error(
         spread = noise_std_m / quantum_m
         reach = math.ceil(8.0 * spread) + 1
         offsets = np.arange(-reach, reach + 1, dtype=np.float64)
-        # P(floor(f + z) = k) = Phi((k + 1 - f) / s) - Phi((k - f) / s), z ~ N(0, s^2)
-        upper = ndtr((offsets[None, :] + 1.0 - phases[:, None]) / spread)
-        lower = ndtr((offsets[None, :] - phases[:, None]) / spread)
+        # P(floor(f + z) = k) = Phi((k + 1 - f) / s) - Phi((k - f) / s), z ~ N(0, s^2). A
+        # spread far below one quantum sends the quotients to +-inf, where Phi is exactly 0 or 1
+        # (k - f is never 0: the phases sit at half-integers over n_phases).
+        with np.errstate(over="ignore", divide="ignore"):
+            upper = ndtr((offsets[None, :] + 1.0 - phases[:, None]) / spread)
+            lower = ndtr((offsets[None, :] - phases[:, None]) / spread)
         weights = upper - lower
         steps = np.broadcast_to(offsets, weights.shape)
     error_steps = steps - phases[:, None]  # error in quanta for each (phase, floor value)

@@ -109,6 +109,7 @@ from sonar_gym.sonar.acoustics import (
 )
 from sonar_gym.sonar.echoes import cylinder_echo_amplitude, plane_echo_amplitude
 from sonar_gym.sonar.receiver import TimeVaryingGain
+from sonar_gym.validation import MIN_TIMER_PERIOD_S
 
 SMALL_BEACON_RADIUS_M = 0.0382 / 2.0
 """Beom & Cho Table I: radius of the small beacon, metres."""
@@ -142,7 +143,8 @@ class Transducer:
             units of :mod:`sonar_gym.sonar.echoes` (pressure relative to 1 m on axis, 1/m).
         range_noise_std_m: standard deviation of the timing jitter expressed as one-way range,
             metres.
-        timer_period_s: period of the time-of-flight counter, seconds (0 = no quantisation).
+        timer_period_s: period of the time-of-flight counter, seconds (0 = no quantisation, else
+            at least :data:`~sonar_gym.validation.MIN_TIMER_PERIOD_S`).
         listen_time_s: time spent per ping (transmit, listen, reset), seconds.
         pan_speed_rad_s: speed of the pan unit or servo the transducer rides on, rad/s.
         absorption_db_per_m: air absorption at the carrier, dB per metre of path.
@@ -205,6 +207,11 @@ class Transducer:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"Transducer.{name} must be a finite number >= 0; got {value!r}")
+        if 0 < self.timer_period_s < MIN_TIMER_PERIOD_S:
+            raise ValueError(
+                "Transducer.timer_period_s must be 0 (no counter) or at least "
+                f"{MIN_TIMER_PERIOD_S:g} s; got {self.timer_period_s!r}"
+            )
         if not isinstance(self.side_lobes, bool):
             raise ValueError(
                 f"Transducer.side_lobes must be True or False; got {self.side_lobes!r}"

@@ -45,6 +45,7 @@ from sonar_gym.scenario import Emitter
 from sonar_gym.sonar.acoustics import REFERENCE_TEMPERATURE_C, speed_of_sound_mps
 from sonar_gym.sonar.echoes import PATH_END_TOLERANCE
 from sonar_gym.sonar.pulse_echo import WorldLike
+from sonar_gym.validation import MIN_TIMER_PERIOD_S
 
 if TYPE_CHECKING:
     from sonar_gym.geometry import StaticGeometry
@@ -134,7 +135,8 @@ class BeaconRanger:
         receivers_xy: receiver positions ``(x, y)`` in the robot frame {R}, metres.
         height_m: receiver height above the floor, metres; None takes
             ``scenario.robot.sensor_height``.
-        timer_period_s: period of the time-of-flight counter, seconds (0 = exact).
+        timer_period_s: period of the time-of-flight counter, seconds (0 = exact, else at least
+            :data:`~sonar_gym.validation.MIN_TIMER_PERIOD_S`).
         range_noise_std_m: standard deviation of the timing jitter as a distance, metres.
         max_range_m: emitters farther than this are not heard, metres.
         assumed_speed_of_sound_mps: the speed the receiver converts with, m/s.
@@ -174,10 +176,16 @@ class BeaconRanger:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"argument '{name}' must be positive; got {value!r}")
-        for name in ("timer_period_s", "range_noise_std_m"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ValueError(f"argument '{name}' must be >= 0; got {value!r}")
+        if not (math.isfinite(self.range_noise_std_m) and self.range_noise_std_m >= 0):
+            raise ValueError(
+                f"argument 'range_noise_std_m' must be >= 0; got {self.range_noise_std_m!r}"
+            )
+        period = self.timer_period_s
+        if not (math.isfinite(period) and (period == 0 or period >= MIN_TIMER_PERIOD_S)):
+            raise ValueError(
+                "argument 'timer_period_s' must be 0 (no counter) or at least "
+                f"{MIN_TIMER_PERIOD_S:g} s; got {period!r}"
+            )
 
     @classmethod
     def wu_tsai(cls, **options: object) -> BeaconRanger:

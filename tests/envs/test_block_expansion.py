@@ -75,6 +75,7 @@ def mean_and_half_width(values: list[float]) -> tuple[float, float]:
         ("distance_range_m", 0.5),
         ("range_noise_std_m", -0.001),
         ("timer_period_s", 1.0),
+        ("timer_period_s", 5e-324),
         ("max_range_m", 0.0),
         ("beacon_prior_std_m", -1.0),
         ("sigma_scale_m", 0.0),

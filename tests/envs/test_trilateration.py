@@ -248,6 +248,16 @@ def test_range_error_without_jitter_is_all_persistent_truncation() -> None:
     assert model.averaging_factor(20) == pytest.approx(1.0)
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+@pytest.mark.parametrize("jitter_m", [5e-324, 1e-300, 1e-12])
+def test_a_vanishing_jitter_gives_the_counter_alone_without_overflow(jitter_m: float) -> None:
+    quantum = 0.00694
+    alone = quantised_range_error(0.0, quantum)
+    model = quantised_range_error(jitter_m, quantum)
+    assert model.total_variance_m2 == pytest.approx(alone.total_variance_m2, rel=1e-6)
+    assert model.persistent_variance_m2 == pytest.approx(alone.persistent_variance_m2, rel=1e-6)
+
+
 def test_range_error_without_counter_is_the_jitter_and_averages_as_one_over_n() -> None:
     model = quantised_range_error(0.003, 0.0)
     assert model.total_variance_m2 == pytest.approx(0.003**2, rel=1e-12)

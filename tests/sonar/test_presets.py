@@ -106,6 +106,7 @@ def test_an_extent_beyond_the_main_lobe_is_refused() -> None:
         ("max_range_m", -1.0),
         ("detection_threshold", 0.0),
         ("timer_period_s", -1e-6),
+        ("timer_period_s", 5e-324),
         ("min_range_m", 9.0),
     ],
 )

@@ -10,6 +10,7 @@ import pytest
 from sonar_gym.pose import Pose
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
 from sonar_gym.sonar.ranging import BeaconRanger
+from sonar_gym.validation import MIN_TIMER_PERIOD_S
 from tests.sonar.worlds import world
 
 EMITTERS = [
@@ -124,6 +125,8 @@ def test_noise_is_seeded_and_unbiased() -> None:
     [
         ({"receivers_xy": ()}, "receivers_xy"),
         ({"timer_period_s": -1.0}, "timer_period_s"),
+        ({"timer_period_s": 5e-324}, "timer_period_s"),
+        ({"timer_period_s": 1e-13}, "timer_period_s"),
         ({"max_range_m": 0.0}, "max_range_m"),
         ({"height_m": math.inf}, "height_m"),
     ],
@@ -189,6 +192,16 @@ def test_route_noise_is_seeded_unbiased_and_quantised() -> None:
     assert np.std(samples) == pytest.approx(0.01, rel=0.05)
     counts = first.distances / ranger.range_quantum_m
     np.testing.assert_allclose(counts, np.round(counts), atol=1e-6)
+
+
+def test_the_finest_counter_allowed_reads_the_exact_distance() -> None:
+    xy = np.zeros((3, 2))
+    finest = BeaconRanger(range_noise_std_m=0.0, timer_period_s=MIN_TIMER_PERIOD_S)
+    exact = BeaconRanger(range_noise_std_m=0.0, timer_period_s=0.0)
+    finest_route = finest.measure_route(ceiling_room(), xy, None)
+    exact_route = exact.measure_route(ceiling_room(), xy, None)
+    assert np.all(np.isfinite(finest_route.distances))
+    np.testing.assert_allclose(finest_route.distances, exact_route.distances, rtol=0.0, atol=1e-9)
 
 
 @pytest.mark.parametrize(
