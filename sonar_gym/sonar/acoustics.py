@@ -251,8 +251,9 @@ def absorption_amplitude_factor(path_m: npt.ArrayLike, absorption_db_per_m: floa
     return np.power(10.0, -absorption_db_per_m * np.asarray(path_m, dtype=np.float64) / 20.0)
 
 
-_TABLE_STEPS_PER_UNIT = 1 << 12
-_TABLE_SIZE = math.ceil(math.sqrt(2.0) * _TABLE_STEPS_PER_UNIT) + 1
+TABLE_STEPS_PER_UNIT = 1 << 12
+"""Samples of :class:`PistonBeam`'s table per unit of ``s = sqrt(1 - cos(theta))``."""
+_TABLE_SIZE = math.ceil(math.sqrt(2.0) * TABLE_STEPS_PER_UNIT) + 1
 
 
 @dataclass(frozen=True, eq=False)
@@ -307,7 +308,7 @@ class PistonBeam:
         if not wavenumber_ka > 0.0:
             raise ValueError(f"argument 'wavenumber_ka' must be positive; got {wavenumber_ka!r}")
         leakage = _validated_leakage(side_lobe_leakage)
-        s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / _TABLE_STEPS_PER_UNIT
+        s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / TABLE_STEPS_PER_UNIT
         front = s <= 1.0
         theta = np.full(len(s), math.pi)
         theta[front] = np.arccos(1.0 - s[front] ** 2)
@@ -322,21 +323,27 @@ class PistonBeam:
             floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
             values[front] = np.where(leaking, np.maximum(values[front], floor), values[front])
             if not side_lobes:
-                last_monotone = _TABLE_STEPS_PER_UNIT  # monotone up to 90 deg
+                last_monotone = TABLE_STEPS_PER_UNIT  # monotone up to 90 deg
         return PistonBeam(
             float(wavenumber_ka),
             bool(side_lobes),
             np.column_stack([values[:-1], np.diff(values)]),
             values[last_monotone::-1].copy(),
-            bool(values[_TABLE_STEPS_PER_UNIT] != 0.0),
+            bool(values[TABLE_STEPS_PER_UNIT] != 0.0),
             leakage,
         )
+
+    @property
+    def cells(self) -> FloatArray:
+        """``(cells, 2)`` the table: ``(value, slope)`` of the pattern per cell of ``s``
+        (:data:`TABLE_STEPS_PER_UNIT` cells per unit), read by linear interpolation."""
+        return self._cells
 
     def two_way_from_cos(self, cos_off_axis: FloatArray) -> FloatArray:
         """The pattern at off-axis angles given by their cosines (any shape, values in [-1, 1])."""
         # Out-of-place arithmetic throughout: on arrays this small numpy's in-place operators
         # cost several times more than the operation.
-        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
+        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * TABLE_STEPS_PER_UNIT
         index = scaled.astype(np.intp)
         cells = self._cells.take(index.ravel(), axis=0)
         values = (cells[:, 0] + (scaled - index).ravel() * cells[:, 1]).reshape(index.shape)
@@ -347,7 +354,7 @@ class PistonBeam:
     def two_way_in_front(self, cos_off_axis: FloatArray) -> FloatArray:
         """:meth:`two_way_from_cos` for cosines known to be positive (in front of the transducer);
         elsewhere the result is meaningless."""
-        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * _TABLE_STEPS_PER_UNIT
+        scaled = np.sqrt(np.abs(1.0 - cos_off_axis)) * TABLE_STEPS_PER_UNIT
         # scaled >= 0, so its floor is the truncated cell index; the fraction then comes from
         # a float-float subtraction, not a slower mixed integer-float one (the same numbers).
         whole = np.floor(scaled)
@@ -377,7 +384,7 @@ class PistonBeam:
         # (as a float: no mixed integer-float arithmetic), value and slope.
         cells = self._main_lobe_cells.take(rising.searchsorted(clipped, side="left"), axis=0)
         s_limit = (cells[:, 0] + (clipped - cells[:, 1]) / cells[:, 2]) * (
-            1.0 / _TABLE_STEPS_PER_UNIT
+            1.0 / TABLE_STEPS_PER_UNIT
         )
         limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
         return limits if reachable else np.where(levels > 1.0, 2.0, limits)

@@ -60,7 +60,8 @@ wall) is one vertex: a corner from whichever side is concave.
 
 The work is array arithmetic over all primitives at once, with per-geometry constant tables
 (:mod:`sonar_gym.sonar.echo_tables`) and the occlusion test as one ``(primitives x
-candidates)`` product.
+candidates)`` product, whose interval tests a compiled loop runs
+(:mod:`sonar_gym.sonar.kernels`).
 """
 
 from __future__ import annotations
@@ -75,6 +76,7 @@ import numpy.typing as npt
 
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
+from sonar_gym.sonar import kernels
 from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, EchoTables, echo_tables
 from sonar_gym.sonar.receiver import TimeVaryingGain
 
@@ -176,8 +178,8 @@ class EchoCandidates:
         return self.position + self.directions * self.path_lengths[:, None]
 
 
-_UV_CENTRE = np.array([(1.0 - PATH_END_TOLERANCE) / 2.0, 0.5])[:, None, None]
-_UV_HALF_WIDTH = _UV_CENTRE.copy()
+_PATH_CENTRE = (1.0 - PATH_END_TOLERANCE) / 2.0
+"""The middle and half width of ``[0, 1 - tol]``, where ``u`` and ``u*`` block a path."""
 
 
 def echo_candidates(
@@ -332,11 +334,12 @@ def _unoccluded(
 
     Segments: ``p + u rel = a + v d`` gives ``u = ((a - p) x d) / (rel x d)`` and
     ``v = ((a - p) x rel) / (rel x d)``; a crossing with ``0 <= u <= 1 - tol`` and
-    ``0 <= v <= 1`` blocks (a segment that may not occlude gets ``rel x d = 0``: no crossing).
-    Circles: the point of the path's line nearest the centre, ``u* = (c - p).rel / |rel|^2``,
-    blocks if it lies on the path (``0 <= u* <= 1 - tol``) and inside the circle. (Beyond the
-    path's end the nearest point of the path is its end, an echo point on another surface,
-    never inside a circle; the reflecting cylinder itself has ``u* > 1``.)
+    ``0 <= v <= 1`` blocks (a segment that may not occlude is skipped). Circles: the point of
+    the path's line nearest the centre, ``u* = (c - p).rel / |rel|^2``, blocks if it lies on
+    the path (``0 <= u* <= 1 - tol``) and inside the circle. (Beyond the path's end the nearest
+    point of the path is its end, an echo point on another surface, never inside a circle; the
+    reflecting cylinder itself has ``u* > 1``.) The products are numpy's; the tests run path
+    by path in :func:`sonar_gym.sonar.kernels.unoccluded`.
 
     Args:
         matrix: ``(3 S + C, 3)``, the occlusion map of ``tables`` at the sensor position
@@ -346,92 +349,9 @@ def _unoccluded(
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
         occluders: ``(S + C,)`` which segments may occlude, then True for every circle.
     """
-    n_segments, n_circles = tables.n_segments, tables.n_circles
     if len(rel) == 0:
         return np.zeros(0, dtype=bool)
     products = np.dot(matrix, rel.T)  # (3 S + C, K)
-    if n_segments and n_circles:
-        return _unoccluded_by_both(tables, products, ranges, centre_distance, occluders)
-    return _unoccluded_kind_by_kind(
-        tables, products, ranges, centre_distance, occluders[:n_segments]
+    return kernels.unoccluded(
+        products, ranges, centre_distance, tables.radius_sq, occluders, _PATH_CENTRE
     )
-
-
-def _unoccluded_kind_by_kind(
-    tables: EchoTables,
-    products: FloatArray,
-    ranges: FloatArray,
-    centre_distance: FloatArray,
-    occluders: np.ndarray,
-) -> np.ndarray:
-    """:func:`_unoccluded` from ``products = matrix @ rel.T``, segments then circles.
-
-    The plain form of the test, for geometries with one kind of primitive (and the reference
-    that :func:`_unoccluded_by_both` is checked against).
-    """
-    n_segments, n_circles = tables.n_segments, tables.n_circles
-    n_paths = len(ranges)
-    blocked = np.zeros(n_paths, dtype=bool)
-    if n_segments:
-        # A segment that may not occlude gets rel x d = 0 (or -0): no crossing.
-        crossing_denominator = products[:n_segments] * occluders[:, None]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            uv = (
-                products[n_segments : 3 * n_segments].reshape(2, n_segments, n_paths)
-                / crossing_denominator
-            )
-        inside = np.abs(uv - _UV_CENTRE) <= _UV_HALF_WIDTH
-        blocked = np.logical_or.reduce(inside[0] & inside[1], axis=0)
-    if n_circles:
-        dots = products[3 * n_segments :]
-        nearest = dots / (ranges * ranges)
-        on_path = np.abs(nearest - _UV_CENTRE[0, 0]) <= _UV_HALF_WIDTH[0, 0]
-        gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
-        blocked = blocked | np.logical_or.reduce(
-            on_path & (gap_sq < tables.radius_sq[:, None]), axis=0
-        )
-    return ~blocked
-
-
-def _unoccluded_by_both(
-    tables: EchoTables,
-    products: FloatArray,
-    ranges: FloatArray,
-    centre_distance: FloatArray,
-    occluders: np.ndarray,
-) -> np.ndarray:
-    """:func:`_unoccluded` with segments and circles in one set of arrays (same arithmetic).
-
-    The ratios ``u``, ``u*`` and ``v`` share one interval test, and each blocking pair of
-    conditions (``u`` and ``v`` for a segment, ``u*`` and the gap for a circle) sits in the
-    top and bottom halves of one boolean array, so one ``&`` and one reduction cover both.
-    A segment that may not occlude is left out of the reduction (``occluders``, ``(S + C,)``:
-    the segments that may occlude, then True for every circle) rather than given a zero
-    denominator.
-    """
-    n_segments, n_circles = tables.n_segments, tables.n_circles
-    n_paths = len(ranges)
-    ratios = np.empty((2 * n_segments + n_circles, n_paths))  # u, then u*, then v
-    tests = np.empty((2 * (n_segments + n_circles), n_paths), dtype=bool)
-    dots = products[3 * n_segments :]
-    crossing_denominator = products[:n_segments]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        np.divide(
-            products[n_segments : 2 * n_segments], crossing_denominator, out=ratios[:n_segments]
-        )
-        np.divide(dots, ranges * ranges, out=ratios[n_segments : n_segments + n_circles])
-        np.divide(
-            products[2 * n_segments : 3 * n_segments],
-            crossing_denominator,
-            out=ratios[n_segments + n_circles :],
-        )
-    np.less_equal(
-        np.abs(ratios - tables.ratio_centres), tables.ratio_half_widths, out=tests[: len(ratios)]
-    )
-    nearest = ratios[n_segments : n_segments + n_circles]
-    gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
-    np.less(gap_sq, tables.radius_sq_column, out=tests[len(ratios) :])
-    half = n_segments + n_circles
-    # A boolean dot product is the OR of the ANDs: one call for the reduction over primitives.
-    blocked = np.dot(occluders, tests[:half] & tests[half:])
-    return ~blocked

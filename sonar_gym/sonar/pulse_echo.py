@@ -35,8 +35,10 @@ import numpy as np
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.scenario import Scenario
+from sonar_gym.sonar import kernels
 from sonar_gym.sonar.acoustics import (
     REFERENCE_TEMPERATURE_C,
+    TABLE_STEPS_PER_UNIT,
     PistonBeam,
     speed_of_sound_mps,
     wavenumber_per_m,
@@ -426,10 +428,24 @@ def _main_lobe_readings(
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     # np.dot: the products first_echoes takes with @, through one call layer less.
     in_frame = np.dot(np.array(((c, s), (-s, c))), candidates.directions.T)  # (2, candidates)
-    cosines = np.dot(beam_directions, in_frame)  # (pings, candidates)
-    detected = cosines >= beam.main_lobe_cos_limits(
+    limits = beam.main_lobe_cos_limits(
         threshold / amplitudes, reachable=candidates.threshold >= threshold
     )
+    if n >= 2 and n_candidates >= 2:  # numpy's products round as kernels.fma there
+        return _compiled_main_lobe_readings(
+            candidates,
+            beam_directions,
+            beam,
+            transducer,
+            true_speed_mps,
+            assumed_speed_mps,
+            readout,
+            rng,
+            in_frame,
+            limits,
+        )
+    cosines = np.dot(beam_directions, in_frame)  # (pings, candidates)
+    detected = cosines >= limits
     first = detected.argmax(axis=1)  # candidates are sorted nearest first
     flat = _ping_offsets(n, n_candidates) + first  # index of (ping, first) in the flat arrays
     hit = detected.ravel().take(flat)
@@ -456,6 +472,57 @@ def _main_lobe_readings(
     masked = np.where(valid, readings, _DROPOUT_READING)
     return masked[0], masked[1]
 
+
+def _compiled_main_lobe_readings(
+    candidates: EchoCandidates,
+    beam_directions: FloatArray,
+    beam: PistonBeam,
+    transducer: Transducer,
+    true_speed_mps: float,
+    assumed_speed_mps: float,
+    readout: Readout,
+    rng: np.random.Generator | None,
+    in_frame: FloatArray,
+    limits: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_main_lobe_readings` through :func:`sonar_gym.sonar.kernels.main_lobe_readings`:
+    the same numbers and the same draws (one normal per ping, as numpy's path draws)."""
+    normals = _NO_NORMALS
+    jitter_s = 0.0
+    if readout.range_noise and transducer.range_noise_std_m > 0.0:
+        if rng is None:
+            raise ValueError("argument 'rng' is needed: the readout adds range noise")
+        jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps
+        normals = rng.standard_normal(len(beam_directions))
+    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
+    period = transducer.timer_period_s if readout.quantisation else 0.0
+    constants = np.array(
+        (
+            float(TABLE_STEPS_PER_UNIT),
+            2.0 / true_speed_mps,
+            transducer.echo_rise_time_s * transducer.detection_threshold if delay else 0.0,
+            jitter_s,
+            1.0 / period if period > 0.0 else 0.0,
+            period,
+            assumed_speed_mps / 2.0,
+            transducer.max_range_m,
+        )
+    )
+    readings = kernels.main_lobe_readings(
+        beam_directions,
+        in_frame,
+        limits,
+        candidates.amplitudes,
+        candidates.path_lengths,
+        beam.cells,
+        normals,
+        constants,
+    )
+    return readings[0], readings[1]
+
+
+_NO_NORMALS = np.empty(0)
+_NO_NORMALS.flags.writeable = False
 
 _DROPOUT_READING = np.array([[np.nan], [0.0]])
 """The ``(range, amplitude)`` column of a dropout: NaN metres, amplitude 0."""

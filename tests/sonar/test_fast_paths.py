@@ -3,8 +3,8 @@
 * the fused main-lobe readout (:func:`~sonar_gym.sonar.pulse_echo._main_lobe_readings`)
   against :func:`~sonar_gym.sonar.pulse_echo.first_echoes` then
   :func:`~sonar_gym.sonar.pulse_echo.echo_readings`, noise included (same generator state);
-* the occlusion test of segments and circles in one set of arrays against the test kind by
-  kind;
+* the compiled occlusion test (:func:`~sonar_gym.sonar.kernels.unoccluded`) against the
+  array test kind by kind, written out below;
 * the beam pattern for cosines in front of the transducer, and the main-lobe limits of levels
   known to be reachable, against the checked and clipped forms.
 """
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -20,10 +21,11 @@ import pytest
 
 from sonar_gym.pose import Pose
 from sonar_gym.scenario import load_scenario
-from sonar_gym.sonar import echoes as echo_module
+from sonar_gym.pose import FloatArray
+from sonar_gym.sonar import kernels
 from sonar_gym.sonar import pulse_echo
 from sonar_gym.sonar.acoustics import PistonBeam, speed_of_sound_mps
-from sonar_gym.sonar.echo_tables import EchoTables, echo_tables
+from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, EchoTables, echo_tables
 from sonar_gym.sonar.echoes import EchoKind
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, Readout
 from sonar_gym.sonar.rotating import RotatingSonar, _pan_grid
@@ -93,6 +95,36 @@ def test_fused_main_lobe_readout_reads_what_first_echoes_then_readings_read(
     assert compared == 32 and detected > 0
 
 
+@pytest.mark.parametrize("n_pings", [1, 2, 3, 19, 60])
+@pytest.mark.parametrize("scenario", SCENARIOS)
+def test_a_ping_of_any_count_reads_what_first_echoes_then_readings_read(
+    scenario: str, n_pings: int
+) -> None:
+    """One ping goes through numpy, two or more through the compiled loop: both read alike."""
+    world = _world(scenario)
+    rng = np.random.default_rng(n_pings)
+    sonar = RotatingSonar.preset("polaroid-6500")
+    _, directions = _pan_grid(-math.pi, math.pi, math.radians(1.0))
+    detected = 0
+    for _ in range(20):
+        pose = world.sample_free_pose(rng, clearance=0.05)
+        start = int(rng.integers(len(directions) - n_pings))
+        beams = directions[start : start + n_pings]
+        seed = int(rng.integers(1 << 30))
+        ranges, amplitudes = sonar.ping(
+            world, pose, pose.position, beams, np.random.default_rng(seed)
+        )
+        plain = sonar.readings(
+            world,
+            sonar.first_echoes_at(world, pose, pose.position, beams),
+            np.random.default_rng(seed),
+        )
+        np.testing.assert_array_equal(ranges, plain[0])
+        np.testing.assert_array_equal(amplitudes, plain[1])
+        detected += int(np.isfinite(ranges).sum())
+    assert detected > 0
+
+
 def test_a_sonar_with_side_lobes_still_reads_through_first_echoes() -> None:
     world, pose = _world("beom_cho_lab"), Pose(2.0, 2.0, 0.4)
     sonar = RotatingSonar(
@@ -109,6 +141,43 @@ def test_a_sonar_with_side_lobes_still_reads_through_first_echoes() -> None:
     )
     np.testing.assert_array_equal(ranges, plain[0])
     np.testing.assert_array_equal(amplitudes, plain[1])
+
+
+def plain_unoccluded(
+    tables: EchoTables,
+    products: FloatArray,
+    ranges: FloatArray,
+    centre_distance: FloatArray,
+    occluders: np.ndarray,
+) -> np.ndarray:
+    """The occlusion test over whole arrays, segments then circles (``occluders``: ``(S,)``).
+
+    A segment that may not occlude gets a zero crossing denominator (no crossing); a segment
+    blocks with ``0 <= u <= 1 - tol`` and ``0 <= v <= 1``, a circle with ``0 <= u* <= 1 - tol``
+    and a gap below its radius.
+    """
+    n_segments, n_circles = tables.n_segments, tables.n_circles
+    centre = np.array([(1.0 - PATH_END_TOLERANCE) / 2.0, 0.5])[:, None, None]
+    n_paths = len(ranges)
+    blocked = np.zeros(n_paths, dtype=bool)
+    if n_segments:
+        crossing_denominator = products[:n_segments] * occluders[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv = (
+                products[n_segments : 3 * n_segments].reshape(2, n_segments, n_paths)
+                / crossing_denominator
+            )
+        inside = np.abs(uv - centre) <= centre
+        blocked = np.logical_or.reduce(inside[0] & inside[1], axis=0)
+    if n_circles:
+        dots = products[3 * n_segments :]
+        nearest = dots / (ranges * ranges)
+        on_path = np.abs(nearest - centre[0, 0]) <= centre[0, 0]
+        gap_sq = (centre_distance * centre_distance)[:, None] - dots * nearest
+        blocked = blocked | np.logical_or.reduce(
+            on_path & (gap_sq < tables.radius_sq[:, None]), axis=0
+        )
+    return ~blocked
 
 
 def _occlusion_inputs(
@@ -130,8 +199,10 @@ def _occlusion_inputs(
     return tables, matrix @ rel.T, np.hypot(rel[:, 0], rel[:, 1]), centre_distance, occluders
 
 
-@pytest.mark.parametrize("world_name", ["beom_cho_lab", "kim_arena", "cluttered_room"])
-def test_joint_occlusion_test_blocks_what_the_kind_by_kind_test_blocks(world_name: str) -> None:
+@pytest.mark.parametrize(
+    "world_name", ["beom_cho_lab", "kim_arena", "cluttered_room", "apcs_corridor"]
+)
+def test_compiled_occlusion_test_blocks_what_the_array_test_blocks(world_name: str) -> None:
     rng = np.random.default_rng(11)
     world: Any
     if world_name == "cluttered_room":
@@ -141,30 +212,53 @@ def test_joint_occlusion_test_blocks_what_the_kind_by_kind_test_blocks(world_nam
         world = World(load_scenario(world_name))
         poses = [world.sample_free_pose(rng, clearance=0.05) for _ in range(10)]
         positions = [(pose.x, pose.y) for pose in poses]
-    assert world.geometry.n_segments and world.geometry.n_circles  # both kinds: the joint test
     blocked = clear = 0
     for position in positions:
         tables, products, ranges, centre_distance, occluders = _occlusion_inputs(
             world, position, rng
         )
-        joint = echo_module._unoccluded_by_both(
-            tables,
+        compiled = kernels.unoccluded(
             products,
             ranges,
             centre_distance,
+            tables.radius_sq,
             np.concatenate([occluders, np.ones(tables.n_circles, dtype=bool)]),
+            (1.0 - PATH_END_TOLERANCE) / 2.0,
         )
-        plain = echo_module._unoccluded_kind_by_kind(
-            tables,
-            products,
-            ranges,
-            centre_distance,
-            occluders,
-        )
-        np.testing.assert_array_equal(joint, plain)
+        plain = plain_unoccluded(tables, products, ranges, centre_distance, occluders)
+        np.testing.assert_array_equal(compiled, plain)
         blocked += int((~plain).sum())
         clear += int(plain.sum())
     assert blocked > 0 and clear > 0
+
+
+def test_compiled_occlusion_test_keeps_the_interval_ends_of_the_array_test() -> None:
+    """Ratios exactly at the ends of the blocking intervals, and just outside them."""
+    end = 1.0 - PATH_END_TOLERANCE
+    ratios = np.array([0.0, -5e-324, end, np.nextafter(end, 2.0), 0.5, 1.0, 1.0 + 2e-16, np.nan])
+    u, v = (grid.ravel() for grid in np.meshgrid(ratios, ratios))
+    n_paths = len(u)
+    denominator = np.full(n_paths, 2.0)
+    ranges = np.full(n_paths, 2.0)
+    # one segment (denominator, u and v numerators), then one circle: u* = dot / range^2 and
+    # a gap of centre distance^2 - dot u* against a squared radius of 1
+    circle_dot = 4.0 * u
+    products = np.vstack([denominator, 2.0 * u, 2.0 * v, circle_dot])
+    centre_distance = np.sqrt(circle_dot * u + np.where(v > 0.5, 0.5, 1.0))[:1]
+    tables: Any = SimpleNamespace(n_segments=1, n_circles=1, radius_sq=np.array([1.0]))
+    for occluding in (True, False):
+        occluders = np.array([occluding])
+        compiled = kernels.unoccluded(
+            products,
+            ranges,
+            centre_distance,
+            tables.radius_sq,
+            np.concatenate([occluders, [True]]),
+            end / 2.0,
+        )
+        plain = plain_unoccluded(tables, products, ranges, centre_distance, occluders)
+        np.testing.assert_array_equal(compiled, plain)
+        assert 0 < plain.sum() < n_paths
 
 
 @pytest.mark.parametrize("leakage", [0.0, 0.07])
