@@ -125,12 +125,20 @@ def test_moving_learned_agent_localizes_from_95_percent_of_lab_poses() -> None:
     assert summary.position_error_p95_m is not None and summary.position_error_p95_m <= 0.03
 
 
-@pytest.mark.slow
-def test_beacon_scan_learned_agent_beats_the_paper_over_the_wide_evaluation() -> None:
-    from sonar_gym.train.baselines import beats, paired_difference
+# over the wide evaluation, where 200 seeds cannot decide: BeaconScan against the paper (a
+# pose only one agent fails moves the difference by 20), Trilateration against the adaptive
+# planner (a gain of about 0.15 inside an interval of +-0.4)
+WIDE_CLAIMS = (("SonarGym/BeaconScan-v0", "paper"), ("SonarGym/Trilateration-v0", "heuristic"))
 
-    results = _evaluation_records(
-        "SonarGym/BeaconScan-v0", ["learned", "paper"], pretrained.WIDE_EVALUATION_EPISODES
-    )
-    versus_paper = paired_difference(results["learned"], results["paper"])
-    assert beats(versus_paper), versus_paper
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("env_id", "reference"), WIDE_CLAIMS)
+def test_the_learned_agent_beats_its_reference_over_the_wide_evaluation(
+    env_id: str, reference: str
+) -> None:
+    from sonar_gym.train.baselines import beats, heuristic_agent, paired_difference
+
+    other = heuristic_agent(env_id) if reference == "heuristic" else reference
+    results = _evaluation_records(env_id, ["learned", other], pretrained.WIDE_EVALUATION_EPISODES)
+    difference = paired_difference(results["learned"], results[other])
+    assert beats(difference), difference
