@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.localization import roh_kernels
 from sonar_gym.pose import FloatArray
 
 
@@ -143,15 +144,6 @@ def distances_to_polyline_reference(points: npt.ArrayLike, polyline: npt.ArrayLi
     return result
 
 
-MAX_WINDOW_SEGMENTS = 8
-"""Most segments :meth:`TruePath.distances` searches per point as one window."""
-
-
-MAX_EXHAUSTIVE_PAIRS = 4096
-"""Point-segment pairs up to which :meth:`TruePath.errors` measures its wide-window points
-against every segment instead of the blocked search (both give the exact minimum)."""
-
-
 class TruePath:
     """A true path ``y = f(x)`` (x strictly monotonic), prepared for :meth:`errors`.
 
@@ -176,7 +168,6 @@ class TruePath:
         self._low_slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
         self._high_slope = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
         self._segments = _Segments(line)
-        self._blocked: _BlockedPolyline | None = None
 
     def y_at(self, x: FloatArray) -> FloatArray:
         """``f(x)``: linear interpolation between vertices; beyond the ends, linear
@@ -206,9 +197,9 @@ class TruePath:
         The vertical gap ``|y - f(x)|`` (inside the path's x range), or the distance to the
         nearer end vertex, bounds each point's distance ``u``; the nearest point of the path
         then lies within ``x +- u``, so only the segments overlapping that x window can hold
-        it. Points whose window spans more than :data:`MAX_WINDOW_SEGMENTS` segments take the
-        general search. The per-segment arithmetic is :func:`distances_to_polyline`'s, so the
-        results agree.
+        it. The windows are searched point by point in
+        :func:`sonar_gym.localization.roh_kernels.window_nearest_sq`, with the per-segment
+        arithmetic of :func:`distances_to_polyline`, so the results agree.
         """
         line, xs = self.vertices, self._xs
         to_ends = np.minimum(
@@ -226,26 +217,21 @@ class TruePath:
         last = np.clip(np.searchsorted(xs, points[:, 0] + bound, side="left"), 1, n_segments) - 1
         if not self._increasing:  # segment k of the reversed vertices is path segment n - 1 - k
             first, last = n_segments - 1 - last, n_segments - 1 - first
-        count = last - first + 1
-        narrow = count <= MAX_WINDOW_SEGMENTS
-        if narrow.all():
-            members = np.minimum(first[:, None] + np.arange(int(count.max())), last[:, None])
-            return np.sqrt(self._segments.nearest_sq(points, members))
-        result = np.empty(len(points))
-        wide = ~narrow
-        n_wide = int(np.count_nonzero(wide))
-        if n_wide * n_segments <= MAX_EXHAUSTIVE_PAIRS:  # a few points: every segment at once
-            members = np.broadcast_to(np.arange(n_segments), (n_wide, n_segments))
-            result[wide] = np.sqrt(self._segments.nearest_sq(points[wide], members))
-        else:
-            if self._blocked is None:
-                self._blocked = _BlockedPolyline(line)
-            result[wide] = self._blocked.distances(points[wide])
-        if np.any(narrow):
-            width = int(count[narrow].max())
-            members = np.minimum(first[narrow, None] + np.arange(width), last[narrow, None])
-            result[narrow] = np.sqrt(self._segments.nearest_sq(points[narrow], members))
-        return result
+        segments = self._segments
+        nearest_sq = roh_kernels.window_nearest_sq(
+            points,
+            first.astype(np.int64, copy=False),
+            last.astype(np.int64, copy=False),
+            (
+                segments.sx,
+                segments.sy,
+                segments.dx,
+                segments.dy,
+                segments.safe_length_sq,
+                segments.degenerate,
+            ),
+        )
+        return np.sqrt(nearest_sq)
 
 
 def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, float]:

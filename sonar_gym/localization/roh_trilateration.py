@@ -41,6 +41,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
+from sonar_gym.localization import roh_kernels
 from sonar_gym.localization.result import OK, OUT_OF_FLOAT_RANGE, Localization
 from sonar_gym.pose import FloatArray, Pose
 
@@ -737,6 +738,32 @@ def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | Non
 
 _CENTROID_PAIRS = ((0, 1), (1, 2), (0, 2))
 """The circle pairs of :func:`paper_centroid`, in its order."""
+_PAIR_CIRCLES: tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]] = (
+    np.array([i for i, _ in _CENTROID_PAIRS], dtype=np.int64),
+    np.array([j for _, j in _CENTROID_PAIRS], dtype=np.int64),
+    np.array([3 - i - j for i, j in _CENTROID_PAIRS], dtype=np.int64),
+)
+"""``(first, second, third)`` circle of each pair, as index arrays."""
+
+
+@functools.lru_cache(maxsize=64)
+def _pair_geometry(
+    centres: bytes,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray] | None:
+    """Per pair of :data:`_CENTROID_PAIRS`: the first and third centres ``(3, 2)``, the centre
+    distance and its square ``(3,)`` and the unit vector first -> second ``(3, 2)`` of three
+    centres given as the bytes of a float64 ``(3, 2)`` array (kept per beacon set); None when
+    two centres coincide."""
+    points = np.frombuffer(centres).reshape(3, 2)
+    first, second, third = (points[indices] for indices in _PAIR_CIRCLES)
+    offset = second - first
+    separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
+    if 0.0 in separations:
+        return None
+    separation = np.array(separations)
+    separation_sq = np.array([value**2 for value in separations])
+    units = np.column_stack([offset[:, 0] / separation, offset[:, 1] / separation])
+    return first, third, separation, separation_sq, units
 
 
 def _paper_centroids(
@@ -744,78 +771,28 @@ def _paper_centroids(
 ) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
     """:func:`paper_centroid` over rows of radii ``(m, 3)`` for one set of three centres.
 
-    The three circle pairs are computed side by side (arrays ``(m, 3)``, one column per
-    pair), each element with the arithmetic of :func:`circle_intersections`.
+    Each element has the arithmetic of :func:`circle_intersections`, row by row in
+    :func:`sonar_gym.localization.roh_kernels.paper_centroids`.
 
     Returns ``(centroids (k, 2), met (m,))``: ``met`` is False where some pair of circles does
     not intersect (those rows need the radical-centre fallback), and the centroids are those
     of the ``k`` rows where ``met`` holds, in row order.
     """
-    first_of, second_of = [i for i, _ in _CENTROID_PAIRS], [j for _, j in _CENTROID_PAIRS]
-    third_of = [3 - i - j for i, j in _CENTROID_PAIRS]
-    ca, cb, ck = centres[first_of], centres[second_of], centres[third_of]
-    offset = cb - ca
-    separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
-    if 0.0 in separations:
+    geometry = _pair_geometry(np.ascontiguousarray(centres, dtype=np.float64).tobytes())
+    if geometry is None:
         return np.zeros((0, 2)), np.zeros(len(radii), dtype=bool)
-    separation = np.array(separations)
-    separation_sq = np.array([value**2 for value in separations])
-    ra, rb = radii[:, first_of], radii[:, second_of]
-    ra_sq, rb_sq = ra * ra, rb * rb
-    along = (ra_sq - rb_sq + separation_sq) / (2.0 * separation)
-    half_chord_sq = ra_sq - along * along
-    tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(np.maximum(ra_sq, rb_sq), separation_sq)
-    met = (half_chord_sq >= -tolerance).all(axis=1)
-    rk = radii[:, third_of]
-    if not met.all():  # the rest only for the rows that keep their centroid
-        along, half_chord_sq, tolerance = along[met], half_chord_sq[met], tolerance[met]
-        rk = rk[met]
-    # x and y as separate (k, 3) arrays: the same arithmetic per element as (k, 3, 2) arrays,
-    # without numpy's slow inner loops of length 2
-    unit_x, unit_y = offset[:, 0] / separation, offset[:, 1] / separation
-    normal_x, normal_y = -unit_y, unit_x
-    foot_x, foot_y = ca[:, 0] + along * unit_x, ca[:, 1] + along * unit_y
-    half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
-    chord_x, chord_y = half_chord * normal_x, half_chord * normal_y
-    first_x, first_y = foot_x + chord_x, foot_y + chord_y
-    second_x, second_y = foot_x - chord_x, foot_y - chord_y
-    take_second = _second_misses_less(
-        first_x - ck[:, 0], first_y - ck[:, 1], second_x - ck[:, 0], second_y - ck[:, 1], rk
+    first_centres, third_centres, separation, separation_sq, units = geometry
+    centroids, met = roh_kernels.paper_centroids(
+        radii,
+        _PAIR_CIRCLES,
+        first_centres,
+        third_centres,
+        separation,
+        separation_sq,
+        units,
+        _TANGENCY_RELATIVE_TOLERANCE,
     )
-    centroids = np.empty((len(rk), 2))
-    for column, (first_c, second_c) in enumerate(((first_x, second_x), (first_y, second_y))):
-        kept = np.where(take_second, second_c, first_c)
-        # the mean over the three pairs, summed in pair order as np.mean over that axis sums
-        centroids[:, column] = ((kept[:, 0] + kept[:, 1]) + kept[:, 2]) / 3
-    return centroids, met
-
-
-def _second_misses_less(
-    first_x: FloatArray,
-    first_y: FloatArray,
-    second_x: FloatArray,
-    second_y: FloatArray,
-    radius: FloatArray,
-) -> npt.NDArray[np.bool_]:
-    """``|hypot(second) - radius| < |hypot(first) - radius|``, elementwise (metres).
-
-    Which intersection point lies nearer the third circle (:func:`paper_centroid`). The
-    comparison is made on ``sqrt(x^2 + y^2)``, within a few ulps of ``hypot`` and several
-    times cheaper; where the two misses are too close for that to decide, or a square leaves
-    the float range, ``hypot`` itself decides, so the result is the ``hypot`` comparison's.
-    """
-    with np.errstate(over="ignore", invalid="ignore"):  # such elements are decided by hypot
-        first = np.sqrt(first_x * first_x + first_y * first_y)
-        second = np.sqrt(second_x * second_x + second_y * second_y)
-        miss_first, miss_second = np.abs(first - radius), np.abs(second - radius)
-        take_second = miss_second < miss_first
-        margin = 1e-12 * (first + second + radius) + 1e-150
-        unsure = ~(np.abs(miss_second - miss_first) > margin)
-    if unsure.any():
-        exact_first = np.abs(np.hypot(first_x[unsure], first_y[unsure]) - radius[unsure])
-        exact_second = np.abs(np.hypot(second_x[unsure], second_y[unsure]) - radius[unsure])
-        take_second[unsure] = exact_second < exact_first
-    return take_second
+    return (centroids if met.all() else centroids[met]), met
 
 
 # ---------------------------------------------------------------------------------------------

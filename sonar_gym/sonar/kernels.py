@@ -13,10 +13,9 @@ the same arithmetic element by element, in the same order, so they return the sa
 * the loops stop at the first detected candidate and the first occluder; numpy computes them
   all and discards the rest (the discarded values never reach a result).
 
-Division by zero yields inf or NaN as in numpy (``error_model="numpy"``), never an exception.
-Each loop has one signature (read-only arrays of any layout), compiled once per machine and
-cached beside this file (``cache=True``); the sonar modules import this one, ``import
-sonar_gym`` alone does not.
+How they are compiled (one signature, cached, numpy's division by zero):
+:mod:`sonar_gym.compiled`. The sonar modules import this one; ``import sonar_gym`` alone does
+not.
 """
 
 from __future__ import annotations
@@ -24,12 +23,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numba
 import numpy as np
 from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
+from sonar_gym.compiled import FLAGS, NUMBERS, TABLE, compiled
 from sonar_gym.pose import FloatArray
 
 
@@ -50,27 +49,16 @@ def _fused_multiply_add(typing_context: Any, a: Any, b: Any, c: Any) -> Any:
 _fma: Any = intrinsic(_fused_multiply_add)
 
 
-def _jit(result: Any, *arguments: Any) -> Any:
-    """Compile for one signature: every array read-only and of any layout, so that the
-    writable, read-only and strided arrays of the callers share one compiled loop."""
-    return numba.njit(result(*arguments), cache=True, error_model="numpy", nogil=True)
-
-
-_NUMBERS = types.Array(types.float64, 1, "A", readonly=True)
-_FLAGS = types.Array(types.boolean, 1, "A", readonly=True)
-_TABLE = types.Array(types.float64, 2, "A", readonly=True)
-
-
-@_jit(  # type: ignore[misc]
+@compiled(  # type: ignore[misc]
     types.Array(types.float64, 2, "C"),  # readings
-    _TABLE,  # directions
-    _TABLE,  # in_frame
-    _NUMBERS,  # limits
-    _NUMBERS,  # amplitudes
-    _NUMBERS,  # path_lengths
-    _TABLE,  # cells
-    _NUMBERS,  # normals
-    _NUMBERS,  # constants
+    TABLE,  # directions
+    TABLE,  # in_frame
+    NUMBERS,  # limits
+    NUMBERS,  # amplitudes
+    NUMBERS,  # path_lengths
+    TABLE,  # cells
+    NUMBERS,  # normals
+    NUMBERS,  # constants
 )
 def _main_lobe_readings_loop(
     directions: FloatArray,
@@ -115,13 +103,13 @@ def _main_lobe_readings_loop(
     return readings
 
 
-@_jit(  # type: ignore[misc]
+@compiled(  # type: ignore[misc]
     types.Array(types.boolean, 1, "C"),  # clear
-    _TABLE,  # products
-    _NUMBERS,  # ranges
-    _NUMBERS,  # centre_distance
-    _NUMBERS,  # radius_sq
-    _FLAGS,  # occluders
+    TABLE,  # products
+    NUMBERS,  # ranges
+    NUMBERS,  # centre_distance
+    NUMBERS,  # radius_sq
+    FLAGS,  # occluders
     types.float64,  # path_centre
 )
 def _unoccluded_loop(

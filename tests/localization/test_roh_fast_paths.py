@@ -4,10 +4,13 @@ distance and the whole block expansion run."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from sonar_gym.localization.result import OK
+from sonar_gym.localization.roh_trilateration import _CENTROID_PAIRS, _TANGENCY_RELATIVE_TOLERANCE
 from sonar_gym.localization.roh import (
     DEFAULT_SENSOR_HEIGHT_M,
     PAPER_THREE_AREAS,
@@ -241,9 +244,108 @@ def test_path_errors_sigma_prime_is_the_mean_distance_over_every_segment(seed: i
     assert sigma_prime == pytest.approx(reference, rel=1e-12, abs=1e-15)
 
 
+# The array form of the paper centroids that the compiled loop replaced: the reference the
+# loop is checked against, bit for bit.
+def array_paper_centroids(centres: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`paper_centroid` over rows of radii ``(m, 3)`` for one set of three centres.
+
+    The three circle pairs are computed side by side (arrays ``(m, 3)``, one column per
+    pair), each element with the arithmetic of :func:`circle_intersections`.
+
+    Returns ``(centroids (k, 2), met (m,))``: ``met`` is False where some pair of circles does
+    not intersect (those rows need the radical-centre fallback), and the centroids are those
+    of the ``k`` rows where ``met`` holds, in row order.
+    """
+    first_of, second_of = [i for i, _ in _CENTROID_PAIRS], [j for _, j in _CENTROID_PAIRS]
+    third_of = [3 - i - j for i, j in _CENTROID_PAIRS]
+    ca, cb, ck = centres[first_of], centres[second_of], centres[third_of]
+    offset = cb - ca
+    separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
+    if 0.0 in separations:
+        return np.zeros((0, 2)), np.zeros(len(radii), dtype=bool)
+    separation = np.array(separations)
+    separation_sq = np.array([value**2 for value in separations])
+    ra, rb = radii[:, first_of], radii[:, second_of]
+    ra_sq, rb_sq = ra * ra, rb * rb
+    along = (ra_sq - rb_sq + separation_sq) / (2.0 * separation)
+    half_chord_sq = ra_sq - along * along
+    tolerance = _TANGENCY_RELATIVE_TOLERANCE * np.maximum(np.maximum(ra_sq, rb_sq), separation_sq)
+    met = (half_chord_sq >= -tolerance).all(axis=1)
+    rk = radii[:, third_of]
+    if not met.all():  # the rest only for the rows that keep their centroid
+        along, half_chord_sq, tolerance = along[met], half_chord_sq[met], tolerance[met]
+        rk = rk[met]
+    # x and y as separate (k, 3) arrays: the same arithmetic per element as (k, 3, 2) arrays,
+    # without numpy's slow inner loops of length 2
+    unit_x, unit_y = offset[:, 0] / separation, offset[:, 1] / separation
+    normal_x, normal_y = -unit_y, unit_x
+    foot_x, foot_y = ca[:, 0] + along * unit_x, ca[:, 1] + along * unit_y
+    half_chord = np.where(half_chord_sq <= tolerance, 0.0, np.sqrt(np.abs(half_chord_sq)))
+    chord_x, chord_y = half_chord * normal_x, half_chord * normal_y
+    first_x, first_y = foot_x + chord_x, foot_y + chord_y
+    second_x, second_y = foot_x - chord_x, foot_y - chord_y
+    take_second = array_second_misses_less(
+        first_x - ck[:, 0], first_y - ck[:, 1], second_x - ck[:, 0], second_y - ck[:, 1], rk
+    )
+    centroids = np.empty((len(rk), 2))
+    for column, (first_c, second_c) in enumerate(((first_x, second_x), (first_y, second_y))):
+        kept = np.where(take_second, second_c, first_c)
+        # the mean over the three pairs, summed in pair order as np.mean over that axis sums
+        centroids[:, column] = ((kept[:, 0] + kept[:, 1]) + kept[:, 2]) / 3
+    return centroids, met
+
+
+def array_second_misses_less(
+    first_x: np.ndarray,
+    first_y: np.ndarray,
+    second_x: np.ndarray,
+    second_y: np.ndarray,
+    radius: np.ndarray,
+) -> np.ndarray:
+    """``|hypot(second) - radius| < |hypot(first) - radius|``, elementwise (metres).
+
+    Which intersection point lies nearer the third circle (:func:`paper_centroid`). The
+    comparison is made on ``sqrt(x^2 + y^2)``, within a few ulps of ``hypot`` and several
+    times cheaper; where the two misses are too close for that to decide, or a square leaves
+    the float range, ``hypot`` itself decides, so the result is the ``hypot`` comparison's.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # such elements are decided by hypot
+        first = np.sqrt(first_x * first_x + first_y * first_y)
+        second = np.sqrt(second_x * second_x + second_y * second_y)
+        miss_first, miss_second = np.abs(first - radius), np.abs(second - radius)
+        take_second = miss_second < miss_first
+        margin = 1e-12 * (first + second + radius) + 1e-150
+        unsure = ~(np.abs(miss_second - miss_first) > margin)
+    if unsure.any():
+        exact_first = np.abs(np.hypot(first_x[unsure], first_y[unsure]) - radius[unsure])
+        exact_second = np.abs(np.hypot(second_x[unsure], second_y[unsure]) - radius[unsure])
+        take_second[unsure] = exact_second < exact_first
+    return take_second
+
+
+@pytest.mark.parametrize("noise_m", [1e-3, 0.05, 0.5])
+def test_the_compiled_paper_centroids_are_the_array_forms_bit_for_bit(noise_m: float) -> None:
+    from sonar_gym.localization.roh_trilateration import _paper_centroids
+
+    rng = np.random.default_rng(12)
+    met_rows = missed_rows = 0
+    for _ in range(200):
+        centres = rng.uniform(-3.0, 3.0, (3, 2))
+        truth = rng.uniform(-3.0, 3.0, 2)
+        exact = np.hypot(*(truth - centres).T)
+        radii = np.abs(exact + rng.normal(0.0, noise_m, (int(rng.integers(1, 60)), 3)))
+        compiled, compiled_met = _paper_centroids(centres, radii)
+        array, array_met = array_paper_centroids(centres, radii)
+        np.testing.assert_array_equal(compiled_met, array_met)
+        assert compiled.view(np.int64).tolist() == array.view(np.int64).tolist()
+        met_rows += int(array_met.sum())
+        missed_rows += int((~array_met).sum())
+    assert met_rows > 0 and missed_rows > 0
+
+
 @pytest.mark.parametrize("scale", [1.0, 1e-170, 1e170])
 def test_the_nearer_intersection_is_chosen_as_hypot_would_choose_it(scale: float) -> None:
-    from sonar_gym.localization.roh_trilateration import _second_misses_less
+    from sonar_gym.localization.roh_kernels import _second_is_nearer
 
     rng = np.random.default_rng(8)
     first_x, first_y = rng.normal(size=(2, 4000)) * scale
@@ -255,9 +357,17 @@ def test_the_nearer_intersection_is_chosen_as_hypot_would_choose_it(scale: float
     expected = np.abs(np.hypot(second_x, second_y) - radius) < np.abs(
         np.hypot(first_x, first_y) - radius
     )
-    chosen = _second_misses_less(first_x, first_y, second_x, second_y, radius)
+    chosen = np.array(
+        [
+            _second_is_nearer(*values)
+            for values in zip(first_x, first_y, second_x, second_y, radius, strict=True)
+        ]
+    )
     np.testing.assert_array_equal(chosen, expected)
     assert expected[1000:].any() and not expected[1000:].all()
+    np.testing.assert_array_equal(
+        array_second_misses_less(first_x, first_y, second_x, second_y, radius), expected
+    )
 
 
 def test_the_cross_product_of_the_calibration_frame_is_numpys() -> None:

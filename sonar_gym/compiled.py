@@ -1,0 +1,30 @@
+"""How the compiled loops are compiled (numba): one signature each, cached, numpy's arithmetic.
+
+Every loop is compiled for one signature whose arrays are read-only and of any layout, so
+writable, read-only and strided inputs share one compiled loop, cached beside its module
+(``cache=True``); it is loaded, not recompiled, by every later process. Division by zero gives
+inf or NaN as in numpy (``error_model="numpy"``), and no ``fastmath``: numba then fuses no
+multiply-add, so every elementwise step rounds as numpy's does.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numba
+from numba import types
+
+NUMBERS = types.Array(types.float64, 1, "A", readonly=True)
+"""A read-only 1-d float64 array of any layout."""
+FLAGS = types.Array(types.boolean, 1, "A", readonly=True)
+"""A read-only 1-d bool array of any layout."""
+INDICES = types.Array(types.int64, 1, "A", readonly=True)
+"""A read-only 1-d int64 array of any layout."""
+TABLE = types.Array(types.float64, 2, "A", readonly=True)
+"""A read-only 2-d float64 array of any layout."""
+
+
+def compiled(result: Any, *arguments: Any) -> Callable[[Callable[..., Any]], Any]:
+    """Decorator: compile a loop for ``result(*arguments)`` (numba types), cached."""
+    return numba.njit(result(*arguments), cache=True, error_model="numpy", nogil=True)  # type: ignore[no-any-return]

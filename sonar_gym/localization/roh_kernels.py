@@ -1,0 +1,221 @@
+"""Compiled inner loops of Roh et al.'s localization: the paper centroids of a range table and
+the nearest-segment search of the path errors (numba, :mod:`sonar_gym.compiled`).
+
+Both do the arithmetic of the array forms they replace element by element, in the same order
+(:func:`sonar_gym.localization.roh_trilateration._paper_centroids` and the windowed search of
+:class:`sonar_gym.localization.roh_path_errors.TruePath`), so they return the same bits; the
+array forms paid numpy's per-call cost on arrays of a few hundred rows.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import types
+
+from sonar_gym.compiled import INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.pose import FloatArray
+
+
+def nan_max(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is NaN."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+_nan_max = compiled(types.float64, types.float64, types.float64)(nan_max)
+
+
+def second_is_nearer(
+    first_dx: float, first_dy: float, second_dx: float, second_dy: float, radius: float
+) -> bool:
+    """``|hypot(second) - radius| < |hypot(first) - radius|``: whether the second point lies
+    nearer the circle of ``radius`` about the origin of the offsets (metres).
+
+    The comparison is made on ``sqrt(x^2 + y^2)``, within a few ulps of ``hypot`` and cheaper;
+    where the two misses are too close for that to decide, ``hypot`` itself decides, so the
+    answer is the ``hypot`` comparison's (:func:`paper_centroids`' choice of intersection).
+    """
+    to_first = math.sqrt(first_dx * first_dx + first_dy * first_dy)
+    to_second = math.sqrt(second_dx * second_dx + second_dy * second_dy)
+    miss_first, miss_second = abs(to_first - radius), abs(to_second - radius)
+    margin = 1e-12 * (to_first + to_second + radius) + 1e-150
+    if abs(miss_second - miss_first) > margin:
+        return miss_second < miss_first
+    return abs(np.hypot(second_dx, second_dy) - radius) < abs(np.hypot(first_dx, first_dy) - radius)
+
+
+_second_is_nearer = compiled(types.boolean, *[types.float64] * 5)(second_is_nearer)
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 2, "C"), types.Array(types.boolean, 1, "C"))),
+    TABLE,  # radii
+    INDICES,  # first_of
+    INDICES,  # second_of
+    INDICES,  # third_of
+    TABLE,  # first_centres
+    TABLE,  # third_centres
+    NUMBERS,  # separation
+    NUMBERS,  # separation_sq
+    TABLE,  # units
+    types.float64,  # tolerance
+)
+def _paper_centroids_loop(
+    radii: FloatArray,
+    first_of: np.ndarray,
+    second_of: np.ndarray,
+    third_of: np.ndarray,
+    first_centres: FloatArray,
+    third_centres: FloatArray,
+    separation: FloatArray,
+    separation_sq: FloatArray,
+    units: FloatArray,
+    tolerance: float,
+) -> tuple[FloatArray, np.ndarray]:
+    n_rows = radii.shape[0]
+    centroids = np.empty((n_rows, 2))
+    met = np.empty(n_rows, dtype=np.bool_)
+    along = np.empty(3)
+    half_chord_sq = np.empty(3)
+    tolerances = np.empty(3)
+    for row in range(n_rows):
+        meets = True
+        for pair in range(3):
+            ra, rb = radii[row, first_of[pair]], radii[row, second_of[pair]]
+            ra_sq, rb_sq = ra * ra, rb * rb
+            a = (ra_sq - rb_sq + separation_sq[pair]) / (2.0 * separation[pair])
+            along[pair] = a
+            half_chord_sq[pair] = ra_sq - a * a
+            tolerances[pair] = tolerance * _nan_max(_nan_max(ra_sq, rb_sq), separation_sq[pair])
+            if not half_chord_sq[pair] >= -tolerances[pair]:
+                meets = False
+        met[row] = meets
+        centroids[row, 0], centroids[row, 1] = np.nan, np.nan
+        if not meets:
+            continue
+        sum_x, sum_y = 0.0, 0.0
+        for pair in range(3):
+            ux, uy = units[pair, 0], units[pair, 1]
+            foot_x = first_centres[pair, 0] + along[pair] * ux
+            foot_y = first_centres[pair, 1] + along[pair] * uy
+            h = half_chord_sq[pair]
+            half_chord = 0.0 if h <= tolerances[pair] else math.sqrt(abs(h))
+            chord_x, chord_y = half_chord * -uy, half_chord * ux
+            first_x, first_y = foot_x + chord_x, foot_y + chord_y
+            second_x, second_y = foot_x - chord_x, foot_y - chord_y
+            rk = radii[row, third_of[pair]]
+            d1x, d1y = first_x - third_centres[pair, 0], first_y - third_centres[pair, 1]
+            d2x, d2y = second_x - third_centres[pair, 0], second_y - third_centres[pair, 1]
+            take_second = _second_is_nearer(d1x, d1y, d2x, d2y, rk)
+            kept_x = second_x if take_second else first_x
+            kept_y = second_y if take_second else first_y
+            if pair == 0:
+                sum_x, sum_y = kept_x, kept_y
+            else:
+                sum_x, sum_y = sum_x + kept_x, sum_y + kept_y
+        centroids[row, 0], centroids[row, 1] = sum_x / 3, sum_y / 3
+    return centroids, met
+
+
+def paper_centroids(
+    radii: FloatArray,
+    pairs: tuple[np.ndarray, np.ndarray, np.ndarray],
+    first_centres: FloatArray,
+    third_centres: FloatArray,
+    separation: FloatArray,
+    separation_sq: FloatArray,
+    units: FloatArray,
+    tolerance: float,
+) -> tuple[FloatArray, np.ndarray]:
+    """Per row of ``radii`` ``(m, 3)`` (metres): the centroid of the three kept intersection
+    points (``(m, 2)``, NaN where not met) and whether every pair of circles meets (``(m,)``).
+
+    Args:
+        pairs: ``(first, second, third)`` circle indices of the three pairs, ``(3,)`` each.
+        first_centres, third_centres: ``(3, 2)`` the first circle's and the third circle's
+            centre per pair, metres.
+        separation, separation_sq: ``(3,)`` centre distance per pair and its square.
+        units: ``(3, 2)`` unit vectors from the first centre to the second per pair.
+        tolerance: the relative tangency tolerance.
+    """
+    first_of, second_of, third_of = pairs
+    return _paper_centroids_loop(  # type: ignore[no-any-return]
+        radii,
+        first_of,
+        second_of,
+        third_of,
+        first_centres,
+        third_centres,
+        separation,
+        separation_sq,
+        units,
+        tolerance,
+    )
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 1, "C"),  # squared distances
+    TABLE,  # points
+    INDICES,  # first
+    INDICES,  # last
+    NUMBERS,  # sx
+    NUMBERS,  # sy
+    NUMBERS,  # dx
+    NUMBERS,  # dy
+    NUMBERS,  # safe_length_sq
+    types.Array(types.boolean, 1, "A", readonly=True),  # degenerate
+)
+def _window_nearest_sq_loop(
+    points: FloatArray,
+    first: np.ndarray,
+    last: np.ndarray,
+    sx: FloatArray,
+    sy: FloatArray,
+    dx: FloatArray,
+    dy: FloatArray,
+    safe_length_sq: FloatArray,
+    degenerate: np.ndarray,
+) -> FloatArray:
+    n_points = points.shape[0]
+    nearest = np.empty(n_points)
+    for point in range(n_points):
+        px, py = points[point, 0], points[point, 1]
+        best = np.inf
+        for segment in range(first[point], last[point] + 1):
+            rx, ry = px - sx[segment], py - sy[segment]
+            t = (rx * dx[segment] + ry * dy[segment]) / safe_length_sq[segment]
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            if degenerate[segment]:
+                t = 0.0
+            gx, gy = rx - t * dx[segment], ry - t * dy[segment]
+            squared = gx * gx + gy * gy
+            if squared < best or squared != squared:
+                best = squared
+        nearest[point] = best
+    return nearest
+
+
+def window_nearest_sq(
+    points: FloatArray,
+    first: np.ndarray,
+    last: np.ndarray,
+    segments: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, np.ndarray],
+) -> FloatArray:
+    """``(m,)`` squared distance (m^2) of each point to the nearest of segments
+    ``first[i]..last[i]`` (inclusive) of a polyline.
+
+    Args:
+        points: ``(m, 2)`` points, metres.
+        first, last: ``(m,)`` int64 segment index windows.
+        segments: ``(sx, sy, dx, dy, safe_length_sq, degenerate)`` per segment: start,
+            direction, squared length (1 where degenerate) and whether the length is zero.
+    """
+    return _window_nearest_sq_loop(points, first, last, *segments)  # type: ignore[no-any-return]
