@@ -15,6 +15,7 @@ a rebuilt geometry gets new tables).
 
 from __future__ import annotations
 
+import functools
 import weakref
 from dataclasses import dataclass, field
 
@@ -59,10 +60,6 @@ class EchoTables:
             itself; ``twin_comes_first``: whether that twin has the lower index, and
             ``twin_comes_last`` its complement.
         kinds_template: ``(S+C+V,)`` EchoKind codes with every vertex an edge.
-        ratio_centres, ratio_half_widths: ``(2 S + C, 1)`` the middle and half width of the
-            interval each occlusion ratio must fall in to block (``u`` of every segment, ``u*``
-            of every circle: ``[0, 1 - tol]``; ``v`` of every segment: ``[0, 1]``).
-        radius_sq_column: ``(C, 1)`` the squared radii.
         has_t_junctions: whether any wedge vertex has a twin (else every wedge passes its
             T-junction test whatever its concavity).
         rel_rows, along_rows, distance_rows, wedge_a_rows, wedge_b_rows, occlusion_rows: the
@@ -103,9 +100,6 @@ class EchoTables:
     twin_comes_first: np.ndarray
     twin_comes_last: np.ndarray
     kinds_template: np.ndarray
-    ratio_centres: FloatArray
-    ratio_half_widths: FloatArray
-    radius_sq_column: FloatArray
     has_t_junctions: bool
     rel_rows: slice
     along_rows: slice
@@ -122,6 +116,25 @@ class EchoTables:
     _inclusive_bounds: dict[tuple[float, float], FloatArray] = field(
         default_factory=dict, repr=False
     )
+
+    @functools.cached_property
+    def search_layout(self) -> np.ndarray:
+        """``(S, C, W, V, first ranges row, first rows of the wedge sides a and b)`` as int64:
+        what :func:`sonar_gym.sonar.kernels.on_axis_echoes` reads of these tables."""
+        layout = np.array(
+            (
+                self.n_segments,
+                self.n_circles,
+                self.n_wedges,
+                self.n_vertices,
+                self.ranges_rows.start,
+                self.wedge_a_rows.start,
+                self.wedge_b_rows.start,
+            ),
+            dtype=np.int64,
+        )
+        layout.flags.writeable = False
+        return layout
 
     def inclusive_bounds(self, min_range_m: float, detection_threshold: float) -> FloatArray:
         """``(3 N + S + C,)`` the bounds of the inclusive tests (``>=``) of the echo search: 0
@@ -235,10 +248,6 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     n_rel = 3 * n_candidates
     # The same constants as _UV_CENTRE and _UV_HALF_WIDTH of the occlusion test.
-    path_centre = (1.0 - PATH_END_TOLERANCE) / 2.0
-    ratio_centres = np.concatenate(
-        [np.full(n_segments + n_circles, path_centre), np.full(n_segments, 0.5)]
-    )[:, None]
     n_position_rows = len(position_map)
     position_and_occlusion_map = np.concatenate([position_map, occlusion.reshape(-1, 3)])
     # The per-candidate test rows of the search map (zeros but for segments; see EchoTables).
@@ -292,9 +301,6 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
                 np.full(n_vertices, edge, dtype=np.int8),
             ]
         ),
-        ratio_centres=ratio_centres,
-        ratio_half_widths=ratio_centres.copy(),
-        radius_sq_column=(geometry.circles[:, 2] ** 2)[:, None],
         has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
         rel_rows=slice(0, n_rel),
         along_rows=slice(n_rel, n_rel + n_segments),

@@ -212,48 +212,29 @@ def echo_candidates(
     """
     tables = echo_tables(geometry, _PLANE, _CYLINDER, _EDGE)
     px, py = float(position[0]), float(position[1])
-    n_segments = tables.n_segments
-    n_specular = n_segments + tables.n_circles
-    wedge_end = n_specular + tables.n_wedges
+    n_specular = tables.n_segments + tables.n_circles
 
-    n_candidates = n_specular + tables.n_vertices
     # The map's product holds every quantity affine in the position, and gets the ranges and
     # amplitudes written into its rows for them: from first_test_row on it is then every
     # per-candidate test, two comparisons in all.
     mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
     rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
-    concave = np.minimum(mapped[tables.wedge_a_rows], mapped[tables.wedge_b_rows]) > 0.0
-
-    # Ranges: planes and vertices are |rel|; a cylinder is its centre distance minus its radius.
-    # (Whole-array arithmetic with per-table padded constants rather than in-place updates of
-    # slices: on arrays this small, numpy's in-place operators cost more than the operation.)
-    distance = np.hypot(rel[:, 0], rel[:, 1])
-    centre_distance = distance[n_segments:n_specular]
-    ranges = np.subtract(distance, tables.radius_padded, out=mapped[tables.ranges_rows])
-    rel[n_segments:n_specular, :2] *= (1.0 - tables.radius / np.maximum(centre_distance, 1e-12))[
-        :, None
-    ]
-
-    safe = np.maximum(ranges, 1e-9)
-    inverse_square_law = 0.5 / safe  # planes and corners
-    vertex_ranges = safe[n_specular:]
-    if edge_law == "weak":
-        edges = EDGE_ECHO_STRENGTH_M / (vertex_ranges * vertex_ranges)
-    else:
-        edges = edge_echo_amplitude(vertex_ranges, wavenumber, edge_law)
-    echo_laws = (
-        inverse_square_law[:n_segments],
-        inverse_square_law[n_segments:n_specular]
-        * np.sqrt(tables.radius / (safe[n_segments:n_specular] + tables.radius)),
-        np.where(concave, inverse_square_law[n_specular:wedge_end], edges[: tables.n_wedges]),
-        edges[tables.n_wedges :],
+    # Ranges (planes and vertices |rel|, a cylinder its centre distance minus its radius,
+    # written into the map's ranges rows), the cylinders' offsets moved to their echo points,
+    # and the on-axis laws of the module docstring, candidate by candidate.
+    concave, centre_distance, safe, on_axis = kernels.on_axis_echoes(
+        mapped,
+        tables.search_layout,
+        tables.radius_padded,
+        tables.radius,
+        _edge_law(edge_law, wavenumber),
     )
+    ranges = mapped[tables.ranges_rows]
     amplitudes = mapped[tables.amplitudes_rows]
     absorbs = absorption_db_per_m > 0.0
     if not absorbs and receiver_gain is None:
-        np.concatenate(echo_laws, out=amplitudes)
+        amplitudes[:] = on_axis
     else:
-        on_axis = np.concatenate(echo_laws)
         if absorbs:
             # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
             absorption = np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
@@ -268,29 +249,16 @@ def echo_candidates(
     # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
     # minimum range and the threshold (a candidate is valid if it passes all five), then
     # which segments and circles may occlude.
-    first_test, tests_end = tables.first_test_row, 5 * n_candidates
-    tests = np.empty(tests_end + n_specular, dtype=bool)
-    np.greater(
-        mapped[first_test : first_test + 2 * n_candidates],
+    keep, occluders = kernels.passing_candidates(
+        mapped[tables.first_test_row :],
         tables.strict_bounds,
-        out=tests[: 2 * n_candidates],
-    )
-    np.greater_equal(
-        mapped[first_test + 2 * n_candidates :],
         tables.inclusive_bounds(max(min_range_m, 1e-9), detection_threshold),
-        out=tests[2 * n_candidates :],
+        concave,
+        tables.twin,
+        tables.twin_comes_last,
+        n_specular,
+        tables.has_t_junctions,
     )
-    valid = np.logical_and.reduce(tests[:tests_end].reshape(5, n_candidates), axis=0)
-    if tables.has_t_junctions:
-        # A T-junction yields one echo: from its concave side if it has one, else from its
-        # first vertex (where the twins differ, the concave one passes). Other vertices, and
-        # every vertex of a geometry without T-junctions, pass.
-        twin_concave = concave.take(tables.twin)
-        valid[n_specular:wedge_end] &= np.where(
-            twin_concave == concave, tables.twin_comes_last, concave
-        )
-
-    keep = valid.nonzero()[0]
     if footprint_center is not None and footprint_radius_m > 0.0:
         fx, fy = float(footprint_center[0]), float(footprint_center[1])
         if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
@@ -305,7 +273,7 @@ def echo_candidates(
             rel.take(keep, axis=0),
             ranges.take(keep),
             centre_distance,
-            tests[tests_end:],
+            occluders,
         )
     ]
     keep = keep[ranges.take(keep).argsort(kind="stable")]
@@ -320,6 +288,21 @@ def echo_candidates(
         _tables=tables,
         threshold=max(detection_threshold, 0.0),
     )
+
+
+@functools.lru_cache(maxsize=16)
+def _edge_law(edge_law: str, wavenumber: float) -> np.ndarray:
+    """``(1, s)`` for the weak edge law, ``(0, G / (2 sqrt(pi k)))`` for the GTD law."""
+    if edge_law == "weak":
+        law = np.array((1.0, EDGE_ECHO_STRENGTH_M))
+    elif edge_law == "gtd":
+        law = np.array(
+            (0.0, EDGE_DIFFRACTION_COEFFICIENT / (2.0 * math.sqrt(math.pi * wavenumber)))
+        )
+    else:
+        raise ValueError(f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {edge_law!r}")
+    law.flags.writeable = False
+    return law
 
 
 def _unoccluded(

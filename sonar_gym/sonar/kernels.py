@@ -1,4 +1,4 @@
-"""Compiled inner loops of the pan: the readout of many pings and the occlusion test (numba).
+"""Compiled inner loops of the pan: the readout of many pings, the echo search's tests (numba).
 
 The array forms in :mod:`sonar_gym.sonar.pulse_echo` and :mod:`sonar_gym.sonar.echoes` spend
 most of a pan in numpy's per-call overhead on arrays of a few hundred elements. These loops do
@@ -28,7 +28,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from sonar_gym.compiled import FLAGS, NUMBERS, TABLE, compiled
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled
 from sonar_gym.pose import FloatArray
 
 
@@ -147,6 +147,208 @@ def _unoccluded_loop(
                     clear[path] = False
                     break
     return clear
+
+
+def _nan_min(a: float, b: float) -> float:
+    """``np.minimum`` of two floats: NaN if either is NaN."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+def _nan_max(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is NaN."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+_compiled_nan_min = compiled(types.float64, types.float64, types.float64)(_nan_min)
+_compiled_nan_max = compiled(types.float64, types.float64, types.float64)(_nan_max)
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.boolean, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+        )
+    ),
+    types.Array(types.float64, 1, "C"),  # mapped (ranges and scaled cylinder offsets written)
+    INDICES,  # layout
+    NUMBERS,  # radius_padded
+    NUMBERS,  # radius
+    NUMBERS,  # edge law constants
+)
+def _on_axis_echoes_loop(
+    mapped: FloatArray,
+    layout: np.ndarray,
+    radius_padded: FloatArray,
+    radius: FloatArray,
+    edge_law: FloatArray,
+) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+    n_segments, n_circles, n_wedges, n_vertices = layout[0], layout[1], layout[2], layout[3]
+    ranges_start, wedge_a_start, wedge_b_start = layout[4], layout[5], layout[6]
+    weak, edge_constant = edge_law[0] > 0.0, edge_law[1]
+    n_specular = n_segments + n_circles
+    n_candidates = n_specular + n_vertices
+    concave = np.empty(n_wedges, dtype=np.bool_)
+    for wedge in range(n_wedges):
+        side = _compiled_nan_min(mapped[wedge_a_start + wedge], mapped[wedge_b_start + wedge])
+        concave[wedge] = side > 0.0
+    safe = np.empty(n_candidates)
+    centre_distance = np.empty(n_circles)
+    for candidate in range(n_candidates):
+        distance = np.hypot(mapped[3 * candidate], mapped[3 * candidate + 1])
+        reach = distance - radius_padded[candidate]
+        mapped[ranges_start + candidate] = reach
+        safe[candidate] = _compiled_nan_max(reach, 1e-9)
+        circle = candidate - n_segments
+        if 0 <= circle < n_circles:
+            centre_distance[circle] = distance
+            shrink = 1.0 - radius[circle] / _compiled_nan_max(distance, 1e-12)
+            mapped[3 * candidate] = mapped[3 * candidate] * shrink
+            mapped[3 * candidate + 1] = mapped[3 * candidate + 1] * shrink
+    on_axis = np.empty(n_candidates)
+    for candidate in range(n_candidates):
+        inverse_square = 0.5 / safe[candidate]
+        if candidate < n_segments:
+            on_axis[candidate] = inverse_square
+        elif candidate < n_specular:
+            rho = radius[candidate - n_segments]
+            on_axis[candidate] = inverse_square * math.sqrt(rho / (safe[candidate] + rho))
+        else:
+            r = safe[candidate]
+            edge = edge_constant / (r * r) if weak else edge_constant / (r * math.sqrt(r))
+            wedge = candidate - n_specular
+            if wedge < n_wedges and concave[wedge]:
+                on_axis[candidate] = inverse_square
+            else:
+                on_axis[candidate] = edge
+    return concave, centre_distance, safe, on_axis
+
+
+def on_axis_echoes(
+    mapped: FloatArray,
+    layout: np.ndarray,
+    radius_padded: FloatArray,
+    radius: FloatArray,
+    edge_law: FloatArray,
+) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+    """The ranges and on-axis echo laws of :func:`sonar_gym.sonar.echoes.echo_candidates`,
+    candidate by candidate: ``(concave (W,), centre distances (C,), ranges clipped at 1 nm
+    (N,), on-axis amplitudes before air and gain (N,))``, in metres and 1/m.
+
+    ``mapped`` is the search map's product at the sensor: its ``(rel_x, rel_y, 1)`` rows come
+    first (one per candidate); the ranges are written into its ranges rows and the cylinders'
+    offsets scaled to their echo points, in place.
+
+    Args:
+        layout: ``(S, C, W, V, first ranges row, first wedge-side row a, b)``.
+        radius_padded: ``(N,)`` each candidate's radius (0 but for cylinders), metres.
+        radius: ``(C,)`` cylinder radii, metres.
+        edge_law: ``(1, s)`` for the weak law ``s / r^2``, ``(0, G / (2 sqrt(pi k)))`` for the
+            GTD law ``G / (2 sqrt(pi k) r^1.5)``.
+    """
+    return _on_axis_echoes_loop(  # type: ignore[no-any-return]
+        mapped, layout, radius_padded, radius, edge_law
+    )
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.boolean, 1, "C"))),
+    NUMBERS,  # tested: mapped rows from the first test row on
+    NUMBERS,  # strict_bounds
+    NUMBERS,  # inclusive_bounds
+    FLAGS,  # concave
+    INDICES,  # twin
+    FLAGS,  # twin_comes_last
+    types.int64,  # n_specular
+    types.boolean,  # has_t_junctions
+)
+def _passing_candidates_loop(
+    tested: FloatArray,
+    strict_bounds: FloatArray,
+    inclusive_bounds: FloatArray,
+    concave: np.ndarray,
+    twin: np.ndarray,
+    twin_comes_last: np.ndarray,
+    n_specular: int,
+    has_t_junctions: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    n_candidates = strict_bounds.shape[0] // 2
+    n_wedges = concave.shape[0]
+    keep = np.empty(n_candidates, dtype=np.int64)
+    n_kept = 0
+    for candidate in range(n_candidates):
+        passes = True
+        for test in range(2):  # strictly inside the segment
+            row = test * n_candidates + candidate
+            if not tested[row] > strict_bounds[row]:
+                passes = False
+        for test in range(3):  # facing, minimum range, threshold
+            row = (2 + test) * n_candidates + candidate
+            if not tested[row] >= inclusive_bounds[row - 2 * n_candidates]:
+                passes = False
+        wedge = candidate - n_specular
+        if passes and has_t_junctions and 0 <= wedge < n_wedges:
+            if concave[twin[wedge]] == concave[wedge]:
+                passes = twin_comes_last[wedge]
+            else:
+                passes = concave[wedge]
+        if passes:
+            keep[n_kept] = candidate
+            n_kept += 1
+    n_occluders = tested.shape[0] - 5 * n_candidates
+    occluders = np.empty(n_occluders, dtype=np.bool_)
+    for occluder in range(n_occluders):
+        row = 5 * n_candidates + occluder
+        occluders[occluder] = tested[row] >= inclusive_bounds[row - 2 * n_candidates]
+    return keep[:n_kept].copy(), occluders
+
+
+def passing_candidates(
+    tested: FloatArray,
+    strict_bounds: FloatArray,
+    inclusive_bounds: FloatArray,
+    concave: np.ndarray,
+    twin: np.ndarray,
+    twin_comes_last: np.ndarray,
+    n_specular: int,
+    has_t_junctions: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The per-candidate tests of :func:`sonar_gym.sonar.echoes.echo_candidates`, candidate
+    by candidate: ``(indices of the candidates that pass, (S + C,) which primitives may
+    occlude)``.
+
+    Args:
+        tested: the search map's product from its first test row on (``5 N + S + C``): the
+            two strict tests, then the facing test, the ranges and the amplitudes, then the
+            occluder rows.
+        strict_bounds: ``(2 N,)`` bounds of the strict tests (``>``).
+        inclusive_bounds: ``(3 N + S + C,)`` bounds of the others (``>=``).
+        concave, twin, twin_comes_last: ``(W,)`` per wedge vertex: whether it is concave from
+            the sensor, its T-junction twin, and whether the twin comes last (a T-junction
+            echoes once: from its concave side if it has one, else from its first vertex).
+        n_specular: segments plus circles (the first wedge's candidate index).
+        has_t_junctions: whether any wedge has a twin.
+    """
+    return _passing_candidates_loop(  # type: ignore[no-any-return]
+        tested,
+        strict_bounds,
+        inclusive_bounds,
+        concave,
+        twin,
+        twin_comes_last,
+        n_specular,
+        has_t_junctions,
+    )
 
 
 def main_lobe_readings(

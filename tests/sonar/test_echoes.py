@@ -194,3 +194,31 @@ def test_corner_classification_matches_the_geometry(seed: int) -> None:
         if kind in (EchoKind.CORNER, EchoKind.EDGE):
             same = np.flatnonzero(np.linalg.norm(vertices - point, axis=1) < 1e-12)
             assert (kind == EchoKind.CORNER) == bool(concave[same].any())
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.integers(0, 10_000), st.sampled_from(["weak", "gtd"]))
+def test_every_candidate_is_as_loud_as_its_kinds_law(seed: int, edge_law: str) -> None:
+    test_world = cluttered_room()
+    (position,) = free_positions(test_world, np.random.default_rng(seed), 1)
+    found = candidates(test_world, position, edge_law=edge_law)
+    circles = test_world.geometry.circles
+    laws = {
+        EchoKind.PLANE: plane_echo_amplitude,
+        EchoKind.CORNER: corner_echo_amplitude,
+        EchoKind.EDGE: lambda r: edge_echo_amplitude(r, K_50KHZ, edge_law),
+    }
+    kinds = set()
+    for point, kind, path, amplitude in zip(
+        found.points, found.kinds, found.path_lengths, found.amplitudes, strict=True
+    ):
+        if kind == EchoKind.CYLINDER:
+            radius = circles[
+                np.argmin(np.abs(np.hypot(*(circles[:, :2] - point).T) - circles[:, 2])), 2
+            ]
+            expected = cylinder_echo_amplitude(path, radius)
+        else:
+            expected = laws[EchoKind(kind)](path)
+        assert amplitude == pytest.approx(float(expected), rel=1e-12)
+        kinds.add(int(kind))
+    assert EchoKind.PLANE in kinds

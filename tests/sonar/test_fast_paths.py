@@ -261,6 +261,56 @@ def test_compiled_occlusion_test_keeps_the_interval_ends_of_the_array_test() -> 
         assert 0 < plain.sum() < n_paths
 
 
+def array_passing_candidates(
+    tested: np.ndarray,
+    strict_bounds: np.ndarray,
+    inclusive_bounds: np.ndarray,
+    concave: np.ndarray,
+    twin: np.ndarray,
+    twin_comes_last: np.ndarray,
+    n_specular: int,
+    has_t_junctions: bool,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The echo search's per-candidate tests over whole arrays (the compiled loop's reference)."""
+    n_candidates = len(strict_bounds) // 2
+    tests = np.empty(len(tested), dtype=bool)
+    np.greater(tested[: 2 * n_candidates], strict_bounds, out=tests[: 2 * n_candidates])
+    np.greater_equal(tested[2 * n_candidates :], inclusive_bounds, out=tests[2 * n_candidates :])
+    valid = np.logical_and.reduce(tests[: 5 * n_candidates].reshape(5, n_candidates), axis=0)
+    if has_t_junctions:
+        wedges = slice(n_specular, n_specular + len(concave))
+        valid[wedges] &= np.where(concave.take(twin) == concave, twin_comes_last, concave)
+    return valid.nonzero()[0], tests[5 * n_candidates :]
+
+
+@pytest.mark.parametrize("t_junctions", [False, True])
+def test_compiled_candidate_tests_pass_what_the_array_tests_pass(t_junctions: bool) -> None:
+    rng = np.random.default_rng(13)
+    passed = 0
+    for _ in range(200):
+        n_specular, n_wedges, n_others = (int(n) for n in rng.integers(1, 12, 3))
+        n_candidates = n_specular + n_wedges + n_others
+        n_occluders = int(rng.integers(0, 10))
+        strict = rng.choice([0.0, -1.0], 2 * n_candidates)
+        inclusive = rng.choice([0.0, 0.3, 1e-4], 3 * n_candidates + n_occluders)
+        # values on, just above and below the bounds, and NaN
+        tested = np.concatenate([strict, inclusive]) + rng.choice(
+            [0.0, 1e-17, -1e-17, 0.5, -0.5, np.nan], 5 * n_candidates + n_occluders
+        )
+        concave = rng.random(n_wedges) < 0.5
+        twin = np.arange(n_wedges)
+        if t_junctions and n_wedges > 1:
+            pair = rng.choice(n_wedges, 2, replace=False)
+            twin[pair[0]], twin[pair[1]] = pair[1], pair[0]
+        args = (tested, strict, inclusive, concave, twin, twin >= np.arange(n_wedges))
+        compiled = kernels.passing_candidates(*args, n_specular, t_junctions)
+        array = array_passing_candidates(*args, n_specular, t_junctions)
+        np.testing.assert_array_equal(compiled[0], array[0])
+        np.testing.assert_array_equal(compiled[1], array[1])
+        passed += len(array[0])
+    assert passed > 0
+
+
 @pytest.mark.parametrize("leakage", [0.0, 0.07])
 def test_pattern_in_front_and_reachable_limits_equal_the_checked_forms(leakage: float) -> None:
     beam = PistonBeam.for_ka(17.6, False, leakage)
