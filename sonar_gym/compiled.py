@@ -28,3 +28,27 @@ TABLE = types.Array(types.float64, 2, "A", readonly=True)
 def compiled(result: Any, *arguments: Any) -> Callable[[Callable[..., Any]], Any]:
     """Decorator: compile a loop for ``result(*arguments)`` (numba types), cached."""
     return numba.njit(result(*arguments), cache=True, error_model="numpy", nogil=True)  # type: ignore[no-any-return]
+
+
+def _nan_min(a: float, b: float) -> float:
+    """``np.minimum`` of two floats: NaN if either is NaN."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a <= b else b
+
+
+def _nan_max(a: float, b: float) -> float:
+    """``np.maximum`` of two floats: NaN if either is NaN."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a >= b else b
+
+
+nan_min = compiled(types.float64, types.float64, types.float64)(_nan_min)
+"""``np.minimum`` of two floats inside a compiled loop (Python's ``min`` drops a NaN)."""
+nan_max = compiled(types.float64, types.float64, types.float64)(_nan_max)
+"""``np.maximum`` of two floats inside a compiled loop (Python's ``max`` drops a NaN)."""

@@ -14,20 +14,8 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max
 from sonar_gym.pose import FloatArray
-
-
-def nan_max(a: float, b: float) -> float:
-    """``np.maximum`` of two floats: NaN if either is NaN."""
-    if a != a:
-        return a
-    if b != b:
-        return b
-    return a if a >= b else b
-
-
-_nan_max = compiled(types.float64, types.float64, types.float64)(nan_max)
 
 
 def second_is_nearer(
@@ -65,7 +53,7 @@ _second_is_nearer = compiled(types.boolean, *[types.float64] * 5)(second_is_near
     TABLE,  # units
     types.float64,  # tolerance
 )
-def _paper_centroids_loop(
+def paper_centroids(
     radii: FloatArray,
     first_of: np.ndarray,
     second_of: np.ndarray,
@@ -77,6 +65,17 @@ def _paper_centroids_loop(
     units: FloatArray,
     tolerance: float,
 ) -> tuple[FloatArray, np.ndarray]:
+    """Per row of ``radii`` ``(m, 3)`` (metres): the centroid of the three kept intersection
+    points (``(m, 2)``, NaN where not met) and whether every pair of circles meets (``(m,)``).
+
+    Args:
+        first_of, second_of, third_of: ``(3,)`` the circle indices of each pair and the third.
+        first_centres, third_centres: ``(3, 2)`` the first circle's and the third circle's
+            centre per pair, metres.
+        separation, separation_sq: ``(3,)`` centre distance per pair and its square.
+        units: ``(3, 2)`` unit vectors from the first centre to the second per pair.
+        tolerance: the relative tangency tolerance.
+    """
     n_rows = radii.shape[0]
     centroids = np.empty((n_rows, 2))
     met = np.empty(n_rows, dtype=np.bool_)
@@ -91,7 +90,7 @@ def _paper_centroids_loop(
             a = (ra_sq - rb_sq + separation_sq[pair]) / (2.0 * separation[pair])
             along[pair] = a
             half_chord_sq[pair] = ra_sq - a * a
-            tolerances[pair] = tolerance * _nan_max(_nan_max(ra_sq, rb_sq), separation_sq[pair])
+            tolerances[pair] = tolerance * nan_max(nan_max(ra_sq, rb_sq), separation_sq[pair])
             if not half_chord_sq[pair] >= -tolerances[pair]:
                 meets = False
         met[row] = meets
@@ -122,42 +121,6 @@ def _paper_centroids_loop(
     return centroids, met
 
 
-def paper_centroids(
-    radii: FloatArray,
-    pairs: tuple[np.ndarray, np.ndarray, np.ndarray],
-    first_centres: FloatArray,
-    third_centres: FloatArray,
-    separation: FloatArray,
-    separation_sq: FloatArray,
-    units: FloatArray,
-    tolerance: float,
-) -> tuple[FloatArray, np.ndarray]:
-    """Per row of ``radii`` ``(m, 3)`` (metres): the centroid of the three kept intersection
-    points (``(m, 2)``, NaN where not met) and whether every pair of circles meets (``(m,)``).
-
-    Args:
-        pairs: ``(first, second, third)`` circle indices of the three pairs, ``(3,)`` each.
-        first_centres, third_centres: ``(3, 2)`` the first circle's and the third circle's
-            centre per pair, metres.
-        separation, separation_sq: ``(3,)`` centre distance per pair and its square.
-        units: ``(3, 2)`` unit vectors from the first centre to the second per pair.
-        tolerance: the relative tangency tolerance.
-    """
-    first_of, second_of, third_of = pairs
-    return _paper_centroids_loop(  # type: ignore[no-any-return]
-        radii,
-        first_of,
-        second_of,
-        third_of,
-        first_centres,
-        third_centres,
-        separation,
-        separation_sq,
-        units,
-        tolerance,
-    )
-
-
 @compiled(  # type: ignore[misc]
     types.Array(types.float64, 1, "C"),  # squared distances
     TABLE,  # points
@@ -168,9 +131,9 @@ def paper_centroids(
     NUMBERS,  # dx
     NUMBERS,  # dy
     NUMBERS,  # safe_length_sq
-    types.Array(types.boolean, 1, "A", readonly=True),  # degenerate
+    FLAGS,  # degenerate
 )
-def _window_nearest_sq_loop(
+def window_nearest_sq(
     points: FloatArray,
     first: np.ndarray,
     last: np.ndarray,
@@ -181,6 +144,15 @@ def _window_nearest_sq_loop(
     safe_length_sq: FloatArray,
     degenerate: np.ndarray,
 ) -> FloatArray:
+    """``(m,)`` squared distance (m^2) of each point to the nearest of segments
+    ``first[i]..last[i]`` (inclusive) of a polyline.
+
+    Args:
+        points: ``(m, 2)`` points, metres.
+        first, last: ``(m,)`` int64 segment index windows.
+        sx, sy, dx, dy, safe_length_sq, degenerate: per segment its start and direction
+            (metres), its squared length (1 where degenerate) and whether that length is 0.
+    """
     n_points = points.shape[0]
     nearest = np.empty(n_points)
     for point in range(n_points):
@@ -201,21 +173,3 @@ def _window_nearest_sq_loop(
                 best = squared
         nearest[point] = best
     return nearest
-
-
-def window_nearest_sq(
-    points: FloatArray,
-    first: np.ndarray,
-    last: np.ndarray,
-    segments: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, np.ndarray],
-) -> FloatArray:
-    """``(m,)`` squared distance (m^2) of each point to the nearest of segments
-    ``first[i]..last[i]`` (inclusive) of a polyline.
-
-    Args:
-        points: ``(m, 2)`` points, metres.
-        first, last: ``(m,)`` int64 segment index windows.
-        segments: ``(sx, sy, dx, dy, safe_length_sq, degenerate)`` per segment: start,
-            direction, squared length (1 where degenerate) and whether the length is zero.
-    """
-    return _window_nearest_sq_loop(points, first, last, *segments)  # type: ignore[no-any-return]

@@ -222,14 +222,12 @@ class TruePath:
             points,
             first.astype(np.int64, copy=False),
             last.astype(np.int64, copy=False),
-            (
-                segments.sx,
-                segments.sy,
-                segments.dx,
-                segments.dy,
-                segments.safe_length_sq,
-                segments.degenerate,
-            ),
+            segments.sx,
+            segments.sy,
+            segments.dx,
+            segments.dy,
+            segments.safe_length_sq,
+            segments.degenerate,
         )
         return np.sqrt(nearest_sq)
 

@@ -784,7 +784,7 @@ def _paper_centroids(
     first_centres, third_centres, separation, separation_sq, units = geometry
     centroids, met = roh_kernels.paper_centroids(
         radii,
-        _PAIR_CIRCLES,
+        *_PAIR_CIRCLES,
         first_centres,
         third_centres,
         separation,

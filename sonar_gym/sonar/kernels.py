@@ -28,7 +28,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max, nan_min
 from sonar_gym.pose import FloatArray
 
 
@@ -60,7 +60,7 @@ _fma: Any = intrinsic(_fused_multiply_add)
     NUMBERS,  # normals
     NUMBERS,  # constants
 )
-def _main_lobe_readings_loop(
+def main_lobe_readings(
     directions: FloatArray,
     in_frame: FloatArray,
     limits: FloatArray,
@@ -70,6 +70,24 @@ def _main_lobe_readings_loop(
     normals: FloatArray,
     constants: FloatArray,
 ) -> FloatArray:
+    """``(2, pings)`` rows of ranges (m, NaN for a dropout) and amplitudes (1/m, 0 for one).
+
+    The loop of :func:`sonar_gym.sonar.pulse_echo._main_lobe_readings`: per ping the first
+    candidate whose cosine reaches its limit, the beam's table at that cosine, then steps 1-5
+    of the readout.
+
+    Args:
+        directions: ``(pings, 2)`` beam directions in the robot frame {R} (unit vectors).
+        in_frame: ``(2, candidates)`` candidate directions in {R}.
+        limits: ``(candidates,)`` the cosine each candidate needs to be detected.
+        amplitudes, path_lengths: ``(candidates,)`` on-axis amplitudes (1/m), one-way paths (m).
+        cells: the beam's ``(value, slope)`` table, :class:`~sonar_gym.sonar.acoustics.PistonBeam`.
+        normals: ``(pings,)`` standard normals of the jitter, or empty without jitter.
+        constants: table steps per unit of ``s``; seconds of flight per metre of path (``2 /
+            c_true``); the crossing-delay numerator (``rise time x threshold``, 0 without the
+            delay); jitter in seconds per normal; ``1 / T0`` and ``T0`` (0 without a counter);
+            metres per second of flight (``c_assumed / 2``); the maximum range (m).
+    """
     steps, tof_per_m, delay_numerator = constants[0], constants[1], constants[2]
     jitter_s, inverse_period, period = constants[3], constants[4], constants[5]
     metres_per_s, max_range = constants[6], constants[7]
@@ -112,7 +130,7 @@ def _main_lobe_readings_loop(
     FLAGS,  # occluders
     types.float64,  # path_centre
 )
-def _unoccluded_loop(
+def unoccluded(
     products: FloatArray,
     ranges: FloatArray,
     centre_distance: FloatArray,
@@ -120,6 +138,22 @@ def _unoccluded_loop(
     occluders: np.ndarray,
     path_centre: float,
 ) -> np.ndarray:
+    """``(paths,)`` which paths no occluding segment crosses and no circle cuts.
+
+    The tests of :func:`sonar_gym.sonar.echoes._unoccluded`, path by path.
+
+    Args:
+        products: ``(3 S + C, paths)`` the occlusion map times each path (crossing
+            denominators, the ``u`` and ``v`` numerators per segment, then ``c - p . rel`` per
+            circle), metres squared.
+        ranges: ``(paths,)`` path lengths, metres.
+        centre_distance: ``(C,)`` sensor-to-centre distances, metres.
+        radius_sq: ``(C,)`` squared circle radii, m^2.
+        occluders: ``(S + C,)`` which segments may occlude (the circle entries are ignored:
+            every circle may).
+        path_centre: the middle (and half width) of the blocking interval of ``u`` and ``u*``,
+            ``(1 - tol) / 2``.
+    """
     n_circles = centre_distance.shape[0]
     n_segments = (products.shape[0] - n_circles) // 3
     n_paths = ranges.shape[0]
@@ -149,28 +183,6 @@ def _unoccluded_loop(
     return clear
 
 
-def _nan_min(a: float, b: float) -> float:
-    """``np.minimum`` of two floats: NaN if either is NaN."""
-    if a != a:
-        return a
-    if b != b:
-        return b
-    return a if a <= b else b
-
-
-def _nan_max(a: float, b: float) -> float:
-    """``np.maximum`` of two floats: NaN if either is NaN."""
-    if a != a:
-        return a
-    if b != b:
-        return b
-    return a if a >= b else b
-
-
-_compiled_nan_min = compiled(types.float64, types.float64, types.float64)(_nan_min)
-_compiled_nan_max = compiled(types.float64, types.float64, types.float64)(_nan_max)
-
-
 @compiled(  # type: ignore[misc]
     types.Tuple(
         (
@@ -186,54 +198,6 @@ _compiled_nan_max = compiled(types.float64, types.float64, types.float64)(_nan_m
     NUMBERS,  # radius
     NUMBERS,  # edge law constants
 )
-def _on_axis_echoes_loop(
-    mapped: FloatArray,
-    layout: np.ndarray,
-    radius_padded: FloatArray,
-    radius: FloatArray,
-    edge_law: FloatArray,
-) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
-    n_segments, n_circles, n_wedges, n_vertices = layout[0], layout[1], layout[2], layout[3]
-    ranges_start, wedge_a_start, wedge_b_start = layout[4], layout[5], layout[6]
-    weak, edge_constant = edge_law[0] > 0.0, edge_law[1]
-    n_specular = n_segments + n_circles
-    n_candidates = n_specular + n_vertices
-    concave = np.empty(n_wedges, dtype=np.bool_)
-    for wedge in range(n_wedges):
-        side = _compiled_nan_min(mapped[wedge_a_start + wedge], mapped[wedge_b_start + wedge])
-        concave[wedge] = side > 0.0
-    safe = np.empty(n_candidates)
-    centre_distance = np.empty(n_circles)
-    for candidate in range(n_candidates):
-        distance = np.hypot(mapped[3 * candidate], mapped[3 * candidate + 1])
-        reach = distance - radius_padded[candidate]
-        mapped[ranges_start + candidate] = reach
-        safe[candidate] = _compiled_nan_max(reach, 1e-9)
-        circle = candidate - n_segments
-        if 0 <= circle < n_circles:
-            centre_distance[circle] = distance
-            shrink = 1.0 - radius[circle] / _compiled_nan_max(distance, 1e-12)
-            mapped[3 * candidate] = mapped[3 * candidate] * shrink
-            mapped[3 * candidate + 1] = mapped[3 * candidate + 1] * shrink
-    on_axis = np.empty(n_candidates)
-    for candidate in range(n_candidates):
-        inverse_square = 0.5 / safe[candidate]
-        if candidate < n_segments:
-            on_axis[candidate] = inverse_square
-        elif candidate < n_specular:
-            rho = radius[candidate - n_segments]
-            on_axis[candidate] = inverse_square * math.sqrt(rho / (safe[candidate] + rho))
-        else:
-            r = safe[candidate]
-            edge = edge_constant / (r * r) if weak else edge_constant / (r * math.sqrt(r))
-            wedge = candidate - n_specular
-            if wedge < n_wedges and concave[wedge]:
-                on_axis[candidate] = inverse_square
-            else:
-                on_axis[candidate] = edge
-    return concave, centre_distance, safe, on_axis
-
-
 def on_axis_echoes(
     mapped: FloatArray,
     layout: np.ndarray,
@@ -256,9 +220,45 @@ def on_axis_echoes(
         edge_law: ``(1, s)`` for the weak law ``s / r^2``, ``(0, G / (2 sqrt(pi k)))`` for the
             GTD law ``G / (2 sqrt(pi k) r^1.5)``.
     """
-    return _on_axis_echoes_loop(  # type: ignore[no-any-return]
-        mapped, layout, radius_padded, radius, edge_law
-    )
+    n_segments, n_circles, n_wedges, n_vertices = layout[0], layout[1], layout[2], layout[3]
+    ranges_start, wedge_a_start, wedge_b_start = layout[4], layout[5], layout[6]
+    weak, edge_constant = edge_law[0] > 0.0, edge_law[1]
+    n_specular = n_segments + n_circles
+    n_candidates = n_specular + n_vertices
+    concave = np.empty(n_wedges, dtype=np.bool_)
+    for wedge in range(n_wedges):
+        side = nan_min(mapped[wedge_a_start + wedge], mapped[wedge_b_start + wedge])
+        concave[wedge] = side > 0.0
+    safe = np.empty(n_candidates)
+    centre_distance = np.empty(n_circles)
+    for candidate in range(n_candidates):
+        distance = np.hypot(mapped[3 * candidate], mapped[3 * candidate + 1])
+        reach = distance - radius_padded[candidate]
+        mapped[ranges_start + candidate] = reach
+        safe[candidate] = nan_max(reach, 1e-9)
+        circle = candidate - n_segments
+        if 0 <= circle < n_circles:
+            centre_distance[circle] = distance
+            shrink = 1.0 - radius[circle] / nan_max(distance, 1e-12)
+            mapped[3 * candidate] = mapped[3 * candidate] * shrink
+            mapped[3 * candidate + 1] = mapped[3 * candidate + 1] * shrink
+    on_axis = np.empty(n_candidates)
+    for candidate in range(n_candidates):
+        inverse_square = 0.5 / safe[candidate]
+        if candidate < n_segments:
+            on_axis[candidate] = inverse_square
+        elif candidate < n_specular:
+            rho = radius[candidate - n_segments]
+            on_axis[candidate] = inverse_square * math.sqrt(rho / (safe[candidate] + rho))
+        else:
+            r = safe[candidate]
+            edge = edge_constant / (r * r) if weak else edge_constant / (r * math.sqrt(r))
+            wedge = candidate - n_specular
+            if wedge < n_wedges and concave[wedge]:
+                on_axis[candidate] = inverse_square
+            else:
+                on_axis[candidate] = edge
+    return concave, centre_distance, safe, on_axis
 
 
 @compiled(  # type: ignore[misc]
@@ -272,7 +272,7 @@ def on_axis_echoes(
     types.int64,  # n_specular
     types.boolean,  # has_t_junctions
 )
-def _passing_candidates_loop(
+def passing_candidates(
     tested: FloatArray,
     strict_bounds: FloatArray,
     inclusive_bounds: FloatArray,
@@ -282,6 +282,22 @@ def _passing_candidates_loop(
     n_specular: int,
     has_t_junctions: bool,
 ) -> tuple[np.ndarray, np.ndarray]:
+    """The per-candidate tests of :func:`sonar_gym.sonar.echoes.echo_candidates`, candidate
+    by candidate: ``(indices of the candidates that pass, (S + C,) which primitives may
+    occlude)``.
+
+    Args:
+        tested: the search map's product from its first test row on (``5 N + S + C``): the
+            two strict tests, then the facing test, the ranges and the amplitudes, then the
+            occluder rows.
+        strict_bounds: ``(2 N,)`` bounds of the strict tests (``>``).
+        inclusive_bounds: ``(3 N + S + C,)`` bounds of the others (``>=``).
+        concave, twin, twin_comes_last: ``(W,)`` per wedge vertex: whether it is concave from
+            the sensor, its T-junction twin, and whether the twin comes last (a T-junction
+            echoes once: from its concave side if it has one, else from its first vertex).
+        n_specular: segments plus circles (the first wedge's candidate index).
+        has_t_junctions: whether any wedge has a twin.
+    """
     n_candidates = strict_bounds.shape[0] // 2
     n_wedges = concave.shape[0]
     keep = np.empty(n_candidates, dtype=np.int64)
@@ -311,103 +327,3 @@ def _passing_candidates_loop(
         row = 5 * n_candidates + occluder
         occluders[occluder] = tested[row] >= inclusive_bounds[row - 2 * n_candidates]
     return keep[:n_kept].copy(), occluders
-
-
-def passing_candidates(
-    tested: FloatArray,
-    strict_bounds: FloatArray,
-    inclusive_bounds: FloatArray,
-    concave: np.ndarray,
-    twin: np.ndarray,
-    twin_comes_last: np.ndarray,
-    n_specular: int,
-    has_t_junctions: bool,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The per-candidate tests of :func:`sonar_gym.sonar.echoes.echo_candidates`, candidate
-    by candidate: ``(indices of the candidates that pass, (S + C,) which primitives may
-    occlude)``.
-
-    Args:
-        tested: the search map's product from its first test row on (``5 N + S + C``): the
-            two strict tests, then the facing test, the ranges and the amplitudes, then the
-            occluder rows.
-        strict_bounds: ``(2 N,)`` bounds of the strict tests (``>``).
-        inclusive_bounds: ``(3 N + S + C,)`` bounds of the others (``>=``).
-        concave, twin, twin_comes_last: ``(W,)`` per wedge vertex: whether it is concave from
-            the sensor, its T-junction twin, and whether the twin comes last (a T-junction
-            echoes once: from its concave side if it has one, else from its first vertex).
-        n_specular: segments plus circles (the first wedge's candidate index).
-        has_t_junctions: whether any wedge has a twin.
-    """
-    return _passing_candidates_loop(  # type: ignore[no-any-return]
-        tested,
-        strict_bounds,
-        inclusive_bounds,
-        concave,
-        twin,
-        twin_comes_last,
-        n_specular,
-        has_t_junctions,
-    )
-
-
-def main_lobe_readings(
-    directions: FloatArray,
-    in_frame: FloatArray,
-    limits: FloatArray,
-    amplitudes: FloatArray,
-    path_lengths: FloatArray,
-    cells: FloatArray,
-    normals: FloatArray,
-    constants: FloatArray,
-) -> FloatArray:
-    """``(2, pings)`` rows of ranges (m, NaN for a dropout) and amplitudes (1/m, 0 for one).
-
-    The loop of :func:`sonar_gym.sonar.pulse_echo._main_lobe_readings`: per ping the first
-    candidate whose cosine reaches its limit, the beam's table at that cosine, then steps 1-5
-    of the readout.
-
-    Args:
-        directions: ``(pings, 2)`` beam directions in the robot frame {R} (unit vectors).
-        in_frame: ``(2, candidates)`` candidate directions in {R}.
-        limits: ``(candidates,)`` the cosine each candidate needs to be detected.
-        amplitudes, path_lengths: ``(candidates,)`` on-axis amplitudes (1/m), one-way paths (m).
-        cells: the beam's ``(value, slope)`` table, :class:`~sonar_gym.sonar.acoustics.PistonBeam`.
-        normals: ``(pings,)`` standard normals of the jitter, or empty without jitter.
-        constants: table steps per unit of ``s``; seconds of flight per metre of path (``2 /
-            c_true``); the crossing-delay numerator (``rise time x threshold``, 0 without the
-            delay); jitter in seconds per normal; ``1 / T0`` and ``T0`` (0 without a counter);
-            metres per second of flight (``c_assumed / 2``); the maximum range (m).
-    """
-    return _main_lobe_readings_loop(  # type: ignore[no-any-return]
-        directions, in_frame, limits, amplitudes, path_lengths, cells, normals, constants
-    )
-
-
-def unoccluded(
-    products: FloatArray,
-    ranges: FloatArray,
-    centre_distance: FloatArray,
-    radius_sq: FloatArray,
-    occluders: np.ndarray,
-    path_centre: float,
-) -> np.ndarray:
-    """``(paths,)`` which paths no occluding segment crosses and no circle cuts.
-
-    The tests of :func:`sonar_gym.sonar.echoes._unoccluded`, path by path.
-
-    Args:
-        products: ``(3 S + C, paths)`` the occlusion map times each path (crossing
-            denominators, the ``u`` and ``v`` numerators per segment, then ``c - p . rel`` per
-            circle), metres squared.
-        ranges: ``(paths,)`` path lengths, metres.
-        centre_distance: ``(C,)`` sensor-to-centre distances, metres.
-        radius_sq: ``(C,)`` squared circle radii, m^2.
-        occluders: ``(S + C,)`` which segments may occlude (the circle entries are ignored:
-            every circle may).
-        path_centre: the middle (and half width) of the blocking interval of ``u`` and ``u*``,
-            ``(1 - tol) / 2``.
-    """
-    return _unoccluded_loop(  # type: ignore[no-any-return]
-        products, ranges, centre_distance, radius_sq, occluders, path_centre
-    )

@@ -420,7 +420,9 @@ def _main_lobe_readings(
     The same arithmetic in the same order, minus the steps whose results are discarded: the
     amplitude of a ping that detects nothing is never read (it is masked at the end), so it
     is neither zeroed nor checked for lying behind the transducer (a detected echo is in
-    front: its cosine reaches a positive limit).
+    front: its cosine reaches a positive limit). Two or more pings at two or more candidates
+    go through the compiled loop :func:`sonar_gym.sonar.kernels.main_lobe_readings`, the
+    same numbers ping by ping.
     """
     threshold = transducer.detection_threshold
     amplitudes, path_lengths = candidates.amplitudes, candidates.path_lengths
@@ -431,19 +433,37 @@ def _main_lobe_readings(
     limits = beam.main_lobe_cos_limits(
         threshold / amplitudes, reachable=candidates.threshold >= threshold
     )
-    if n >= 2 and n_candidates >= 2:  # numpy's products round as kernels.fma there
-        return _compiled_main_lobe_readings(
-            candidates,
+    jitter = readout.range_noise and transducer.range_noise_std_m > 0.0
+    normals = _NO_NORMALS  # one standard normal per ping, drawn alike on both paths
+    if jitter:
+        if rng is None:
+            raise ValueError("argument 'rng' is needed: the readout adds range noise")
+        normals = rng.standard_normal(n)
+    jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps if jitter else 0.0
+    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
+    period = transducer.timer_period_s if readout.quantisation else 0.0
+    if n >= 2 and n_candidates >= 2:  # there numpy's products round as the loop's fma
+        constants = (
+            float(TABLE_STEPS_PER_UNIT),
+            2.0 / true_speed_mps,
+            transducer.echo_rise_time_s * threshold if delay else 0.0,
+            jitter_s,
+            1.0 / period if period > 0.0 else 0.0,
+            period,
+            assumed_speed_mps / 2.0,
+            transducer.max_range_m,
+        )
+        compiled = kernels.main_lobe_readings(
             beam_directions,
-            beam,
-            transducer,
-            true_speed_mps,
-            assumed_speed_mps,
-            readout,
-            rng,
             in_frame,
             limits,
+            amplitudes,
+            path_lengths,
+            beam.cells,
+            normals,
+            np.array(constants),
         )
+        return compiled[0], compiled[1]
     cosines = np.dot(beam_directions, in_frame)  # (pings, candidates)
     detected = cosines >= limits
     first = detected.argmax(axis=1)  # candidates are sorted nearest first
@@ -456,69 +476,17 @@ def _main_lobe_readings(
     )
     # measured_times and echo_readings, steps 1-5 of the module docstring:
     tof = path_lengths.take(first) * (2.0 / true_speed_mps)
-    if readout.crossing_delay and transducer.echo_rise_time_s > 0.0:
+    if delay:
         safe = np.where(hit, first_amplitude, threshold)
         tof = tof + (transducer.echo_rise_time_s * threshold) / safe
-    if readout.range_noise and transducer.range_noise_std_m > 0.0:
-        if rng is None:
-            raise ValueError("argument 'rng' is needed: the readout adds range noise")
-        jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps
-        tof = tof + rng.standard_normal(n) * jitter_s
-    if readout.quantisation and transducer.timer_period_s > 0.0:
-        period = transducer.timer_period_s
+    if jitter:
+        tof = tof + normals * jitter_s
+    if period > 0.0:
         tof = np.floor(tof * (1.0 / period)) * period
     ranges = np.multiply(tof, assumed_speed_mps / 2.0, out=readings[0])
     valid = hit & (ranges <= transducer.max_range_m)
     masked = np.where(valid, readings, _DROPOUT_READING)
     return masked[0], masked[1]
-
-
-def _compiled_main_lobe_readings(
-    candidates: EchoCandidates,
-    beam_directions: FloatArray,
-    beam: PistonBeam,
-    transducer: Transducer,
-    true_speed_mps: float,
-    assumed_speed_mps: float,
-    readout: Readout,
-    rng: np.random.Generator | None,
-    in_frame: FloatArray,
-    limits: FloatArray,
-) -> tuple[FloatArray, FloatArray]:
-    """:func:`_main_lobe_readings` through :func:`sonar_gym.sonar.kernels.main_lobe_readings`:
-    the same numbers and the same draws (one normal per ping, as numpy's path draws)."""
-    normals = _NO_NORMALS
-    jitter_s = 0.0
-    if readout.range_noise and transducer.range_noise_std_m > 0.0:
-        if rng is None:
-            raise ValueError("argument 'rng' is needed: the readout adds range noise")
-        jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps
-        normals = rng.standard_normal(len(beam_directions))
-    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
-    period = transducer.timer_period_s if readout.quantisation else 0.0
-    constants = np.array(
-        (
-            float(TABLE_STEPS_PER_UNIT),
-            2.0 / true_speed_mps,
-            transducer.echo_rise_time_s * transducer.detection_threshold if delay else 0.0,
-            jitter_s,
-            1.0 / period if period > 0.0 else 0.0,
-            period,
-            assumed_speed_mps / 2.0,
-            transducer.max_range_m,
-        )
-    )
-    readings = kernels.main_lobe_readings(
-        beam_directions,
-        in_frame,
-        limits,
-        candidates.amplitudes,
-        candidates.path_lengths,
-        beam.cells,
-        normals,
-        constants,
-    )
-    return readings[0], readings[1]
 
 
 _NO_NORMALS = np.empty(0)
