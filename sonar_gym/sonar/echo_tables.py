@@ -247,7 +247,6 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
         twin = np.where(same_point.any(axis=1), same_point.argmax(axis=1), twin)
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     n_rel = 3 * n_candidates
-    # The same constants as _UV_CENTRE and _UV_HALF_WIDTH of the occlusion test.
     n_position_rows = len(position_map)
     position_and_occlusion_map = np.concatenate([position_map, occlusion.reshape(-1, 3)])
     # The per-candidate test rows of the search map (zeros but for segments; see EchoTables).

@@ -125,15 +125,23 @@ def edge_echo_amplitude(
     """On-axis echo of a convex edge: ``s / r^2`` (``"weak"``) or ``G / (2 sqrt(pi k) r^1.5)``
     (``"gtd"``); ``r`` in metres, ``k`` in rad/m."""
     r = np.asarray(range_m, dtype=np.float64)
+    weak, constant = _edge_law(edge_law, wavenumber).tolist()
+    return constant / (r * r) if weak else constant / (r * np.sqrt(r))
+
+
+@functools.lru_cache(maxsize=16)
+def _edge_law(edge_law: str, wavenumber: float) -> np.ndarray:
+    """``(1, s)`` for the weak edge law, ``(0, G / (2 sqrt(pi k)))`` for the GTD law."""
     if edge_law == "weak":
-        return EDGE_ECHO_STRENGTH_M / (r * r)
-    if edge_law == "gtd":
-        return (
-            EDGE_DIFFRACTION_COEFFICIENT
-            / (2.0 * math.sqrt(math.pi * wavenumber))
-            / (r * np.sqrt(r))
+        law = np.array((1.0, EDGE_ECHO_STRENGTH_M))
+    elif edge_law == "gtd":
+        law = np.array(
+            (0.0, EDGE_DIFFRACTION_COEFFICIENT / (2.0 * math.sqrt(math.pi * wavenumber)))
         )
-    raise ValueError(f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {edge_law!r}")
+    else:
+        raise ValueError(f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {edge_law!r}")
+    law.flags.writeable = False
+    return law
 
 
 @dataclass(frozen=True)
@@ -288,21 +296,6 @@ def echo_candidates(
         _tables=tables,
         threshold=max(detection_threshold, 0.0),
     )
-
-
-@functools.lru_cache(maxsize=16)
-def _edge_law(edge_law: str, wavenumber: float) -> np.ndarray:
-    """``(1, s)`` for the weak edge law, ``(0, G / (2 sqrt(pi k)))`` for the GTD law."""
-    if edge_law == "weak":
-        law = np.array((1.0, EDGE_ECHO_STRENGTH_M))
-    elif edge_law == "gtd":
-        law = np.array(
-            (0.0, EDGE_DIFFRACTION_COEFFICIENT / (2.0 * math.sqrt(math.pi * wavenumber)))
-        )
-    else:
-        raise ValueError(f"argument 'edge_law' must be one of {list(EDGE_LAWS)}; got {edge_law!r}")
-    law.flags.writeable = False
-    return law
 
 
 def _unoccluded(
