@@ -23,11 +23,25 @@ INDICES = types.Array(types.int64, 1, "A", readonly=True)
 """A read-only 1-d int64 array of any layout."""
 TABLE = types.Array(types.float64, 2, "A", readonly=True)
 """A read-only 2-d float64 array of any layout."""
+INDEX_TABLE = types.Array(types.int64, 2, "A", readonly=True)
+"""A read-only 2-d int64 array of any layout."""
 
 
-def compiled(result: Any, *arguments: Any) -> Callable[[Callable[..., Any]], Any]:
-    """Decorator: compile a loop for ``result(*arguments)`` (numba types), cached."""
-    return numba.njit(result(*arguments), cache=True, error_model="numpy", nogil=True)  # type: ignore[no-any-return]
+def compiled(
+    result: Any, *arguments: Any, inline: bool = False
+) -> Callable[[Callable[..., Any]], Any]:
+    """Decorator: compile a loop for ``result(*arguments)`` (numba types), cached.
+
+    ``inline``: a helper that other loops call per element, inlined into each of them (a call
+    per element costs more than the helper's arithmetic).
+    """
+    return numba.njit(  # type: ignore[no-any-return]
+        result(*arguments),
+        cache=True,
+        error_model="numpy",
+        nogil=True,
+        inline="always" if inline else "never",
+    )
 
 
 def _nan_min(a: float, b: float) -> float:

@@ -84,6 +84,7 @@ from sonar_gym.localization.kim_grid import (
     Sweep,
     sweep_end_points,
 )
+from sonar_gym.localization import kim_kernels
 from sonar_gym.localization.result import OK, Localization
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 
@@ -354,17 +355,6 @@ def _resolve_headings(
     return wrap_angles(-math.pi + 2.0 * math.pi * np.arange(count) / count)
 
 
-def _binomial_smooth(volume: npt.NDArray[np.int64]) -> npt.NDArray[np.int64]:
-    """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer, zero outside the grid."""
-    along_x = 2 * volume
-    along_x[:, 1:] += volume[:, :-1]
-    along_x[:, :-1] += volume[:, 1:]
-    smoothed = 2 * along_x
-    smoothed[:, :, 1:] += along_x[:, :, :-1]
-    smoothed[:, :, :-1] += along_x[:, :, 1:]
-    return smoothed
-
-
 # -- voting -------------------------------------------------------------------------------------
 
 
@@ -419,109 +409,50 @@ def _direction_index(
     return np.rint(turns).astype(np.intp) % direction_bins
 
 
+def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:
+    """The middle candidate heading and the largest angle from it to another candidate
+    (radians, padded by 1e-6), or ``None`` when the candidates span half a turn or more and
+    no pair can be dropped for its heading (:func:`~sonar_gym.localization.kim_kernels.
+    candidate_pairs`)."""
+    if headings.size == 0:
+        return None
+    middle = float(headings[headings.size // 2])
+    spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
+    spread += 1e-6
+    return None if spread >= np.pi else (middle, spread)
+
+
 def _candidate_pairs(
     readings: _Readings,
     anchors: FloatArray,
     center: FloatArray | None,
     radius: float | None,
+    headings: FloatArray,
 ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
-    """``(reading index, anchor index)`` of the pairs that can vote inside the search circle.
-
-    A vote ``t = a - R(heading) e`` lies within ``radius`` of the centre ``c`` only if
-    ``| |a - c| - |e| | <= radius`` (triangle inequality, any heading), so the other pairs are
-    dropped before the headings are tried. Pairs come reading-major, anchors ascending: the
-    order of the full ``(J, K)`` product, so votes and their sums are unchanged. Without a
-    search circle every pair is kept.
+    """``(reading index, anchor index)`` of the pairs that can vote inside the search circle
+    under one of the ``headings``, reading-major and anchors ascending (the order of the full
+    ``(J, K)`` product, so votes and their sums are unchanged); every pair without a search
+    circle. The tests are those of :func:`~sonar_gym.localization.kim_kernels.candidate_pairs`.
     """
     n_readings, n_anchors = readings.range_m.size, anchors.shape[0]
     if center is None or radius is None:
         pair_j, pair_k = np.divmod(np.arange(n_readings * n_anchors), n_anchors)
         return pair_j, pair_k
-    anchor_distance = np.hypot(anchors[:, 0] - center[0], anchors[:, 1] - center[1])
-    reach = np.hypot(readings.end_x, readings.end_y)
-    slack = radius * (1.0 + 1e-9) + 1e-12
-    near = np.abs(anchor_distance - reach[:, None]) <= slack  # (J, K)
-    flat = np.flatnonzero(near)
-    pair_j = flat // n_anchors
-    return pair_j, flat - pair_j * n_anchors
-
-
-def _pairs_reachable_by_headings(
-    readings: _Readings,
-    anchors: FloatArray,
-    center: FloatArray | None,
-    radius: float | None,
-    headings: FloatArray,
-    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
-) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
-    """The ``pairs`` whose vote some candidate heading can bring into the search circle.
-
-    ``|t - c|^2 = D^2 + E^2 - 2 D E cos(heading - psi*)`` (``D = |a - c|``, ``E = |e|``,
-    ``psi*`` the heading that turns ``e`` onto ``a - c``). Every candidate lies within
-    ``spread`` of the middle one; with ``phi`` the angle between ``psi*`` and the middle
-    heading, the largest ``cos(heading - psi*)`` over the candidates is 1 when ``phi <=
-    spread``, else ``cos(phi - spread)``. So a pair can vote inside only if ``phi <= spread``
-    or ``D E cos(phi - spread) >= (D^2 + E^2 - radius^2) / 2``, where ``D E cos(phi - spread)
-    = dot cos(spread) + |cross| sin(spread)`` with ``dot`` and ``cross`` the products of
-    ``a - c`` turned back by the middle heading and ``e``: no trigonometry per pair. The test
-    is padded (radius and spread) so that rounding never drops a pair that votes; the kept
-    pairs keep their order. Without a circle: all pairs.
-    """
-    pair_j, pair_k = pairs
-    if center is None or radius is None or headings.size == 0 or pair_j.size == 0:
-        return pairs
-    middle = float(headings[headings.size // 2])
-    spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
-    spread += 1e-6
-    if spread >= np.pi:
-        return pairs
-    cos_m, sin_m = math.cos(middle), math.sin(middle)
-    to_anchor_x, to_anchor_y = anchors[:, 0] - center[0], anchors[:, 1] - center[1]
-    # a - c in the frame of the middle heading, per anchor; the end points, per reading
-    back_x = (cos_m * to_anchor_x + sin_m * to_anchor_y).take(pair_k)
-    back_y = (cos_m * to_anchor_y - sin_m * to_anchor_x).take(pair_k)
-    end_x, end_y = readings.end_x.take(pair_j), readings.end_y.take(pair_j)
-    dot = back_x * end_x + back_y * end_y
-    cross = np.abs(back_x * end_y - back_y * end_x)
-    squared_d = (to_anchor_x * to_anchor_x + to_anchor_y * to_anchor_y).take(pair_k)
-    squared_e = (readings.end_x * readings.end_x + readings.end_y * readings.end_y).take(pair_j)
-    padded = radius * (1.0 + 1e-9) + 1e-12
-    needed = 0.5 * (squared_d + squared_e - padded * padded) - 1e-12
-    cos_s, sin_s = math.cos(spread), math.sin(spread)
-    within_spread = dot >= cos_s * np.sqrt(squared_d * squared_e) - 1e-12  # cos(phi) >= cos(spread)
-    reachable = within_spread | (dot * cos_s + cross * sin_s >= needed)
-    kept = np.flatnonzero(reachable)
-    return pair_j.take(kept), pair_k.take(kept)
-
-
-def _vote_positions(
-    readings: _Readings,
-    anchors: FloatArray,
-    table: FloatArray,
-    headings: FloatArray,
-    direction_index: npt.NDArray[np.intp],
-    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
-) -> tuple[npt.NDArray[np.intp], FloatArray, FloatArray]:
-    """Unobstructed hypotheses for a block of headings: ``(heading index, t_x, t_y)``.
-
-    A reading ending at ``anchors[k]`` puts the robot at ``t = anchors[k] - R(heading) e``.
-    ``table[d, k]`` is the free distance behind occupied cell ``k`` in direction ``d``; a
-    reading of range ``r`` may have ended at cell ``k`` when ``r`` is below it. Only the
-    ``(reading, anchor)`` ``pairs`` of :func:`_candidate_pairs` are tried.
-    """
-    pair_j, pair_k = pairs
-    n_anchors = table.shape[1]
-    # table[d, k] through flat indices: one gather instead of two-axis fancy indexing
-    flat = (direction_index * n_anchors).take(pair_j, axis=1) + pair_k
-    free = table.take(flat) > readings.range_m.take(pair_j)
-    hits = np.flatnonzero(free)  # (h, P) row-major: heading by heading
-    cos_h, sin_h = np.cos(headings)[:, None], np.sin(headings)[:, None]
-    end_x, end_y = readings.end_x, readings.end_y
-    rotated_x = (cos_h * end_x - sin_h * end_y).take(pair_j, axis=1)  # (h, P)
-    rotated_y = (sin_h * end_x + cos_h * end_y).take(pair_j, axis=1)
-    t_x = (anchors[:, 0].take(pair_k) - rotated_x).take(hits)
-    t_y = (anchors[:, 1].take(pair_k) - rotated_y).take(hits)
-    return hits // pair_j.size, t_x, t_y
+    spread = _heading_spread(headings)
+    middle, angle = (0.0, 0.0) if spread is None else spread
+    return kim_kernels.candidate_pairs(  # type: ignore[no-any-return]
+        readings.end_x,
+        readings.end_y,
+        anchors,
+        float(center[0]),
+        float(center[1]),
+        float(radius),
+        spread is not None,
+        math.cos(middle),
+        math.sin(middle),
+        math.cos(angle),
+        math.sin(angle),
+    )
 
 
 @dataclass(frozen=True)
@@ -545,6 +476,12 @@ class _VoteWindow:
         whole[..., x : x + wx, y : y + wy] = block
         return whole
 
+    @property
+    def cells(self) -> tuple[int, int, int, int]:
+        """``(low x, low y, high x, high y)``, inclusive cell indices of the whole grid."""
+        (x, y), (wx, wy) = self.low, self.shape
+        return x, y, x + wx - 1, y + wy - 1
+
 
 def _vote_window(
     grid: OccupancyGrid, center: FloatArray | None, radius: float | None
@@ -562,53 +499,6 @@ def _vote_window(
     if high_x < low_x or high_y < low_y:
         return _VoteWindow((0, 0), (0, 0))
     return _VoteWindow((low_x, low_y), (high_x - low_x + 1, high_y - low_y + 1))
-
-
-@dataclass(frozen=True)
-class _Votes:
-    """The votes that count, in the order they were cast (heading by heading, so
-    ``heading_i`` is sorted): heading index within the block, continuous position ``t``
-    (m, {W}) and cell of the whole grid."""
-
-    heading_i: npt.NDArray[np.intp]
-    t_x: FloatArray
-    t_y: FloatArray
-    cell_x: npt.NDArray[np.int64]
-    cell_y: npt.NDArray[np.int64]
-
-
-def _counted_votes(
-    grid: OccupancyGrid,
-    window: _VoteWindow,
-    heading_i: npt.NDArray[np.intp],
-    t_x: FloatArray,
-    t_y: FloatArray,
-    center: FloatArray | None,
-    radius: float | None,
-) -> _Votes:
-    """The votes inside the search circle (if any) whose cell lies in ``window``.
-
-    The window lies inside the grid, so its test is also the test of the grid's bounds.
-    """
-    if center is not None and radius is not None:
-        inside = np.flatnonzero((t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius)
-        heading_i, t_x, t_y = heading_i.take(inside), t_x.take(inside), t_y.take(inside)
-    x0, y0 = grid.origin_m
-    cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
-    cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
-    (low_x, low_y), (wx, wy) = window.low, window.shape
-    if cell_x.size == 0 or (
-        low_x <= cell_x.min()
-        and cell_x.max() < low_x + wx
-        and low_y <= cell_y.min()
-        and cell_y.max() < low_y + wy
-    ):  # always inside a search circle: its window has a margin for rounding
-        return _Votes(heading_i, t_x, t_y, cell_x, cell_y)
-    keep = (cell_x >= low_x) & (cell_x < low_x + wx) & (cell_y >= low_y) & (cell_y < low_y + wy)
-    kept = np.flatnonzero(keep)
-    return _Votes(
-        heading_i.take(kept), t_x.take(kept), t_y.take(kept), cell_x.take(kept), cell_y.take(kept)
-    )
 
 
 def _failure(status: str, message: str) -> VoteLocalization:
@@ -712,36 +602,35 @@ def vote_localize(
     if anchors.shape[0] == 0:
         return _failure(NO_VOTES, "the grid has no occupied cell")
 
-    # Vote volume over (heading, ix, iy) of the vote window, built in blocks of headings.
+    # Vote volume over (heading, ix, iy) of the vote window.
     window = _vote_window(grid, center, radius)
-    (low_x, low_y), (wx, wy) = window.low, window.shape
-    cells_per_layer = wx * wy
-    volume = np.zeros((headings.size, wx, wy), dtype=np.int64)
-    pairs = _candidate_pairs(readings, anchors, center, radius)
-    pairs = _pairs_reachable_by_headings(readings, anchors, center, radius, headings, pairs)
-    if pairs[0].size == 0 or cells_per_layer == 0:
+    pairs = _candidate_pairs(readings, anchors, center, radius, headings)
+    if pairs[0].size == 0 or window.shape[0] * window.shape[1] == 0:
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
-    block = max(1, _CHUNK_ELEMENTS // pairs[0].size)
-    counted: _Votes | None = None
-    for start in range(0, headings.size, block):
-        block_headings = headings[start : start + block]
-        direction_index = _direction_index(block_headings, readings, direction_bins)
-        table = table_cache.columns(direction_index.ravel())
-        heading_i, t_x, t_y = _vote_positions(
-            readings, anchors, table, block_headings, direction_index, pairs
-        )
-        counted = _counted_votes(grid, window, heading_i, t_x, t_y, center, radius)
-        flat = (
-            counted.heading_i * cells_per_layer
-            + (counted.cell_x - low_x) * wy
-            + (counted.cell_y - low_y)
-        )
-        counts = np.bincount(flat, minlength=block_headings.size * cells_per_layer)
-        volume[start : start + block_headings.size] = counts.reshape(-1, wx, wy)
-    if block < headings.size:
-        counted = None  # only the last block's votes are kept: recompute the chosen heading's
+    direction_index = _direction_index(headings, readings, direction_bins)
+    table = table_cache.columns(direction_index.ravel())
+    cos_h, sin_h = np.cos(headings), np.sin(headings)
+    circle = (0.0, 0.0, math.inf) if center is None or radius is None else (*center, radius)
+    vote_layout = (
+        (float(circle[0]), float(circle[1]), float(circle[2])),
+        (float(grid.origin_m[0]), float(grid.origin_m[1]), float(grid.cell_size_m)),
+        window.cells,
+    )
+    volume = kim_kernels.vote_volume(
+        *pairs,
+        direction_index,
+        table,
+        readings.range_m,
+        readings.end_x,
+        readings.end_y,
+        anchors,
+        cos_h,
+        sin_h,
+        *vote_layout,
+    )
+    (low_x, low_y) = window.low
 
     if not volume.any():
         return _failure(
@@ -770,23 +659,25 @@ def vote_localize(
 
     if refine == "cell_center":
         position = choice.centre
-    else:
-        if counted is None:
-            position = _mean_vote_position(
-                grid,
-                readings,
-                table_cache,
-                anchors,
-                heading,
-                direction_bins,
-                choice,
-                window,
-                center,
-                radius,
-                pairs,
-            )
-        else:
-            position = _mean_in_window(counted, choice.heading_index, choice)
+    else:  # the mean of the chosen heading's votes in the chosen window of cells
+        chosen = choice.heading_index
+        votes_x, votes_y = kim_kernels.votes_in_cells(
+            *pairs,
+            direction_index[chosen],
+            table,
+            readings.range_m,
+            readings.end_x,
+            readings.end_y,
+            anchors,
+            float(cos_h[chosen]),
+            float(sin_h[chosen]),
+            *vote_layout,
+            (*choice.window_low, *choice.window_high),
+        )
+        # sum / count is np.mean's own arithmetic (one pairwise sum, one division)
+        count = votes_x.size
+        mean = np.array([votes_x.sum() / count, votes_y.sum() / count]) if count else None
+        position = choice.centre if mean is None else mean
     pose = Pose(float(position[0]), float(position[1]), heading)
     return VoteLocalization(
         status=OK,
@@ -846,7 +737,7 @@ def _choose(
         low = (max(cell[0] - 1, 0), max(cell[1] - 1, 0))
         high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
         return _Choice(heading_index, cell, low, high, centroid, volume)
-    score = _binomial_smooth(volume)
+    score = kim_kernels.binomial_smooth(volume)
     heading_index, rest = divmod(int(np.argmax(score)), score.shape[1] * score.shape[2])
     local_x, local_y = divmod(rest, score.shape[2])
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
@@ -877,44 +768,3 @@ def _rival_score(
     near_heading = np.abs(wrap_angles(headings - headings[choice.heading_index])) <= heading_rad
     excluded = near_heading[:, None, None] & near_position[None, :, :]
     return int(np.where(excluded, -1, score).max())
-
-
-def _mean_vote_position(
-    grid: OccupancyGrid,
-    readings: _Readings,
-    table_cache: _FreeDistanceTable,
-    anchors: FloatArray,
-    heading: float,
-    direction_bins: int,
-    choice: _Choice,
-    window: _VoteWindow,
-    center: FloatArray | None,
-    radius: float | None,
-    pairs: tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]],
-) -> FloatArray:
-    """Mean of the continuous vote positions in the chosen window of cells, the votes of
-    ``heading`` cast afresh."""
-    headings = np.array([heading])
-    direction_index = _direction_index(headings, readings, direction_bins)
-    table = table_cache.columns(direction_index.ravel())
-    heading_i, t_x, t_y = _vote_positions(
-        readings, anchors, table, headings, direction_index, pairs
-    )
-    return _mean_in_window(
-        _counted_votes(grid, window, heading_i, t_x, t_y, center, radius), 0, choice
-    )
-
-
-def _mean_in_window(votes: _Votes, heading_index: int, choice: _Choice) -> FloatArray:
-    """Mean of the positions of the ``votes`` of ``heading_index`` in the chosen window of
-    cells (its centre when none lies there)."""
-    first, end = votes.heading_i.searchsorted([heading_index, heading_index + 1])
-    cell_x, cell_y = votes.cell_x[first:end], votes.cell_y[first:end]
-    keep = (cell_x >= choice.window_low[0]) & (cell_x <= choice.window_high[0])
-    keep &= (cell_y >= choice.window_low[1]) & (cell_y <= choice.window_high[1])
-    kept = np.flatnonzero(keep)
-    if kept.size == 0:
-        return choice.centre
-    # sum / count is np.mean's own arithmetic (one pairwise sum, one division)
-    t_x, t_y = votes.t_x[first:end].take(kept), votes.t_y[first:end].take(kept)
-    return np.array([t_x.sum() / kept.size, t_y.sum() / kept.size])

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from sonar_gym.localization import kim
+from sonar_gym.localization import kim, kim_kernels
 from sonar_gym.localization.kim import OccupancyGrid, vote_localize
 from sonar_gym.pose import Pose
 from tests.localization.test_kim import (
@@ -23,9 +23,9 @@ from tests.localization.test_kim import (
 _PRE_SELECTED_PAIRS = kim._candidate_pairs
 
 
-def _all_pairs(readings, anchors, center, radius):  # type: ignore[no-untyped-def]
+def _all_pairs(readings, anchors, center, radius, headings):  # type: ignore[no-untyped-def]
     """The slow reference: every reading with every anchor (the full product)."""
-    return _PRE_SELECTED_PAIRS(readings, anchors, None, None)
+    return _PRE_SELECTED_PAIRS(readings, anchors, None, None, headings)
 
 
 @pytest.fixture(scope="module")
@@ -62,9 +62,9 @@ def test_pairs_keep_every_pair_that_can_vote_inside_the_circle(grid: OccupancyGr
     readings = kim._gather_readings([_sweep(truth)], None)
     anchors = grid.occupied_obstacle_points()
     centre, radius = np.array([1.0, 0.7]), 0.2
-    pair_j, pair_k = kim._candidate_pairs(readings, anchors, centre, radius)
-    kept = set(zip(pair_j.tolist(), pair_k.tolist(), strict=True))
     headings = np.radians(np.arange(-180.0, 180.0, 2.0))
+    pair_j, pair_k = kim._candidate_pairs(readings, anchors, centre, radius, headings)
+    kept = set(zip(pair_j.tolist(), pair_k.tolist(), strict=True))
     for heading in headings:
         c, s = math.cos(heading), math.sin(heading)
         ends = readings.end_xy @ np.array([[c, s], [-s, c]])
@@ -82,4 +82,4 @@ def test_binomial_smoothing_matches_the_padded_reference() -> None:
     for dx in range(3):
         for dy in range(3):
             expected += kernel[dx, dy] * padded[:, dx : dx + 7, dy : dy + 5]
-    assert np.array_equal(kim._binomial_smooth(volume), expected)
+    assert np.array_equal(kim_kernels.binomial_smooth(volume), expected)

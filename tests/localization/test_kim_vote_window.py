@@ -82,9 +82,9 @@ def test_window_covers_the_search_circle_and_is_clipped_to_the_grid(grid: Occupa
     assert kim._vote_window(grid, None, None).shape == grid.shape
 
 
-def _every_pair(readings, anchors, center, radius, headings, pairs):  # type: ignore[no-untyped-def]
+def _no_heading_test(headings):  # type: ignore[no-untyped-def]
     """The slow reference: no pair dropped for its heading."""
-    return pairs
+    return None
 
 
 @pytest.mark.parametrize("window_deg", [3.0, 30.0, 180.0])
@@ -108,7 +108,7 @@ def test_pairs_dropped_for_their_heading_never_vote(
         anchor="obstacle_point",
     )
     fast = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
-    monkeypatch.setattr(kim, "_pairs_reachable_by_headings", _every_pair)
+    monkeypatch.setattr(kim, "_heading_spread", _no_heading_test)
     slow = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
     assert fast.status == slow.status == "ok"
     assert fast.pose == slow.pose
@@ -121,9 +121,10 @@ def test_heading_filter_drops_most_pairs_of_a_narrow_window(grid: OccupancyGrid)
     readings = kim._gather_readings([_sweep(truth)], None)
     anchors = grid.occupied_obstacle_points()
     centre, radius = np.array([0.95, 0.7]), 0.1
-    pairs = kim._candidate_pairs(readings, anchors, centre, radius)
+    every_heading = np.radians(np.arange(-180.0, 180.0, 1.0))
+    pairs = kim._candidate_pairs(readings, anchors, centre, radius, every_heading)
     headings = kim.heading_candidates_around(0.4, math.radians(5.0), math.radians(1.0))
-    kept = kim._pairs_reachable_by_headings(readings, anchors, centre, radius, headings, pairs)
+    kept = kim._candidate_pairs(readings, anchors, centre, radius, headings)
     kept_set = set(zip(kept[0].tolist(), kept[1].tolist(), strict=True))
     assert len(kept_set) < pairs[0].size / 2
     for heading in headings:  # every pair whose vote lands inside is kept

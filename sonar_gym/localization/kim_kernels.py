@@ -1,0 +1,282 @@
+"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the (reading, anchor) pairs that
+can vote inside the search circle, the vote volume, and the votes of one heading in a window.
+
+They do the arithmetic of the array forms they replace element by element, in the same order
+(kept as references in ``tests/localization/test_kim_fast_paths.py``), so votes, counts and
+positions are the same bits; the array forms paid numpy's per-call cost on a few hundred pairs
+and a few thousand votes per fix. The trigonometry stays in numpy (its ``cos`` and ``sin`` of
+arrays round differently from libm's): callers pass cosines and sines in.
+
+Frames: readings' end points are in the first sweep's robot frame (metres); anchors, search
+centre, grid origin and vote positions ``t = a - R(heading) e`` in the map frame {W} (metres).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import types
+
+from sonar_gym.compiled import INDEX_TABLE, INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.pose import FloatArray
+
+_PAIRS = types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.int64, 1, "C")))
+
+
+@compiled(  # type: ignore[misc]
+    _PAIRS,
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    TABLE,  # anchors
+    types.float64,  # center_x
+    types.float64,  # center_y
+    types.float64,  # radius
+    types.boolean,  # by_heading
+    types.float64,  # middle_cos
+    types.float64,  # middle_sin
+    types.float64,  # spread_cos
+    types.float64,  # spread_sin
+)
+def candidate_pairs(
+    end_x: FloatArray,
+    end_y: FloatArray,
+    anchors: FloatArray,
+    center_x: float,
+    center_y: float,
+    radius: float,
+    by_heading: bool,
+    middle_cos: float,
+    middle_sin: float,
+    spread_cos: float,
+    spread_sin: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(reading index, anchor index)`` of the pairs whose vote can fall inside the circle.
+
+    A vote ``t = a - R(heading) e`` lies within ``radius`` of the centre ``c`` only if
+    ``| |a - c| - |e| | <= radius`` (triangle inequality, any heading). With ``by_heading``,
+    a pair must also be reachable by a heading within ``spread`` of the ``middle`` candidate:
+    ``phi <= spread`` or ``D E cos(phi - spread) >= (D^2 + E^2 - radius^2) / 2`` (``D = |a - c|``,
+    ``E = |e|``, ``phi`` the angle between the heading that turns ``e`` onto ``a - c`` and the
+    middle heading), where ``D E cos(phi - spread) = dot cos(spread) + |cross| sin(spread)``
+    with ``dot`` and ``cross`` the products of ``a - c`` turned back by the middle heading and
+    ``e``. Both tests are padded so that rounding never drops a pair that votes. Pairs come
+    reading-major, anchors ascending: the order of the full ``(J, K)`` product.
+
+    Args:
+        end_x, end_y: ``(J,)`` reading end points, first-sweep robot frame, metres.
+        anchors: ``(K, 2)`` anchor points of the occupied cells, {W}, metres.
+        center_x, center_y, radius: the search circle, {W}, metres.
+        by_heading: apply the heading test (False: the circle test only).
+        middle_cos, middle_sin: cosine and sine of the middle candidate heading.
+        spread_cos, spread_sin: of the largest angle from it to another candidate (padded).
+    """
+    n_readings, n_anchors = end_x.size, anchors.shape[0]
+    anchor_distance = np.empty(n_anchors)
+    back_x = np.empty(n_anchors)
+    back_y = np.empty(n_anchors)
+    squared_d = np.empty(n_anchors)
+    for k in range(n_anchors):
+        to_x, to_y = anchors[k, 0] - center_x, anchors[k, 1] - center_y
+        anchor_distance[k] = np.hypot(to_x, to_y)
+        back_x[k] = middle_cos * to_x + middle_sin * to_y
+        back_y[k] = middle_cos * to_y - middle_sin * to_x
+        squared_d[k] = to_x * to_x + to_y * to_y
+    slack = radius * (1.0 + 1e-9) + 1e-12
+    needed_radius = slack * slack
+    pair_j = np.empty(n_readings * n_anchors, dtype=np.int64)
+    pair_k = np.empty(n_readings * n_anchors, dtype=np.int64)
+    count = 0
+    for j in range(n_readings):
+        ex, ey = end_x[j], end_y[j]
+        reach = np.hypot(ex, ey)
+        squared_e = ex * ex + ey * ey
+        for k in range(n_anchors):
+            if not abs(anchor_distance[k] - reach) <= slack:
+                continue
+            if by_heading:
+                dot = back_x[k] * ex + back_y[k] * ey
+                cross = abs(back_x[k] * ey - back_y[k] * ex)
+                needed = 0.5 * (squared_d[k] + squared_e - needed_radius) - 1e-12
+                within_spread = dot >= spread_cos * math.sqrt(squared_d[k] * squared_e) - 1e-12
+                if not (within_spread or dot * spread_cos + cross * spread_sin >= needed):
+                    continue
+            pair_j[count] = j
+            pair_k[count] = k
+            count += 1
+    return pair_j[:count].copy(), pair_k[:count].copy()
+
+
+_CIRCLE = types.UniTuple(types.float64, 3)
+"""``(centre x, centre y, radius)`` of the search circle, {W}, metres (radius inf: none)."""
+_GRID_FRAME = types.UniTuple(types.float64, 3)
+"""``(origin x, origin y, cell size)`` of the grid, {W}, metres."""
+_CELLS = types.UniTuple(types.int64, 4)
+"""``(low x, low y, high x, high y)``: a block of grid cells, inclusive."""
+
+
+def _vote_cell(
+    t_x: float,
+    t_y: float,
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+) -> tuple[bool, int, int]:
+    """Whether the vote at ``t`` counts (inside the circle and the ``window`` of cells) and its
+    cell ``floor((t - origin) / cell size)``."""
+    center_x, center_y, radius = circle
+    off_x, off_y = t_x - center_x, t_y - center_y
+    if not off_x * off_x + off_y * off_y <= radius * radius:
+        return False, 0, 0
+    origin_x, origin_y, cell_size = grid_frame
+    cell_x = int(math.floor((t_x - origin_x) / cell_size))
+    cell_y = int(math.floor((t_y - origin_y) / cell_size))
+    low_x, low_y, high_x, high_y = window
+    return low_x <= cell_x <= high_x and low_y <= cell_y <= high_y, cell_x, cell_y
+
+
+_vote_cell_compiled = compiled(
+    types.Tuple((types.boolean, types.int64, types.int64)),
+    types.float64,
+    types.float64,
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,
+    inline=True,
+)(_vote_cell)
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.int64, 3, "C"),
+    INDICES,  # pair_j
+    INDICES,  # pair_k
+    INDEX_TABLE,  # direction_index
+    TABLE,  # free_distance
+    NUMBERS,  # range_m
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    TABLE,  # anchors
+    NUMBERS,  # cos_h
+    NUMBERS,  # sin_h
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+)
+def vote_volume(
+    pair_j: np.ndarray,
+    pair_k: np.ndarray,
+    direction_index: np.ndarray,
+    free_distance: FloatArray,
+    range_m: FloatArray,
+    end_x: FloatArray,
+    end_y: FloatArray,
+    anchors: FloatArray,
+    cos_h: FloatArray,
+    sin_h: FloatArray,
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+) -> np.ndarray:
+    """``(h, wx, wy)`` votes per candidate heading and cell of the vote ``window``.
+
+    A pair ``(j, k)`` votes under heading ``i`` when its ray is unobstructed,
+    ``free_distance[direction_index[i, j], k] > range_m[j]``, for the robot at
+    ``t = anchors[k] - R(heading_i) e_j`` (``cos_h``, ``sin_h``: of the headings); the vote
+    counts when ``t`` lies inside the search ``circle`` and its cell inside ``window``.
+    """
+    low_x, low_y, high_x, high_y = window
+    volume = np.zeros((cos_h.size, high_x - low_x + 1, high_y - low_y + 1), dtype=np.int64)
+    for pair in range(pair_j.size):  # integer counts: any order gives the same volume
+        j, k = pair_j[pair], pair_k[pair]
+        reading_range, e_x, e_y = range_m[j], end_x[j], end_y[j]
+        a_x, a_y = anchors[k, 0], anchors[k, 1]
+        for heading in range(cos_h.size):
+            if not free_distance[direction_index[heading, j], k] > reading_range:
+                continue
+            c, s = cos_h[heading], sin_h[heading]
+            t_x = a_x - (c * e_x - s * e_y)
+            t_y = a_y - (s * e_x + c * e_y)
+            counts, cell_x, cell_y = _vote_cell_compiled(t_x, t_y, circle, grid_frame, window)
+            if counts:
+                volume[heading, cell_x - low_x, cell_y - low_y] += 1
+    return volume
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 1, "C"), types.Array(types.float64, 1, "C"))),
+    INDICES,  # pair_j
+    INDICES,  # pair_k
+    INDICES,  # direction_index (of this heading, per reading)
+    TABLE,  # free_distance
+    NUMBERS,  # range_m
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    TABLE,  # anchors
+    types.float64,  # cos_heading
+    types.float64,  # sin_heading
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+    _CELLS,  # cells
+)
+def votes_in_cells(
+    pair_j: np.ndarray,
+    pair_k: np.ndarray,
+    direction_index: np.ndarray,
+    free_distance: FloatArray,
+    range_m: FloatArray,
+    end_x: FloatArray,
+    end_y: FloatArray,
+    anchors: FloatArray,
+    cos_heading: float,
+    sin_heading: float,
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+    cells: tuple[int, int, int, int],
+) -> tuple[FloatArray, FloatArray]:
+    """The positions ``t`` ({W}, metres) of one heading's votes, in pair order, that
+    :func:`vote_volume` counts and whose cell lies in ``cells`` as well."""
+    votes_x = np.empty(pair_j.size)
+    votes_y = np.empty(pair_j.size)
+    count = 0
+    for pair in range(pair_j.size):
+        j, k = pair_j[pair], pair_k[pair]
+        if not free_distance[direction_index[j], k] > range_m[j]:
+            continue
+        t_x = anchors[k, 0] - (cos_heading * end_x[j] - sin_heading * end_y[j])
+        t_y = anchors[k, 1] - (sin_heading * end_x[j] + cos_heading * end_y[j])
+        in_window, cell_x, cell_y = _vote_cell_compiled(t_x, t_y, circle, grid_frame, window)
+        low_x, low_y, high_x, high_y = cells
+        if in_window and low_x <= cell_x <= high_x and low_y <= cell_y <= high_y:
+            votes_x[count] = t_x
+            votes_y[count] = t_y
+            count += 1
+    return votes_x[:count].copy(), votes_y[:count].copy()
+
+
+@compiled(types.Array(types.int64, 3, "C"), types.Array(types.int64, 3, "A", readonly=True))  # type: ignore[misc]
+def binomial_smooth(volume: np.ndarray) -> np.ndarray:
+    """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer of ``(h, nx, ny)`` integer
+    votes, zero outside the layer (integers: exact in any order)."""
+    n_layers, nx, ny = volume.shape
+    along_x = np.empty((nx, ny), dtype=np.int64)
+    smoothed = np.empty((n_layers, nx, ny), dtype=np.int64)
+    for layer in range(n_layers):
+        for ix in range(nx):
+            for iy in range(ny):
+                total = 2 * volume[layer, ix, iy]
+                if ix > 0:
+                    total += volume[layer, ix - 1, iy]
+                if ix < nx - 1:
+                    total += volume[layer, ix + 1, iy]
+                along_x[ix, iy] = total
+        for ix in range(nx):
+            for iy in range(ny):
+                total = 2 * along_x[ix, iy]
+                if iy > 0:
+                    total += along_x[ix, iy - 1]
+                if iy < ny - 1:
+                    total += along_x[ix, iy + 1]
+                smoothed[layer, ix, iy] = total
+    return smoothed
