@@ -9,11 +9,15 @@ multiply-add, so every elementwise step rounds as numpy's does.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any
 
 import numba
+import numpy as np
+from llvmlite import ir
 from numba import types
+from numba.extending import intrinsic
 
 NUMBERS = types.Array(types.float64, 1, "A", readonly=True)
 """A read-only 1-d float64 array of any layout."""
@@ -66,3 +70,51 @@ nan_min = compiled(types.float64, types.float64, types.float64)(_nan_min)
 """``np.minimum`` of two floats inside a compiled loop (Python's ``min`` drops a NaN)."""
 nan_max = compiled(types.float64, types.float64, types.float64)(_nan_max)
 """``np.maximum`` of two floats inside a compiled loop (Python's ``max`` drops a NaN)."""
+
+
+def _fused_multiply_add(typing_context: Any, a: Any, b: Any, c: Any) -> Any:
+    """``a * b + c`` with one rounding (LLVM's ``llvm.fma.f64``)."""
+    signature = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
+        double = ir.DoubleType()
+        function = builder.module.declare_intrinsic(
+            "llvm.fma", [double], ir.FunctionType(double, [double, double, double])
+        )
+        return builder.call(function, args)
+
+    return signature, codegen
+
+
+fused_multiply_add: Any = intrinsic(_fused_multiply_add)
+"""``fused_multiply_add(a, b, c)``: ``a * b + c`` rounded once, inside a compiled loop. numpy's
+BLAS products round so: OpenBLAS's ``gemm`` sums ``a_0 b_0``, then adds each further term with
+one fused multiply-add."""
+
+
+def _remainder(x: float, y: float) -> float:
+    """IEEE 754 ``remainder(x, y)`` of finite floats, ``y != 0``: exact, so the bits of
+    Python's ``math.remainder`` (whose algorithm this is: ``fmod`` is exact too)."""
+    absx, absy = abs(x), abs(y)
+    m = np.fmod(absx, absy)
+    c = absy - m
+    if m < c:
+        r = m
+    elif m > c:
+        r = -c
+    else:  # half way: the even multiple
+        r = m - 2.0 * np.fmod(0.5 * (absx - m), absy)
+    return math.copysign(1.0, x) * r
+
+
+remainder = compiled(types.float64, types.float64, types.float64, inline=True)(_remainder)
+"""``math.remainder`` of two finite floats inside a compiled loop."""
+
+
+def _wrap_angle(angle_rad: float) -> float:
+    wrapped = remainder(angle_rad, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
+
+
+wrap_angle = compiled(types.float64, types.float64, inline=True)(_wrap_angle)
+""":func:`sonar_gym.pose.wrap_angle` of a finite angle (radians) inside a compiled loop."""

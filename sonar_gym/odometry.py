@@ -28,6 +28,7 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym import odometry_kernels
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
@@ -256,33 +257,19 @@ def predict_step(
 
     ``x = f(x, u)`` and ``P = A P A^T + F V F^T`` (symmetrised), ``V`` from
     :func:`wheel_increment_covariance`: :func:`sonar_gym.localization.ekf.predict` without its
-    argument checks (the increments come from the robot, finite by construction).
+    argument checks (the increments come from the robot, finite by construction), compiled
+    (:func:`sonar_gym.odometry_kernels.predict_commands`).
     """
-    d_left_m, d_right_m, wheel_base_m = float(d_left_m), float(d_right_m), float(wheel_base_m)
-    distance = 0.5 * (d_left_m + d_right_m)
-    turned = (d_right_m - d_left_m) / wheel_base_m
-    heading = pose.theta + 0.5 * turned if integration == "midpoint" else pose.theta
-    cos_h, sin_h = math.cos(heading), math.sin(heading)
-    state_jacobian = np.array(
-        [[1.0, 0.0, -distance * sin_h], [0.0, 1.0, distance * cos_h], [0.0, 0.0, 1.0]]
+    moved, p, _ = predict_over_motion(
+        pose,
+        covariance,
+        ((d_left_m, d_right_m),),
+        wheel_base_m,
+        variance_per_m,
+        scale_variance,
+        integration,
     )
-    inverse_base = 1.0 / wheel_base_m
-    half_cos, half_sin = 0.5 * cos_h, 0.5 * sin_h
-    if integration == "midpoint":  # the lever of the half-turn, added to the first two rows
-        lever = distance / (2.0 * wheel_base_m)
-        wheel_rows = [
-            [half_cos + -lever * sin_h, half_cos + lever * sin_h],
-            [half_sin + lever * cos_h, half_sin + -lever * cos_h],
-        ]
-    else:
-        wheel_rows = [[half_cos, half_cos], [half_sin, half_sin]]
-    wheel_jacobian = np.array([*wheel_rows, [inverse_base, -inverse_base]])
-    wheels = wheel_increment_covariance(d_left_m, d_right_m, variance_per_m, scale_variance)
-    p = state_jacobian @ covariance @ state_jacobian.T + wheel_jacobian @ wheels @ wheel_jacobian.T
-    moved = Pose.unchecked(
-        pose.x + distance * cos_h, pose.y + distance * sin_h, pose.theta + turned
-    )
-    return moved, 0.5 * (p + p.T)
+    return moved, p
 
 
 def predict_over_motion(
@@ -300,14 +287,20 @@ def predict_over_motion(
         ``(pose, covariance, poses)``: the prediction after the last command, its covariance
         and the predicted pose after each command.
     """
-    p = np.asarray(covariance, dtype=np.float64)
-    poses: list[Pose] = []
-    for d_left, d_right in np.asarray(increments_m, dtype=np.float64).reshape(-1, 2).tolist():
-        pose, p = predict_step(
-            pose, p, d_left, d_right, wheel_base_m, variance_per_m, scale_variance, integration
-        )
-        poses.append(pose)
-    return pose, p, poses
+    increments = np.asarray(increments_m, dtype=np.float64).reshape(-1, 2)
+    if increments.shape[0] == 0:
+        return pose, np.asarray(covariance, dtype=np.float64), []
+    predicted, p = odometry_kernels.predict_commands(
+        (pose.x, pose.y, pose.theta),
+        np.asarray(covariance, dtype=np.float64),
+        increments,
+        float(wheel_base_m),
+        float(variance_per_m),
+        float(scale_variance),
+        integration == "midpoint",
+    )
+    poses = [Pose.unchecked(x, y, theta) for x, y, theta in predicted.tolist()]
+    return poses[-1], p, poses
 
 
 def predict_run(

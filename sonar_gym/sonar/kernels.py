@@ -7,9 +7,10 @@ the same arithmetic element by element, in the same order, so they return the sa
 * every elementwise step (``+ - * /``, ``sqrt``, ``floor``, comparisons) is IEEE-754 in both, and
   numba fuses no multiply-add unless asked (no ``fastmath``);
 * a product that numpy takes through BLAS with both sides at least two wide (``(pings, 2) @
-  (2, candidates)``) is a fused multiply-add there, ``fma(b1, f1, b0 * f0)``; ``_fma`` gives
-  the loops that same single rounding. With one ping or one candidate numpy goes through
-  another BLAS kernel that rounds differently, so callers keep numpy's path for those.
+  (2, candidates)``) is a fused multiply-add there, ``fma(b1, f1, b0 * f0)``;
+  :data:`sonar_gym.compiled.fused_multiply_add` gives the loops that same single rounding.
+  With one ping or one candidate numpy goes through another BLAS kernel that rounds
+  differently, so callers keep numpy's path for those.
 * the loops stop at the first detected candidate and the first occluder; numpy computes them
   all and discards the rest (the discarded values never reach a result).
 
@@ -21,32 +22,21 @@ not.
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
-from llvmlite import ir
 from numba import types
-from numba.extending import intrinsic
 
-from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max, nan_min
+from sonar_gym.compiled import (
+    FLAGS,
+    INDICES,
+    NUMBERS,
+    TABLE,
+    compiled,
+    fused_multiply_add,
+    nan_max,
+    nan_min,
+)
 from sonar_gym.pose import FloatArray
-
-
-def _fused_multiply_add(typing_context: Any, a: Any, b: Any, c: Any) -> Any:
-    """``a * b + c`` with one rounding (LLVM's ``llvm.fma.f64``)."""
-    signature = types.float64(types.float64, types.float64, types.float64)
-
-    def codegen(context: Any, builder: Any, sig: Any, args: Any) -> Any:
-        double = ir.DoubleType()
-        function = builder.module.declare_intrinsic(
-            "llvm.fma", [double], ir.FunctionType(double, [double, double, double])
-        )
-        return builder.call(function, args)
-
-    return signature, codegen
-
-
-_fma: Any = intrinsic(_fused_multiply_add)
 
 
 @compiled(  # type: ignore[misc]
@@ -97,7 +87,7 @@ def main_lobe_readings(
         bx, by = directions[ping, 0], directions[ping, 1]
         first, cosine = -1, 0.0
         for candidate in range(n_candidates):  # sorted nearest first
-            c = _fma(by, in_frame[1, candidate], bx * in_frame[0, candidate])
+            c = fused_multiply_add(by, in_frame[1, candidate], bx * in_frame[0, candidate])
             if c >= limits[candidate]:
                 first, cosine = candidate, c
                 break
