@@ -146,6 +146,7 @@ class World:
         self._commanded_angular_velocity = 0.0
         self._robot_body, self._robot_shape = self._new_robot()
         self._robot_is_fresh = True  # not stepped by the space since it was made
+        self._placed_pose: Pose | None = None  # the pose teleported to, until the body moves
         space.add(self._robot_body, self._robot_shape)
         self.rebuild_geometry()
 
@@ -267,7 +268,8 @@ class World:
 
     @property
     def robot_body(self) -> pymunk.Body:
-        """The robot's dynamic pymunk body (read it; move it with the methods of this class)."""
+        """The robot's dynamic pymunk body (read it; move it only with the methods of this
+        class, which keep :attr:`robot_pose` in step with it)."""
         return self._robot_body
 
     @property
@@ -278,6 +280,8 @@ class World:
     @property
     def robot_pose(self) -> Pose:
         """The true robot pose in {W}, from the pymunk body (metres, radians)."""
+        if self._placed_pose is not None:  # the body holds exactly these floats
+            return self._placed_pose
         x, y = self._robot_body.position
         x, y, theta = float(x), float(y), float(self._robot_body.angle)
         if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
@@ -304,6 +308,7 @@ class World:
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
         # happens next depends only on the pose, never on the history of the space. A body
         # the space has not stepped since it was made is still in that state: it only moves.
+        self._placed_pose = pose  # pose.theta is wrapped: the body reads back this very pose
         if self._robot_is_fresh:
             self._robot_body.position = (pose.x, pose.y)
             self._robot_body.angle = pose.theta
@@ -457,6 +462,7 @@ class World:
         # The velocity imposed in step k moves the body in step k + 1: one extra step applies the
         # last command, a settle step lets the contact bias remove any residual overlap.
         self._robot_is_fresh = False
+        self._placed_pose = None
         for k in range(len(steps) + 1 + _SETTLE_STEPS):
             vx, vy, omega = velocities[k] if k < len(steps) else zero
             self._commanded_velocity = (float(vx), float(vy))

@@ -427,3 +427,25 @@ def test_a_teleported_robot_that_never_moved_drives_like_a_new_one() -> None:
     assert moved.move_robot(drive) == expected
     moved.set_robot_pose(start)  # after a motion, a teleport gives a fresh body again
     assert moved.move_robot(drive) == expected
+
+
+def _body_pose(world: World) -> Pose:
+    x, y = world.robot_body.position
+    return Pose(float(x), float(y), float(world.robot_body.angle))
+
+
+def test_robot_pose_is_what_the_body_holds_through_teleports_moves_and_pickling() -> None:
+    world = World(CLUTTERED)
+    robot = DifferentialDriveRobot(OdometryNoise(0.01, 0.01, 0.0, 0.05, 0.2))
+    rng = np.random.default_rng(4)
+    world.set_robot_pose(Pose(-1.5, -1.0, 3.1))
+    assert world.robot_pose == _body_pose(world) == Pose(-1.5, -1.0, 3.1)
+    for _ in range(30):  # free arcs teleport; a blocked one steps the space
+        robot.drive(world, *rng.uniform(-0.4, 0.6, 2).tolist(), rng)
+        assert world.robot_pose == _body_pose(world)
+    world.set_robot_pose(Pose(1.5, -1.0, 0.0))
+    outcome = world.move_robot(np.tile([0.05, 0.0, 0.01], (40, 1)))  # into the right wall
+    assert outcome.collided
+    assert world.robot_pose == _body_pose(world) == outcome.pose
+    copy = pickle.loads(pickle.dumps(world))
+    assert copy.robot_pose == _body_pose(copy) == world.robot_pose

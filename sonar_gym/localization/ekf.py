@@ -221,15 +221,23 @@ def _covariance(value: npt.ArrayLike | float | None, size: int, name: str) -> Fl
             f"{name} must be a scalar variance, a length-{size} diagonal or a {size}x{size} "
             f"matrix, got shape {np.shape(value)}"
         )
-    if not np.all(np.isfinite(array)):
+    # The checks on Python floats: a 2x2 or 3x3 matrix costs more in numpy calls than in
+    # arithmetic, and these run at every EKF step.
+    rows = array.tolist()
+    if not all(math.isfinite(value) for row in rows for value in row):
         raise ValueError(f"{name} must be finite")
-    if np.any(np.diag(array) < 0.0):
+    if any(rows[i][i] < 0.0 for i in range(size)):
         raise ValueError(f"{name} must have a non-negative diagonal (variances)")
     # np.allclose(array, array.T, rtol=1e-9, atol) for a finite array, without its overhead
-    magnitude = np.abs(array)
-    atol = 1e-12 * max(1.0, float(magnitude.max()))
-    if not (np.abs(array - array.T) <= atol + 1e-9 * magnitude.T).all():
-        raise ValueError(f"{name} must be symmetric")
+    atol = 1e-12 * max(1.0, *(abs(value) for row in rows for value in row))
+    for i in range(size):
+        for j in range(i + 1, size):
+            upper, lower = rows[i][j], rows[j][i]
+            difference = abs(upper - lower)
+            if not (
+                difference <= atol + 1e-9 * abs(lower) and difference <= atol + 1e-9 * abs(upper)
+            ):
+                raise ValueError(f"{name} must be symmetric")
     return array
 
 

@@ -831,6 +831,21 @@ def test_paper_table_1_errors_stay_below_one_cell() -> None:
     assert np.all(errors < CELL)
 
 
+def test_ekf_symmetry_check_tests_both_triangles() -> None:
+    """``|a_ij - a_ji| <= atol + rtol |a_ji|`` holds one way round but not the other for this
+    pair: numpy's allclose against the transpose rejects the matrix, whichever entry is where,
+    and so does the check."""
+    from sonar_gym.localization import ekf
+
+    smaller, larger = 0.6469621279872788, 0.6469621286352409
+    for upper, lower in ((smaller, larger), (larger, smaller)):
+        matrix = np.eye(3)
+        matrix[0, 1], matrix[1, 0] = upper, lower
+        assert not np.allclose(matrix, matrix.T, rtol=1e-9, atol=1e-12)
+        with pytest.raises(ValueError, match="symmetric"):
+            ekf._covariance(matrix, 3, "covariance")
+
+
 @settings(max_examples=200, deadline=None)
 @given(
     st.floats(min_value=-8.0, max_value=2.0),

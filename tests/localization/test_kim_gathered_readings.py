@@ -33,3 +33,18 @@ def test_readings_of_all_sweeps_are_each_sweeps_end_points(
     assert np.array_equal(readings.beam_rad, np.concatenate(beams))
     expected_ranges = np.linalg.norm(expected_ends - np.concatenate(sensors), axis=1)
     assert np.array_equal(readings.range_m, expected_ranges)
+
+
+def test_an_unchecked_sweep_is_the_checked_one() -> None:
+    angles = np.radians(np.arange(-45.0, 46.0, 1.0))
+    ranges = np.where(np.arange(angles.size) % 7 == 0, np.nan, 0.3 + 0.01 * np.arange(angles.size))
+    odometry = Pose(0.1, -0.05, 0.3)
+    checked = Sweep(angles, ranges, (0.04, 0.0), odometry)
+    unchecked = Sweep.unchecked(angles, ranges, (0.04, 0.0), odometry)
+    assert np.array_equal(unchecked.angles, checked.angles)
+    assert np.array_equal(unchecked.ranges, checked.ranges, equal_nan=True)
+    assert unchecked.sensor_offset == checked.sensor_offset == (0.04, 0.0)
+    assert unchecked.odometry == checked.odometry
+    for array, source in ((unchecked.angles, angles), (unchecked.ranges, ranges)):
+        assert not array.flags.writeable
+        assert not np.shares_memory(array, source)  # a copy: the caller's array stays its own
