@@ -113,7 +113,13 @@ def piston_directivity(theta_rad: npt.ArrayLike, wavenumber_ka: float) -> FloatA
     Returns:
         ``D`` with the shape of ``theta_rad``; signed (negative on odd side lobes).
     """
-    x = wavenumber_ka * np.sin(np.abs(np.asarray(theta_rad, dtype=np.float64)))
+    return _piston_directivity_of(
+        wavenumber_ka * np.sin(np.abs(np.asarray(theta_rad, dtype=np.float64)))
+    )
+
+
+def _piston_directivity_of(x: FloatArray) -> FloatArray:
+    """``2 J1(x) / x`` of ``x = k a sin(theta)`` (:func:`piston_directivity`)."""
     small = x < 1e-4  # 2 J1(x) / x = 1 - x^2/8 + x^4/192 - ...
     safe = np.where(small, 1.0, x)
     return np.where(small, 1.0 - x * x / 8.0, 2.0 * j1(safe) / safe)
@@ -256,6 +262,21 @@ TABLE_STEPS_PER_UNIT = 1 << 12
 _TABLE_SIZE = math.ceil(math.sqrt(2.0) * TABLE_STEPS_PER_UNIT) + 1
 
 
+@functools.cache
+def _table_grid() -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
+    """The samples of :class:`PistonBeam`'s table, the same for every ``k a``: which lie in
+    front (``s <= 1``), their off-axis angles (radians; pi behind) and ``sin(theta)`` of those
+    in front. Read-only."""
+    s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / TABLE_STEPS_PER_UNIT
+    front = s <= 1.0
+    theta = np.full(len(s), math.pi)
+    theta[front] = np.arccos(1.0 - s[front] ** 2)
+    sin_front = np.sin(theta[front])
+    for array in (front, theta, sin_front):
+        array.flags.writeable = False
+    return front, theta, sin_front
+
+
 @dataclass(frozen=True, eq=False)
 class PistonBeam:
     """The two-way pattern of one transducer, tabulated for fast vectorised evaluation.
@@ -308,17 +329,15 @@ class PistonBeam:
         if not wavenumber_ka > 0.0:
             raise ValueError(f"argument 'wavenumber_ka' must be positive; got {wavenumber_ka!r}")
         leakage = _validated_leakage(side_lobe_leakage)
-        s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / TABLE_STEPS_PER_UNIT
-        front = s <= 1.0
-        theta = np.full(len(s), math.pi)
-        theta[front] = np.arccos(1.0 - s[front] ** 2)
-        values = np.where(front, piston_directivity(theta, wavenumber_ka) ** 2, 0.0)
+        front, theta, sin_front = _table_grid()
+        x = wavenumber_ka * sin_front  # k a sin(theta) of the samples in front
+        values = np.zeros(len(theta))  # behind the transducer the pattern is 0
+        values[front] = _piston_directivity_of(x) ** 2
         beyond_main_lobe = (theta >= first_null_rad(wavenumber_ka)) | ~front
         if not side_lobes:
             values[beyond_main_lobe] = 0.0
         last_monotone = int(np.argmax(beyond_main_lobe)) - 1
         if leakage > 0.0:
-            x = wavenumber_ka * np.sin(theta[front])
             leaking = x >= leakage_onset_argument(leakage)
             floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
             values[front] = np.where(leaking, np.maximum(values[front], floor), values[front])

@@ -273,3 +273,41 @@ def test_leaky_beam_table_error_bound_holds_on_a_dense_grid(leakage: float) -> N
     assert onset.any()
     assert error[~onset].max() <= 3e-6
     assert np.all(error[onset] <= 0.01 * exact[onset])
+
+
+def _reference_beam_values(ka: float, side_lobes: bool, leakage: float) -> np.ndarray:
+    """The table's samples as the array form computed them for every ``k a`` afresh: the
+    angle grid, then the directivity at every sample (behind the transducer too)."""
+    from sonar_gym.sonar.acoustics import (
+        _TABLE_SIZE,
+        TABLE_STEPS_PER_UNIT,
+        first_null_rad,
+        leakage_onset_argument,
+        piston_directivity,
+        side_lobe_envelope,
+    )
+
+    s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / TABLE_STEPS_PER_UNIT
+    front = s <= 1.0
+    theta = np.full(len(s), math.pi)
+    theta[front] = np.arccos(1.0 - s[front] ** 2)
+    values = np.where(front, piston_directivity(theta, ka) ** 2, 0.0)
+    if not side_lobes:
+        values[(theta >= first_null_rad(ka)) | ~front] = 0.0
+    if leakage > 0.0:
+        x = ka * np.sin(theta[front])
+        leaking = x >= leakage_onset_argument(leakage)
+        floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
+        values[front] = np.where(leaking, np.maximum(values[front], floor), values[front])
+    return values
+
+
+@pytest.mark.parametrize("side_lobes", [True, False])
+@pytest.mark.parametrize("leakage", [0.0, 0.02])
+@pytest.mark.parametrize("ka", [1.5, POLAROID_KA, 7.123456789, 13.0, 30.0])
+def test_beam_table_is_the_per_ka_array_forms(ka: float, side_lobes: bool, leakage: float) -> None:
+    """The angle grid shared by every ``k a`` gives each table the same bits."""
+    beam = PistonBeam.for_ka(ka, side_lobes, leakage)
+    values = _reference_beam_values(ka, side_lobes, leakage)
+    assert np.array_equal(beam.cells[:, 0], values[:-1])
+    assert np.array_equal(beam.cells[:, 1], np.diff(values))
