@@ -500,7 +500,7 @@ class SweepLocalizationEnv(SonarEnv):
                 )
             duration_s += scan.duration_s
             odometry = _relative_pose(first_estimate, episode.estimate)
-            sweeps.append(Sweep(scan.angles, scan.ranges, offset, odometry))
+            sweeps.append(Sweep.unchecked(scan.angles, scan.ranges, offset, odometry))
             scanned.append((sweeps[-1], true_pose))
             episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector
