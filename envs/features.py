@@ -16,6 +16,7 @@ covered). :data:`FEATURE_TYPES` lists them by name.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -137,9 +138,20 @@ class RangeBins(Feature):
         values = np.where(np.isfinite(fractions), np.clip(fractions, 0.0, 1.0), 1.0)
         if values.size % self.size == 0:
             return np.minimum.reduce(values.reshape(self.size, -1), axis=1)
+        if values.size > self.size:  # every bin holds a run of consecutive pings
+            return np.minimum.reduceat(values, _bin_starts(values.size, self.size))
         bins = np.ones(self.size)
         np.minimum.at(bins, (np.arange(values.size) * self.size) // values.size, values)
         return bins
+
+
+@functools.lru_cache(maxsize=64)
+def _bin_starts(pings: int, bins: int) -> np.ndarray:
+    """The first ping of each of ``bins`` bins of ``pings`` consecutive pings (ping ``i`` in bin
+    ``i * bins // pings``; ``pings > bins``, so no bin is empty). Read-only."""
+    starts = np.searchsorted((np.arange(pings) * bins) // pings, np.arange(bins))
+    starts.flags.writeable = False
+    return starts
 
 
 @dataclass(frozen=True)
