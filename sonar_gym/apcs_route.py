@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from sonar_gym import drive_kernels
 from sonar_gym.localization.apcs import DetectedWall, MatchResult
 from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
 from sonar_gym.phase_timer import PhaseTimer
@@ -293,17 +294,12 @@ class APCSRoute:
                 half = 0.5 * turn * base
                 command(-half, half, straight=False)
             count = min(remaining, steps_per_aim)
-            # command(step_m, step_m, straight=True) count times, inlined: the hot loop.
+            # command(step_m, step_m, straight=True) count times, compiled: the hot loop.
             step_noise = encoder_std * math.sqrt(abs(step_m))
-            for _ in range(count):
-                normals, _ = plan.draws.draw(rng)
-                noise_left, noise_right = normals.tolist()
-                left = step_m + step_noise * noise_left
-                right = step_m + step_noise * noise_right
-                distance, turn = 0.5 * (right + left), (right - left) / base
-                heading = theta + 0.5 * turn
-                x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
-                theta = wrap_angle(theta + turn)
+            (x, y, theta), normals, uniforms = drive_kernels.dead_reckon_straight(
+                rng, (x, y, theta), count, step_m, step_noise, base
+            )
+            plan.draws.extend(normals, uniforms)
             plan.commanded.extend([(step_m, step_m)] * count)
             plan.straight.extend([True] * count)
             if count < steps_per_aim:

@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from sonar_gym import drive_kernels
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.odometry import sinc_of_array
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
@@ -134,8 +135,7 @@ def drive_run(
     if int(count) != count or count < 0:
         raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
     draws = CommandDraws.start(rng)
-    for _ in range(int(count)):
-        draws.draw(rng)
+    draws.extend(*drive_kernels.draw_commands(rng, int(count)))
     draws.finish(rng)
     commanded = np.tile([d_left_m, d_right_m], (int(count), 1))
     return drive_commands(robot, world, commanded, draws, rng)
@@ -169,6 +169,12 @@ class CommandDraws:
         self.uniforms.append(uniforms)
         return normals, uniforms
 
+    def extend(self, normals: FloatArray, uniforms: FloatArray) -> None:
+        """Add commands' numbers drawn in this order elsewhere: ``(k, 2)`` and ``(k, 4)``
+        (:func:`sonar_gym.drive_kernels.draw_commands`)."""
+        self.normals.extend(normals)
+        self.uniforms.extend(uniforms)
+
     def finish(self, rng: np.random.Generator) -> None:
         """Note the generator's state after the last command."""
         self.end_state = rng.bit_generator.state
@@ -179,9 +185,7 @@ class CommandDraws:
             rng.bit_generator.state = self.end_state
             return
         rng.bit_generator.state = self.start_state
-        for _ in range(index):
-            rng.standard_normal(2)
-            rng.random(4)
+        drive_kernels.draw_commands(rng, index)
 
 
 def drive_commands(
