@@ -1,8 +1,13 @@
-"""Writes ``fixtures/rollouts.json``: digests of seeded rollouts of every env.
+"""Writes ``fixtures/rollouts.<family>.json``: digests of seeded rollouts of every env.
 
-Run it once on a tree whose behaviour is the reference (never on the code under test), e.g.::
+Run it once per numerics family (:mod:`tests.envs.numerics`) on a tree whose behaviour is the
+reference (never on the code under test; the reference is fdfde8b). ``tests`` must come from
+this tree and ``sonar_gym`` from the reference, so put a directory holding only a link to this
+tree's ``tests/`` first, and run from outside both trees::
 
-    PYTHONPATH=/path/to/reference/tree python tests/envs/make_rollout_fixture.py
+    mkdir -p /tmp/t && ln -sfn "$PWD/tests" /tmp/t/tests
+    here=$PWD; cd /tmp
+    PYTHONPATH=/tmp/t:/path/to/reference/tree python "$here/tests/envs/make_rollout_fixture.py"
 
 ``test_rollout_fixture.py`` replays the same rollouts and compares. Each step is digested
 (observation bytes, reward, terminated, truncated, info) so the file stays small while any
@@ -20,7 +25,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-FIXTURE = Path(__file__).with_name("fixtures") / "rollouts.json"
+from tests.envs.numerics import family_fixture
+
+FIXTURE = family_fixture(Path(__file__).with_name("fixtures") / "rollouts.json")
+"""This machine's family's fixture (:mod:`tests.envs.numerics`)."""
 
 CASES: list[tuple[str, dict[str, Any], str]] = [
     ("SonarGym/BeaconScan-v0", {}, "random"),

@@ -2,10 +2,12 @@
 
 With default arguments the environments' observations, actions, rewards, statuses and info
 values must not move (trained policies ship against them). The fixture
-``seeded_rollouts.json`` beside this file was written by running this module as a script on
-the tree before the config, reward-term and info-key unification::
+``seeded_rollouts.<family>.json`` beside this file (one per numerics family,
+:mod:`tests.envs.numerics`) was written by running this module as a script on the tree before
+the config, reward-term and info-key unification (fdfde8b), with ``tests`` from this tree and
+``sonar_gym`` from the old one (as in ``make_rollout_fixture.py``)::
 
-    PYTHONPATH=<old tree> python tests/envs/seeded_rollouts.py tests/envs/seeded_rollouts.json
+    here=$PWD; cd /tmp; PYTHONPATH=/tmp/t:<old tree> python "$here/tests/envs/seeded_rollouts.py"
 
 and ``test_seeded_rollouts.py`` replays the same episodes on the current tree. Only the public
 API is used (``gym.make``, ``make_agent``), so the script runs on either tree.
@@ -32,6 +34,7 @@ import numpy as np
 import sonar_gym  # noqa: F401  (registers the ids)
 from sonar_gym.agents import make_agent
 from sonar_gym.registration import ENVIRONMENTS
+from tests.envs.numerics import family_fixture
 
 ENV_IDS = tuple(sorted(ENVIRONMENTS))
 AGENTS = ("random", "paper", "lowest")
@@ -42,7 +45,8 @@ MAX_STEPS = 60
 """Steps recorded per episode at most (enough to cross every decision kind of every task)."""
 EPISODES = 2
 """Episodes per rollout: the first from ``reset(seed=seed)``, the next from ``reset()``."""
-FIXTURE = Path(__file__).with_name("seeded_rollouts.json")
+FIXTURE = family_fixture(Path(__file__).with_name("seeded_rollouts.json"))
+"""This machine's family's fixture (:mod:`tests.envs.numerics`)."""
 
 
 def canonical(value: Any) -> Any:
