@@ -501,6 +501,20 @@ def _vote_window(
     return _VoteWindow((low_x, low_y), (high_x - low_x + 1, high_y - low_y + 1))
 
 
+def _vote_layout(
+    grid: OccupancyGrid, window: _VoteWindow, center: FloatArray | None, radius: float | None
+) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]:
+    """The compiled vote loops' ``(circle, grid_frame, window)``
+    (:mod:`~sonar_gym.localization.kim_kernels`): the search circle (an infinite radius
+    without one), the grid's origin and cell size, and the window's cells."""
+    if center is None or radius is None:
+        circle = (0.0, 0.0, math.inf)
+    else:
+        circle = (float(center[0]), float(center[1]), float(radius))
+    (x0, y0), size = grid.origin_m, grid.cell_size_m
+    return circle, (float(x0), float(y0), float(size)), window.cells
+
+
 def _failure(status: str, message: str) -> VoteLocalization:
     return VoteLocalization(status=status, message=message)
 
@@ -612,12 +626,7 @@ def vote_localize(
     direction_index = _direction_index(headings, readings, direction_bins)
     table = table_cache.columns(direction_index.ravel())
     cos_h, sin_h = np.cos(headings), np.sin(headings)
-    circle = (0.0, 0.0, math.inf) if center is None or radius is None else (*center, radius)
-    vote_layout = (
-        (float(circle[0]), float(circle[1]), float(circle[2])),
-        (float(grid.origin_m[0]), float(grid.origin_m[1]), float(grid.cell_size_m)),
-        window.cells,
-    )
+    vote_layout = _vote_layout(grid, window, center, radius)
     volume = kim_kernels.vote_volume(
         *pairs,
         direction_index,
@@ -630,8 +639,7 @@ def vote_localize(
         sin_h,
         *vote_layout,
     )
-    (low_x, low_y) = window.low
-
+    low_x, low_y = window.low
     if not volume.any():
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"

@@ -154,12 +154,7 @@ def test_compiled_votes_are_the_array_forms_votes(
     direction_index = kim._direction_index(headings, readings, 360)
     table = table_cache.columns(direction_index.ravel())
     cos_h, sin_h = np.cos(headings), np.sin(headings)
-    circle = (0.0, 0.0, math.inf) if center is None or radius is None else (*center, radius)
-    layout = (
-        tuple(float(value) for value in circle),
-        (*grid.origin_m, grid.cell_size_m),
-        window.cells,
-    )
+    layout = kim._vote_layout(grid, window, center, radius)
     volume = kim_kernels.vote_volume(
         *pairs, direction_index, table, readings.range_m, readings.end_x, readings.end_y,
         anchors, cos_h, sin_h, *layout,
