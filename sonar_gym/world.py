@@ -36,6 +36,7 @@ import numpy.typing as npt
 import pymunk
 
 from sonar_gym.geometry import StaticGeometry, static_geometry
+from sonar_gym.path_clearance import StaticShapeTable
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
 
@@ -114,6 +115,8 @@ class World:
         space: the ``pymunk.Space`` (static shapes in category :data:`STATIC_CATEGORY`, the
             robot in :data:`ROBOT_CATEGORY`).
         geometry: the :class:`~sonar_gym.geometry.StaticGeometry` of the static content.
+        static_shape_table: the static pymunk shapes as arrays, for the compiled clearance
+            test of planned motions (:mod:`sonar_gym.path_clearance`).
     """
 
     def __init__(
@@ -186,6 +189,7 @@ class World:
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
+        self.static_shape_table = StaticShapeTable.of(shapes)
         box_corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
         self._box_polygons = _ConvexPolygons(box_corners.reshape(-1, 4, 2))
 
