@@ -16,7 +16,8 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import compiled, wrap_angle
+from sonar_gym.compiled import INDICES, NUMBERS, TABLE, compiled, wrap_angle
+from sonar_gym.path_clearance import arc_is_clear
 from sonar_gym.pose import FloatArray
 
 _GENERATOR = types.NumPyRandomGeneratorType("NumPyRandomGeneratorType")
@@ -87,3 +88,208 @@ def dead_reckon_straight(
         x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
         theta = wrap_angle(theta + turn)
     return (x, y, theta), normals, uniforms
+
+
+EULER, MIDPOINT, ARC = 0, 1, 2
+"""Codes of :data:`sonar_gym.odometry.INTEGRATIONS` (their indices) for the loops below."""
+
+
+def _sinc(x: float) -> float:
+    if abs(x) < 1e-4:
+        return 1.0 - x * x / 6.0
+    return math.sin(x) / x
+
+
+_sinc_compiled = compiled(types.float64, types.float64, inline=True)(_sinc)
+
+
+def _integrate_substeps(
+    x: float,
+    y: float,
+    theta: float,
+    d_left_m: float,
+    d_right_m: float,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+) -> tuple[float, float, float]:
+    n = substeps
+    distance = 0.5 * (d_left_m + d_right_m) / n
+    delta = (d_right_m - d_left_m) / (wheel_base_m * n)
+    if delta == 0.0:
+        return x + n * distance * math.cos(theta), y + n * distance * math.sin(theta), theta
+    lead = 0.0 if integration == EULER else 0.5
+    if integration == ARC:
+        distance *= _sinc_compiled(0.5 * delta)
+    half = 0.5 * delta
+    gain = float(n) if abs(half) < 1e-300 else math.sin(n * half) / math.sin(half)
+    heading = theta + (lead + 0.5 * (n - 1)) * delta
+    return (
+        x + distance * gain * math.cos(heading),
+        y + distance * gain * math.sin(heading),
+        wrap_angle(theta + n * delta),
+    )
+
+
+_integrate_substeps_compiled = compiled(
+    types.UniTuple(types.float64, 3), *[types.float64] * 6, types.int64, types.int64, inline=True
+)(_integrate_substeps)
+""":func:`sonar_gym.odometry.integrate_substeps` of ``(x, y, theta)`` inside a compiled loop
+(the integration as a code: :data:`EULER`, :data:`MIDPOINT`, :data:`ARC`)."""
+
+
+def _ground_travel(
+    commanded_m: float,
+    scale_error: float,
+    slip_draw: float,
+    size_draw: float,
+    slip_probability_per_m: float,
+    slip_fraction_max: float,
+) -> float:
+    slip_probability = 1.0 - (1.0 - slip_probability_per_m) ** abs(commanded_m)
+    slip_loss = size_draw * slip_fraction_max if slip_draw < slip_probability else 0.0
+    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
+
+
+_ground_travel_compiled = compiled(types.float64, *[types.float64] * 6, inline=True)(_ground_travel)
+
+ENCODER, GROUND, SUBSTEPS, ODOMETRY, TRUE_POSE, PATH_LENGTH = 0, 2, 4, 5, 8, 11
+"""First columns of a motion table (:func:`drive_commands`): the encoder increments ``(left,
+right)`` and the ground travel (metres), the physics substeps, the odometry pose and the true
+pose after the command (``(x, y, theta)``, {W}) and the true centre's path length (metres)."""
+MOTION_COLUMNS = 12
+
+_MOTIONS = types.Array(types.float64, 2, "C")
+_SHAPES = (TABLE, INDICES, TABLE)  # StaticShapeTable: bounds, kinds, shapes
+
+
+def _clear_arcs(
+    motions: FloatArray,
+    first: int,
+    start: tuple[float, float, float],
+    wheel_base_m: float,
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+) -> int:
+    x, y, theta = start
+    for command in range(first, motions.shape[0]):
+        left, right = motions[command, GROUND], motions[command, GROUND + 1]
+        end_x, end_y, end_theta = _integrate_substeps_compiled(
+            x, y, theta, left, right, wheel_base_m, 1, ARC
+        )
+        if not arc_is_clear(
+            x, y, end_x, end_y, left, right, wheel_base_m, robot_radius_m, bounds, kinds, shapes
+        ):
+            return command
+        half_turn = 0.5 * (right - left) / (wheel_base_m * motions[command, SUBSTEPS])
+        motions[command, PATH_LENGTH] = abs(0.5 * (left + right)) * abs(_sinc_compiled(half_turn))
+        motions[command, TRUE_POSE] = end_x
+        motions[command, TRUE_POSE + 1] = end_y
+        motions[command, TRUE_POSE + 2] = end_theta
+        x, y, theta = end_x, end_y, end_theta
+    return motions.shape[0]
+
+
+_CLEAR_ARCS_SIGNATURE = (
+    types.int64,
+    _MOTIONS,  # motions (written)
+    types.int64,  # first
+    types.UniTuple(types.float64, 3),  # start
+    types.float64,  # wheel_base_m
+    types.float64,  # robot_radius_m
+    *_SHAPES,
+)
+_clear_arcs_compiled = compiled(*_CLEAR_ARCS_SIGNATURE, inline=True)(_clear_arcs)
+clear_arcs = compiled(*_CLEAR_ARCS_SIGNATURE)(_clear_arcs)
+"""``clear_arcs(motions, first, start, wheel_base_m, robot_radius_m, bounds, kinds, shapes)``:
+the true motion of the commands of the motion table ``motions`` from ``first`` on, from
+``start`` (``(x, y, theta)``, {W}), while each one's arc (:data:`ARC`, of its ground travel)
+is clear of the static shapes ``(bounds, kinds, shapes)``
+(:data:`sonar_gym.path_clearance.arc_is_clear`): pymunk would impose it exactly, so the robot
+ends where the arc ends and its centre travels the chords of the substeps. Writes each clear
+command's true pose and path length; returns the first command that is not clear (``K`` if
+none)."""
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_MOTIONS, types.int64)),
+    TABLE,  # commands_m
+    NUMBERS,  # draws
+    NUMBERS,  # noise
+    types.float64,  # wheel_base_m
+    types.int64,  # substeps
+    types.int64,  # integration
+    types.UniTuple(types.float64, 3),  # odometry
+    types.UniTuple(types.float64, 3),  # start
+    types.float64,  # robot_radius_m
+    *_SHAPES,
+)
+def drive_commands(
+    commands_m: FloatArray,
+    draws: FloatArray,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+) -> tuple[FloatArray, int]:
+    """:meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` of each of the ``(K, 2)``
+    commanded increments ``commands_m`` (``(d_l, d_r)``, metres), as far as no physics is
+    needed.
+
+    Per command: the draws of ``drive`` (``draws``: ``6 K`` numbers, two standard normals then
+    four uniforms per command, in the order :func:`draw_commands` draws them); the encoder
+    increments and the ground travel of :class:`~sonar_gym.odometry.OdometryConfig`
+    (``noise``: its five fields in their order, then the robot's ``max_substep_m`` and
+    ``max_substep_rad``); the physics substeps (``substeps``, or if 0 enough that no wheel
+    travels more than ``max_substep_m`` and the heading turns by at most ``max_substep_rad``
+    per substep); the odometry integrated over them from ``odometry`` (``(x, y, theta)``,
+    {W}; ``integration`` a code :data:`EULER`, :data:`MIDPOINT` or :data:`ARC`); then the
+    true motion from ``start`` while it is clear (:data:`clear_arcs`).
+
+    Returns the ``(K, MOTION_COLUMNS)`` motion table (columns :data:`ENCODER` ...) and the
+    first command that needs the physics (``K`` if none); that command's and the later ones'
+    true poses and path lengths are not written.
+    """
+    encoder_std, scale_left, scale_right = noise[0], noise[1], noise[2]
+    slip_probability, slip_fraction = noise[3], noise[4]
+    max_substep_m, max_substep_rad = noise[5], noise[6]
+    count = commands_m.shape[0]
+    motions = np.empty((count, MOTION_COLUMNS))
+    x, y, theta = odometry
+    for command in range(count):
+        left, right = commands_m[command, 0], commands_m[command, 1]
+        first = 6 * command
+        encoder_left = left + encoder_std * math.sqrt(abs(left)) * draws[first]
+        encoder_right = right + encoder_std * math.sqrt(abs(right)) * draws[first + 1]
+        ground_left = _ground_travel_compiled(
+            left, scale_left, draws[first + 2], draws[first + 4], slip_probability, slip_fraction
+        )
+        ground_right = _ground_travel_compiled(
+            right, scale_right, draws[first + 3], draws[first + 5], slip_probability, slip_fraction
+        )
+        if substeps > 0:
+            n = substeps
+        else:
+            travel = max(abs(ground_left), abs(ground_right), abs(encoder_left), abs(encoder_right))
+            turn = abs(ground_right - ground_left) / wheel_base_m
+            n = max(1, math.ceil(travel / max_substep_m), math.ceil(turn / max_substep_rad))
+        x, y, theta = _integrate_substeps_compiled(
+            x, y, theta, encoder_left, encoder_right, wheel_base_m, n, integration
+        )
+        row = motions[command]
+        row[ENCODER], row[ENCODER + 1] = encoder_left, encoder_right
+        row[GROUND], row[GROUND + 1] = ground_left, ground_right
+        row[SUBSTEPS] = n
+        row[ODOMETRY], row[ODOMETRY + 1], row[ODOMETRY + 2] = x, y, theta
+    blocked = _clear_arcs_compiled(
+        motions, 0, start, wheel_base_m, robot_radius_m, bounds, kinds, shapes
+    )
+    return motions, blocked

@@ -222,12 +222,12 @@ def follow_route(
     wheel_base = robot.wheel_base_for(world)
     rolled: list[float] = []
     for target in route.targets_between(*span_m):
-        motion = robot.move_to(world, (float(target[0]), float(target[1])), rng, from_pose=estimate)
-        increments = [(p.encoder_left_m, p.encoder_right_m) for p in motion.parts or (motion,)]
+        plan = robot.plan_move(world, (float(target[0]), float(target[1])), from_pose=estimate)
+        increments = robot.drive_commands(world, plan, rng).encoder_m
         estimate, covariance, _ = predict_over_motion(
             estimate, covariance, increments, wheel_base, variance_per_m
         )
-        rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments]
+        rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments.tolist()]
     return FollowedLeg(estimate, covariance, tuple(rolled))
 
 

@@ -26,21 +26,21 @@ blocked robot.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import pymunk
 
+from sonar_gym import drive_kernels
 from sonar_gym.odometry import (
     INTEGRATIONS,
     Integration,
     OdometryConfig,
     arc_displacements,
-    integrate_substeps,
     sinc,
 )
-from sonar_gym.pose import Pose, angle_difference
-from sonar_gym.world import STATIC_ONLY, World
+from sonar_gym.pose import FloatArray, Pose, angle_difference
+from sonar_gym.world import World
 
 
 def unicycle_step(
@@ -96,10 +96,6 @@ def unicycle_step(
 OdometryNoise = OdometryConfig
 """The robot's odometry errors: :class:`sonar_gym.odometry.OdometryConfig` (one vocabulary)."""
 
-PATH_CLEARANCE_M = 1e-3
-"""A command whose swept disc stays this far (metres) beyond the robot radius from every static
-shape meets no contact, so it is integrated without stepping the physics."""
-
 
 @dataclass(frozen=True)
 class MotionResult:
@@ -124,6 +120,60 @@ class MotionResult:
     encoder_left_m: float = 0.0
     encoder_right_m: float = 0.0
     parts: tuple[MotionResult, ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class CommandRun:
+    """The outcome of :meth:`DifferentialDriveRobot.drive_commands` over its ``K`` commands.
+
+    Attributes:
+        motions: ``(K, MOTION_COLUMNS)`` the motion table of
+            :func:`sonar_gym.drive_kernels.drive_commands`: per command the encoder
+            increments the odometry integrated and the ground travel (metres), the substeps,
+            the odometry pose and the true pose afterwards ({W}; metres, radians) and the path
+            length of the true robot centre (metres).
+        collided: ``(K,)`` whether the robot touched and pushed against a static shape.
+        true_pose, odometry_pose: the true and the odometry pose after the last command
+            (None if there is none).
+    """
+
+    motions: FloatArray
+    collided: np.ndarray
+    true_pose: Pose | None = None
+    odometry_pose: Pose | None = None
+
+    @property
+    def encoder_m(self) -> FloatArray:
+        """``(K, 2)`` the encoder increments ``(left, right)``, metres."""
+        return self.motions[:, _ENCODER]
+
+    def result(self, command: int) -> MotionResult:
+        """Command ``command``'s :class:`MotionResult`."""
+        row = self.motions[command].tolist()
+        if (
+            command in (-1, len(self.motions) - 1)
+            and self.true_pose is not None
+            and self.odometry_pose is not None
+        ):
+            true_pose, odometry_pose = self.true_pose, self.odometry_pose
+        else:
+            true_pose = Pose.unchecked(*row[_TRUE_POSE])
+            odometry_pose = Pose.unchecked(*row[_ODOMETRY])
+        return MotionResult(
+            true_pose=true_pose,
+            odometry_pose=odometry_pose,
+            collided=bool(self.collided[command]),
+            distance_m=row[drive_kernels.PATH_LENGTH],
+            encoder_left_m=row[drive_kernels.ENCODER],
+            encoder_right_m=row[drive_kernels.ENCODER + 1],
+        )
+
+
+# the motion table's columns of each quantity
+_ENCODER = slice(drive_kernels.ENCODER, drive_kernels.ENCODER + 2)
+_GROUND = slice(drive_kernels.GROUND, drive_kernels.GROUND + 2)
+_ODOMETRY = slice(drive_kernels.ODOMETRY, drive_kernels.ODOMETRY + 3)
+_TRUE_POSE = slice(drive_kernels.TRUE_POSE, drive_kernels.TRUE_POSE + 3)
 
 
 class DifferentialDriveRobot:
@@ -215,73 +265,96 @@ class DifferentialDriveRobot:
                 substep.
         """
         d_left_m, d_right_m = float(d_left_m), float(d_right_m)
-        if not (math.isfinite(d_left_m) and math.isfinite(d_right_m)):
+        run = self.drive_commands(world, ((d_left_m, d_right_m),), rng, substeps)
+        return run.result(0)
+
+    def drive_commands(
+        self,
+        world: World,
+        commands_m: Sequence[tuple[float, float]] | FloatArray,
+        rng: np.random.Generator,
+        substeps: int | None = None,
+    ) -> CommandRun:
+        """:meth:`drive` each ``(d_left, d_right)`` of ``commands_m`` (metres) in turn.
+
+        The wheels (draws, encoder noise, slip, substeps, odometry) run in one compiled loop
+        (:func:`sonar_gym.drive_kernels.wheel_commands`); so does the true motion while each
+        command's arc is clear of the static shapes (:func:`sonar_gym.drive_kernels.clear_arcs`,
+        where pymunk would impose the arc exactly). A command that may touch a shape goes
+        through pymunk (:meth:`World.move_robot`). The body is placed at the end of a clear
+        stretch only once, as the teleports in between leave no trace.
+        """
+        commands = np.asarray(commands_m, dtype=np.float64).reshape(-1, 2)
+        if not all(map(math.isfinite, commands.ravel().tolist())):
+            bad = commands[~np.isfinite(commands).all(axis=1)][0].tolist()
             raise ValueError(
-                f"wheel increments must be finite (metres); got {d_left_m!r}, {d_right_m!r}"
+                f"wheel increments must be finite (metres); got {bad[0]!r}, {bad[1]!r}"
             )
         if not isinstance(rng, np.random.Generator):
             raise ValueError(
                 f"argument 'rng' must be a numpy.random.Generator; got {type(rng).__name__}"
             )
-        wheel_base = self.wheel_base_for(world)
+        fixed_substeps = 0 if substeps is None else _checked_substeps(substeps)
+        count = len(commands)
+        if count == 0:
+            return CommandRun(np.empty((0, drive_kernels.MOTION_COLUMNS)), np.zeros(0, dtype=bool))
+        wheel_base = float(self.wheel_base_for(world))
         noise = self.noise
-        normal_left, normal_right = rng.standard_normal(2).tolist()
-        slip_left, slip_right, size_left, size_right = rng.random(4).tolist()
-
-        # Per wheel in plain floats (two-element arrays cost more than the arithmetic).
-        encoder = (
-            float(noise.encoder_increments(d_left_m, normal_left)),
-            float(noise.encoder_increments(d_right_m, normal_right)),
-        )
-        ground = (
-            float(noise.ground_travel(d_left_m, noise.scale_error_left, slip_left, size_left)),
-            float(noise.ground_travel(d_right_m, noise.scale_error_right, slip_right, size_right)),
-        )
-
-        n = self._substep_count(ground, encoder, wheel_base, substeps)
         start = world.robot_pose
-        odometry_start = start if self.odometry_pose is None else self.odometry_pose
-
-        arc_end = integrate_substeps(start, ground[0], ground[1], wheel_base, 1, "arc")
-        if _path_is_clear(world, start, ground, wheel_base, arc_end):
-            true_pose, collided, path_length = _free_motion(world, arc_end, ground, wheel_base, n)
-        else:
+        odometry = start if self.odometry_pose is None else self.odometry_pose
+        draws = [
+            rng.standard_normal(2) if slot % 2 == 0 else rng.random(4) for slot in range(2 * count)
+        ]
+        table = world.static_shape_table
+        radius = float(world.robot_radius)
+        motions, blocked = drive_kernels.drive_commands(
+            commands,
+            np.concatenate(draws),
+            np.array(
+                (
+                    noise.encoder_std_m_per_sqrt_m,
+                    noise.scale_error_left,
+                    noise.scale_error_right,
+                    noise.slip_probability_per_m,
+                    noise.slip_fraction_max,
+                    self.max_substep_m,
+                    self.max_substep_rad,
+                ),
+                dtype=np.float64,
+            ),
+            wheel_base,
+            fixed_substeps,
+            INTEGRATIONS.index(self.odometry_integration),
+            (odometry.x, odometry.y, odometry.theta),
+            (start.x, start.y, start.theta),
+            radius,
+            table.bounds,
+            table.kinds,
+            table.shapes,
+        )
+        collided = np.zeros(count, dtype=bool)
+        pose, first = start, 0
+        while True:
+            if blocked > first:
+                pose = Pose.unchecked(*motions[blocked - 1, _TRUE_POSE].tolist())
+                world.place_robot_on_clear_path(pose)
+            if blocked == count:
+                break
+            left, right = motions[blocked, _GROUND].tolist()
+            substeps_here = int(motions[blocked, drive_kernels.SUBSTEPS])
             outcome = world.move_robot(
-                arc_displacements(start, ground[0], ground[1], wheel_base, n)
+                arc_displacements(pose, left, right, wheel_base, substeps_here)
             )
-            true_pose, collided, path_length = outcome.pose, outcome.collided, outcome.path_length_m
-
-        odometry = integrate_substeps(
-            odometry_start, encoder[0], encoder[1], wheel_base, n, self.odometry_integration
-        )
-        self.odometry_pose = odometry
-        return MotionResult(
-            true_pose=true_pose,
-            odometry_pose=odometry,
-            collided=collided,
-            distance_m=path_length,
-            encoder_left_m=float(encoder[0]),
-            encoder_right_m=float(encoder[1]),
-        )
-
-    def _substep_count(
-        self,
-        ground: tuple[float, float],
-        encoder: tuple[float, float],
-        wheel_base: float,
-        substeps: int | None,
-    ) -> int:
-        if substeps is not None:
-            if int(substeps) != substeps or substeps < 1:
-                raise ValueError(
-                    f"argument 'substeps' must be a positive integer or None; got {substeps!r}"
-                )
-            return int(substeps)
-        travel = max(abs(ground[0]), abs(ground[1]), abs(encoder[0]), abs(encoder[1]))
-        turn = abs(float(ground[1] - ground[0])) / wheel_base
-        return max(
-            1, math.ceil(travel / self.max_substep_m), math.ceil(turn / self.max_substep_rad)
-        )
+            pose = outcome.pose
+            motions[blocked, _TRUE_POSE] = (pose.x, pose.y, pose.theta)
+            motions[blocked, drive_kernels.PATH_LENGTH] = outcome.path_length_m
+            collided[blocked] = outcome.collided
+            first = blocked + 1
+            blocked = drive_kernels.clear_arcs(
+                motions, first, (pose.x, pose.y, pose.theta), wheel_base, radius, *table.arrays
+            )
+        self.odometry_pose = Pose.unchecked(*motions[-1, _ODOMETRY].tolist())
+        return CommandRun(motions, collided, pose, self.odometry_pose)
 
     # --- convenience commands -----------------------------------------------------------
 
@@ -293,8 +366,7 @@ class DifferentialDriveRobot:
 
     def turn(self, world: World, angle_rad: float, rng: np.random.Generator) -> MotionResult:
         """Turn in place by ``angle_rad`` radians (counter-clockwise positive)."""
-        half = 0.5 * float(angle_rad) * self.wheel_base_for(world)
-        return self.drive(world, -half, half, rng)
+        return self.drive(world, *_turn_in_place(angle_rad, self.wheel_base_for(world)), rng)
 
     def move_to(
         self,
@@ -308,8 +380,28 @@ class DifferentialDriveRobot:
 
         The plan is made from ``from_pose`` (default: the odometry estimate, or the true pose
         if odometry was never set), as a robot plans from its belief; noise and walls make the
-        true end pose differ. Each part is one :meth:`drive` command.
+        true end pose differ. Each part is one :meth:`drive` command (:meth:`plan_move`).
         """
+        run = self.drive_commands(world, self.plan_move(world, target, from_pose), rng)
+        parts = [run.result(command) for command in range(len(run.collided))]
+        return MotionResult(
+            true_pose=parts[-1].true_pose,
+            odometry_pose=parts[-1].odometry_pose,
+            collided=any(p.collided for p in parts),
+            distance_m=sum(p.distance_m for p in parts),
+            encoder_left_m=sum(p.encoder_left_m for p in parts),
+            encoder_right_m=sum(p.encoder_right_m for p in parts),
+            parts=tuple(parts),
+        )
+
+    def plan_move(
+        self, world: World, target: Pose | tuple[float, float], from_pose: Pose | None = None
+    ) -> list[tuple[float, float]]:
+        """The ``(d_left, d_right)`` commands (metres) of :meth:`move_to`: the turn towards
+        ``target`` and the straight to it (none if it is within 1 nm), then the turn to its
+        heading if it is a Pose; one command of no travel if that leaves none. Planned from
+        ``from_pose`` (default: the odometry estimate, or the true pose if odometry was never
+        set)."""
         if from_pose is not None:
             belief = from_pose
         elif self.odometry_pose is not None:
@@ -321,120 +413,37 @@ class DifferentialDriveRobot:
         else:
             tx, ty = np.asarray(target, dtype=np.float64).reshape(2)
             target_xy, target_heading = (float(tx), float(ty)), None
+        wheel_base = self.wheel_base_for(world)
         dx, dy = target_xy[0] - belief.x, target_xy[1] - belief.y
         distance = math.hypot(dx, dy)
-        parts: list[MotionResult] = []
+        commands: list[tuple[float, float]] = []
         heading = belief.theta
         if distance > 1e-9:
             bearing = math.atan2(dy, dx)
-            parts.append(self.turn(world, angle_difference(bearing, heading), rng))
-            parts.append(self.drive_straight(world, distance, rng))
+            commands.append(_turn_in_place(angle_difference(bearing, heading), wheel_base))
+            commands.append((distance, distance))
             heading = bearing
         if target_heading is not None:
-            parts.append(self.turn(world, angle_difference(target_heading, heading), rng))
-        if not parts:
-            parts.append(self.drive(world, 0.0, 0.0, rng))
-        return MotionResult(
-            true_pose=parts[-1].true_pose,
-            odometry_pose=parts[-1].odometry_pose,
-            collided=any(p.collided for p in parts),
-            distance_m=sum(p.distance_m for p in parts),
-            encoder_left_m=sum(p.encoder_left_m for p in parts),
-            encoder_right_m=sum(p.encoder_right_m for p in parts),
-            parts=tuple(parts),
+            commands.append(_turn_in_place(angle_difference(target_heading, heading), wheel_base))
+        return commands or [(0.0, 0.0)]
+
+
+def _turn_in_place(angle_rad: float, wheel_base_m: float) -> tuple[float, float]:
+    """The ``(d_left, d_right)`` wheel travel (metres) turning by ``angle_rad`` in place."""
+    half = 0.5 * float(angle_rad) * wheel_base_m
+    return -half, half
+
+
+def _checked_substeps(substeps: int) -> int:
+    if int(substeps) != substeps or substeps < 1:
+        raise ValueError(
+            f"argument 'substeps' must be a positive integer or None; got {substeps!r}"
         )
-
-
-def _path_is_clear(
-    world: World,
-    start: Pose,
-    ground: tuple[float, float],
-    wheel_base_m: float,
-    end: Pose | None = None,
-) -> bool:
-    """Whether the robot disc can follow the planned arc without touching a static shape.
-
-    The arc of length ``L`` turning by ``phi`` lies within its sagitta ``<= L |phi| / 8`` of
-    its chord, so the disc of the robot radius plus that sagitta plus :data:`PATH_CLEARANCE_M`
-    swept along the chord (``start`` to ``end``, the arc's end, integrated here if not given)
-    covers every position the body takes. pymunk's bounding-box index
-    picks the shapes near the chord; their exact distance to it decides.
-    """
-    turned = abs(float(ground[1] - ground[0])) / wheel_base_m
-    if turned > math.pi:
-        return False
-    arc_length = 0.5 * abs(float(ground[0] + ground[1]))
-    if end is None:
-        end = integrate_substeps(start, float(ground[0]), float(ground[1]), wheel_base_m, 1, "arc")
-    radius = world.robot_radius + arc_length * turned / 8.0 + PATH_CLEARANCE_M
-    a = (start.x, start.y)
-    b = (end.x, end.y)
-    box = pymunk.BB(
-        min(a[0], b[0]) - radius,
-        min(a[1], b[1]) - radius,
-        max(a[0], b[0]) + radius,
-        max(a[1], b[1]) + radius,
-    )
-    for shape in world.space.bb_query(box, STATIC_ONLY):
-        if isinstance(shape, pymunk.Segment):
-            p, q = (shape.a.x, shape.a.y), (shape.b.x, shape.b.y)
-            gap = _segment_distance(a, b, p, q) - shape.radius
-        elif isinstance(shape, pymunk.Circle) and shape.body is not None:
-            centre = shape.body.local_to_world(shape.offset)
-            gap = _point_segment_distance((centre.x, centre.y), a, b) - shape.radius
-        else:  # a shape this check does not know: let the physics decide
-            return False
-        if gap <= radius:
-            return False
-    return True
-
-
-def _point_segment_distance(
-    point: tuple[float, float], a: tuple[float, float], b: tuple[float, float]
-) -> float:
-    ex, ey = b[0] - a[0], b[1] - a[1]
-    length2 = ex * ex + ey * ey
-    t = 0.0 if length2 == 0.0 else ((point[0] - a[0]) * ex + (point[1] - a[1]) * ey) / length2
-    t = min(max(t, 0.0), 1.0)
-    return math.hypot(point[0] - a[0] - t * ex, point[1] - a[1] - t * ey)
-
-
-def _segment_distance(
-    a: tuple[float, float], b: tuple[float, float], p: tuple[float, float], q: tuple[float, float]
-) -> float:
-    """Shortest distance between the segments ``ab`` and ``pq`` (0 if they cross), metres."""
-
-    def side(o: tuple[float, float], u: tuple[float, float], v: tuple[float, float]) -> float:
-        return (u[0] - o[0]) * (v[1] - o[1]) - (u[1] - o[1]) * (v[0] - o[0])
-
-    if side(a, b, p) * side(a, b, q) < 0.0 and side(p, q, a) * side(p, q, b) < 0.0:
-        return 0.0
-    return min(
-        _point_segment_distance(a, p, q),
-        _point_segment_distance(b, p, q),
-        _point_segment_distance(p, a, b),
-        _point_segment_distance(q, a, b),
-    )
-
-
-def _free_motion(
-    world: World, end: Pose, ground: tuple[float, float], wheel_base_m: float, substeps: int
-) -> tuple[Pose, bool, float]:
-    """The outcome of :meth:`World.move_robot` along the arc when no contact can occur.
-
-    With no contact the body integrates the imposed velocities exactly: it ends where the arc
-    ends (``end``), and its centre travels the ``n`` chords of the substeps, each ``|d / n|
-    sinc(delta / 2)`` long (``d`` the centre's arc length, ``delta`` the substep's turn).
-    """
-    left, right = float(ground[0]), float(ground[1])
-    pose = end
-    world.place_robot_on_clear_path(pose)  # _path_is_clear has shown the end free
-    half_turn = 0.5 * (right - left) / (wheel_base_m * substeps)
-    path_length = abs(0.5 * (left + right)) * abs(sinc(half_turn))
-    return pose, False, path_length
+    return int(substeps)
 
 
 __all__ = [
+    "CommandRun",
     "DifferentialDriveRobot",
     "INTEGRATIONS",
     "MotionResult",

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from sonar_gym import robot as robot_module
+from sonar_gym import drive_kernels
 from sonar_gym.localization.ekf import predict, proportional_encoder_noise
 from sonar_gym.odometry import (
     OdometryConfig,
@@ -17,6 +17,7 @@ from sonar_gym.odometry import (
     predict_run,
     wheel_increment_covariance,
 )
+from sonar_gym.path_clearance import path_is_clear
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise, unicycle_step
 from sonar_gym.scenario import scenario_from_dict
@@ -111,8 +112,10 @@ def test_the_robot_noise_is_the_odometry_config() -> None:
 
 
 def _drive_all(world: World, clear: bool | None, monkeypatch: pytest.MonkeyPatch) -> list:
-    if clear is False:
-        monkeypatch.setattr(robot_module, "_path_is_clear", lambda *args: False)
+    if clear is False:  # every command through pymunk: no arc counts as clear
+        compiled = drive_kernels.drive_commands
+        monkeypatch.setattr(drive_kernels, "drive_commands", lambda *args: (compiled(*args)[0], 0))
+        monkeypatch.setattr(drive_kernels, "clear_arcs", lambda motions, first, *rest: first)
     robot = DifferentialDriveRobot(OdometryConfig(slip_probability_per_m=0.3))
     rng = np.random.default_rng(11)
     results = []
@@ -139,17 +142,31 @@ def test_free_motion_matches_the_physics_reference(monkeypatch: pytest.MonkeyPat
         assert a.distance_m == pytest.approx(b.distance_m, abs=1e-9)
 
 
+def _arc_is_clear(world: World, start: Pose, left: float, right: float) -> bool:
+    end = integrate_substeps(start, left, right, 0.4, 1, "arc")
+    return bool(
+        path_is_clear(
+            (start.x, start.y),
+            (end.x, end.y),
+            (left, right),
+            0.4,
+            world.robot_radius,
+            *world.static_shape_table.arrays,
+        )
+    )
+
+
 def test_a_path_into_a_wall_is_not_clear() -> None:
     world = World(ROOM)
     world.set_robot_pose(Pose(0.5, -1.0, 0.0))
     start = world.robot_pose
-    assert not robot_module._path_is_clear(world, start, np.array([0.5, 0.5]), 0.4)
-    assert robot_module._path_is_clear(world, start, np.array([0.2, 0.2]), 0.4)
+    assert not _arc_is_clear(world, start, 0.5, 0.5)
+    assert _arc_is_clear(world, start, 0.2, 0.2)
     # turning in place next to the wall: clear only while the disc keeps its clearance
     world.set_robot_pose(Pose(0.79, -1.0, 0.0))
-    assert robot_module._path_is_clear(world, world.robot_pose, np.array([-0.1, 0.1]), 0.4)
+    assert _arc_is_clear(world, world.robot_pose, -0.1, 0.1)
     world.set_robot_pose(Pose(0.7995, -1.0, 0.0))
-    assert not robot_module._path_is_clear(world, world.robot_pose, np.array([-0.1, 0.1]), 0.4)
+    assert not _arc_is_clear(world, world.robot_pose, -0.1, 0.1)
 
 
 def test_covariance_linearised_at_given_poses_matches_the_ekf_per_command() -> None:
