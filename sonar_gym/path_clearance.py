@@ -172,48 +172,10 @@ def _arc_is_clear(
 arc_is_clear = compiled(types.boolean, *[types.float64] * 8, TABLE, INDICES, TABLE, inline=True)(
     _arc_is_clear
 )
-"""Inside a compiled loop: whether the robot (radius ``robot_radius_m``) can follow the arc of
+"""Whether the robot (radius ``robot_radius_m``) can follow the arc of
 wheel travel ``(left_m, right_m)`` over wheel base ``wheel_base_m`` from ``(start_x, start_y)``
 to ``(end_x, end_y)`` ({W}, metres) without touching a shape of a :class:`StaticShapeTable`
 ``(bounds, kinds, shapes)`` (see the module docstring)."""
-
-
-@compiled(  # type: ignore[misc]
-    types.boolean,
-    types.UniTuple(types.float64, 2),  # start
-    types.UniTuple(types.float64, 2),  # end
-    types.UniTuple(types.float64, 2),  # ground_m
-    types.float64,  # wheel_base_m
-    types.float64,  # robot_radius_m
-    TABLE,  # bounds
-    INDICES,  # kinds
-    TABLE,  # shapes
-)
-def path_is_clear(
-    start: tuple[float, float],
-    end: tuple[float, float],
-    ground_m: tuple[float, float],
-    wheel_base_m: float,
-    robot_radius_m: float,
-    bounds: FloatArray,
-    kinds: np.ndarray,
-    shapes: FloatArray,
-) -> bool:
-    """:data:`arc_is_clear` of one command, from Python: the arc from ``start`` to ``end``
-    (``(x, y)``, {W}, metres) of ground travel ``ground_m`` (``(d_l, d_r)``, metres)."""
-    return arc_is_clear(  # type: ignore[no-any-return]
-        start[0],
-        start[1],
-        end[0],
-        end[1],
-        ground_m[0],
-        ground_m[1],
-        wheel_base_m,
-        robot_radius_m,
-        bounds,
-        kinds,
-        shapes,
-    )
 
 
 __all__ = [
@@ -222,5 +184,4 @@ __all__ = [
     "SEGMENT",
     "StaticShapeTable",
     "arc_is_clear",
-    "path_is_clear",
 ]

@@ -12,7 +12,7 @@ import pytest
 
 from sonar_gym import drive_kernels
 from sonar_gym.odometry import INTEGRATIONS, OdometryConfig, integrate_substeps
-from sonar_gym.path_clearance import PATH_CLEARANCE_M, StaticShapeTable, path_is_clear
+from sonar_gym.path_clearance import PATH_CLEARANCE_M, StaticShapeTable, arc_is_clear
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import scenario_from_dict
@@ -98,10 +98,13 @@ def test_the_clearance_test_is_the_bounding_box_query_and_the_exact_distances() 
             right *= 5.0
         end = integrate_substeps(start, left, right, 0.4, 1, "arc")
         expected = _reference_path_is_clear(world, start, (left, right), 0.4, end)
-        compiled = path_is_clear(
-            (start.x, start.y),
-            (end.x, end.y),
-            (left, right),
+        compiled = arc_is_clear(
+            start.x,
+            start.y,
+            end.x,
+            end.y,
+            left,
+            right,
             0.4,
             world.robot_radius,
             *world.static_shape_table.arrays,

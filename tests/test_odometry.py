@@ -17,7 +17,7 @@ from sonar_gym.odometry import (
     predict_run,
     wheel_increment_covariance,
 )
-from sonar_gym.path_clearance import path_is_clear
+from sonar_gym.path_clearance import arc_is_clear
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise, unicycle_step
 from sonar_gym.scenario import scenario_from_dict
@@ -145,10 +145,13 @@ def test_free_motion_matches_the_physics_reference(monkeypatch: pytest.MonkeyPat
 def _arc_is_clear(world: World, start: Pose, left: float, right: float) -> bool:
     end = integrate_substeps(start, left, right, 0.4, 1, "arc")
     return bool(
-        path_is_clear(
-            (start.x, start.y),
-            (end.x, end.y),
-            (left, right),
+        arc_is_clear(
+            start.x,
+            start.y,
+            end.x,
+            end.y,
+            left,
+            right,
             0.4,
             world.robot_radius,
             *world.static_shape_table.arrays,
