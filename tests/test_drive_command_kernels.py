@@ -12,11 +12,12 @@ import pytest
 
 from sonar_gym import drive_kernels
 from sonar_gym.odometry import INTEGRATIONS, OdometryConfig, integrate_substeps
-from sonar_gym.path_clearance import PATH_CLEARANCE_M, StaticShapeTable, arc_is_clear
+from sonar_gym.path_clearance import PATH_CLEARANCE_M, StaticShapeTable
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import scenario_from_dict
 from sonar_gym.world import STATIC_ONLY, World
+from tests.test_odometry import compiled_arc_is_clear
 
 ROOM = scenario_from_dict(
     {
@@ -98,17 +99,7 @@ def test_the_clearance_test_is_the_bounding_box_query_and_the_exact_distances() 
             right *= 5.0
         end = integrate_substeps(start, left, right, 0.4, 1, "arc")
         expected = _reference_path_is_clear(world, start, (left, right), 0.4, end)
-        compiled = arc_is_clear(
-            start.x,
-            start.y,
-            end.x,
-            end.y,
-            left,
-            right,
-            0.4,
-            world.robot_radius,
-            *world.static_shape_table.arrays,
-        )
+        compiled = compiled_arc_is_clear(world, start, left, right)
         assert compiled == expected, (start, left, right)
         verdicts.append(expected)
     assert 0.2 < np.mean(verdicts) < 0.8, "the cases must hold both verdicts"

@@ -142,7 +142,8 @@ def test_free_motion_matches_the_physics_reference(monkeypatch: pytest.MonkeyPat
         assert a.distance_m == pytest.approx(b.distance_m, abs=1e-9)
 
 
-def _arc_is_clear(world: World, start: Pose, left: float, right: float) -> bool:
+def compiled_arc_is_clear(world: World, start: Pose, left: float, right: float) -> bool:
+    """The compiled verdict of the arc of ``(left, right)`` from ``start`` (0.4 m base)."""
     end = integrate_substeps(start, left, right, 0.4, 1, "arc")
     return bool(
         arc_is_clear(
@@ -163,13 +164,13 @@ def test_a_path_into_a_wall_is_not_clear() -> None:
     world = World(ROOM)
     world.set_robot_pose(Pose(0.5, -1.0, 0.0))
     start = world.robot_pose
-    assert not _arc_is_clear(world, start, 0.5, 0.5)
-    assert _arc_is_clear(world, start, 0.2, 0.2)
+    assert not compiled_arc_is_clear(world, start, 0.5, 0.5)
+    assert compiled_arc_is_clear(world, start, 0.2, 0.2)
     # turning in place next to the wall: clear only while the disc keeps its clearance
     world.set_robot_pose(Pose(0.79, -1.0, 0.0))
-    assert _arc_is_clear(world, world.robot_pose, -0.1, 0.1)
+    assert compiled_arc_is_clear(world, world.robot_pose, -0.1, 0.1)
     world.set_robot_pose(Pose(0.7995, -1.0, 0.0))
-    assert not _arc_is_clear(world, world.robot_pose, -0.1, 0.1)
+    assert not compiled_arc_is_clear(world, world.robot_pose, -0.1, 0.1)
 
 
 def test_covariance_linearised_at_given_poses_matches_the_ekf_per_command() -> None:
