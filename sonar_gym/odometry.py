@@ -352,62 +352,16 @@ def predict_run(
     poses[1:, 0] = pose.x + np.cumsum(distance * cos_h)
     poses[1:, 1] = pose.y + np.cumsum(distance * sin_h)
     poses[1:, 2] = wrap_angles(thetas[1:])
-    # F V F^T for every command: F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|).
-    lever = distance / (2.0 * base)
-    wheels = np.empty((len(left), 3, 2))
-    wheels[:, 0, 0] = 0.5 * cos_h - lever * sin_h
-    wheels[:, 0, 1] = 0.5 * cos_h + lever * sin_h
-    wheels[:, 1, 0] = 0.5 * sin_h + lever * cos_h
-    wheels[:, 1, 1] = 0.5 * sin_h - lever * cos_h
-    wheels[:, 2, 0] = 1.0 / base
-    wheels[:, 2, 1] = -1.0 / base
-    variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
-    encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
-    # Every A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
+    # F V F^T per command (F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|)). Every
+    # A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
     # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
     # Phi_jk = I + (U_k - U_j) e3^T and U_k the sum of the first k u's. For symmetric X,
     # (I + w e3^T) X (I + w e3^T)^T = X + w x^T + x w^T + X_33 w w^T with x = X e3; with
-    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K).
-    count = len(left)
-    sums = np.zeros((count + 1, 3))
-    sums[1:, 0] = np.cumsum(-distance * sin_h)
-    sums[1:, 1] = np.cumsum(distance * cos_h)
-
-    def before(values: FloatArray) -> FloatArray:  # [k] = sum over i < k
-        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
-
-    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
-        return a[:, :, None] * b[:, None, :]
-
-    column = start_covariance[:, 2]
-    covariances = (
-        start_covariance
-        + outer(sums, np.broadcast_to(column, sums.shape))
-        + outer(np.broadcast_to(column, sums.shape), sums)
-        + start_covariance[2, 2] * outer(sums, sums)
+    # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K),
+    # one compiled loop over the elements.
+    covariances = odometry_kernels.run_covariances(
+        start_covariance, distance, cos_h, sin_h, right, left, base, k
     )
-    if count:
-        q = encoder_terms[:, :, 2]
-        q33 = encoder_terms[:, 2, 2]
-        later = sums[1:]  # U_(i+1)
-        total = before(encoder_terms)
-        q_sum = before(q)
-        cross = before(outer(later, q))
-        weight = before(q33)
-        weighted = before(q33[:, None] * later)
-        second = before(q33[:, None, None] * outer(later, later))
-        covariances += (
-            total
-            + outer(sums, q_sum)
-            + outer(q_sum, sums)
-            - cross
-            - cross.transpose(0, 2, 1)
-            + weight[:, None, None] * outer(sums, sums)
-            - outer(sums, weighted)
-            - outer(weighted, sums)
-            + second
-        )
-    covariances = 0.5 * (covariances + covariances.transpose(0, 2, 1))
     return poses, covariances
 
 

@@ -6,6 +6,9 @@ products as numpy's BLAS rounds them (each entry ``a_0 b_0`` plus every further 
 fused multiply-add, :data:`sonar_gym.compiled.fused_multiply_add`), the rest elementwise, the
 cosines and sines from libm as Python's ``math``. So it returns the same bits; numpy's four
 small products and three array constructions cost about 35 us per command.
+
+:func:`run_covariances` is the covariance part of :func:`sonar_gym.odometry.predict_run`'s
+closed form over a whole run, element by element in the order numpy evaluates the array form.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import TABLE, compiled, fused_multiply_add, wrap_angle
+from sonar_gym.compiled import NUMBERS, TABLE, compiled, fused_multiply_add, wrap_angle
 from sonar_gym.pose import FloatArray
 
 _MATRIX = types.Array(types.float64, 2, "C")
@@ -106,3 +109,122 @@ def predict_commands(
         x, y, theta = x + distance * cos_h, y + distance * sin_h, wrap_angle(theta + turned)
         poses[command, 0], poses[command, 1], poses[command, 2] = x, y, theta
     return poses, p
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 3, "C"),
+    TABLE,  # covariance
+    NUMBERS,  # distance
+    NUMBERS,  # cos_h
+    NUMBERS,  # sin_h
+    NUMBERS,  # right
+    NUMBERS,  # left
+    types.float64,  # wheel_base_m
+    types.float64,  # variance_per_m
+)
+def run_covariances(
+    covariance: FloatArray,
+    distance: FloatArray,
+    cos_h: FloatArray,
+    sin_h: FloatArray,
+    right: FloatArray,
+    left: FloatArray,
+    wheel_base_m: float,
+    variance_per_m: float,
+) -> FloatArray:
+    """The ``(K + 1, 3, 3)`` covariances of :func:`sonar_gym.odometry.predict_run`'s closed form.
+
+    Per command ``k``: the distance ``(d_r + d_l)/2`` (metres), the cosine and sine of its
+    midpoint heading (numpy's, as the caller computed them), the encoder increments; the
+    elements in the closed form's order of operations (each numpy array expression there is
+    one element expression here, its prefix sums sequential as ``cumsum``'s), so it returns
+    the same bits without the thirty-odd temporary arrays.
+    """
+    count = distance.shape[0]
+    inverse_base = 1.0 / wheel_base_m
+    negative_inverse_base = -1.0 / wheel_base_m
+    sums = np.zeros((count + 1, 3))
+    for command in range(count):
+        step_x = -distance[command] * sin_h[command]
+        step_y = distance[command] * cos_h[command]
+        if command == 0:
+            sums[1, 0], sums[1, 1] = step_x, step_y
+        else:
+            sums[command + 1, 0] = sums[command, 0] + step_x
+            sums[command + 1, 1] = sums[command, 1] + step_y
+    out = np.empty((count + 1, 3, 3))
+    column = np.empty(3)
+    for i in range(3):
+        column[i] = covariance[i, 2]
+    p33 = covariance[2, 2]
+    for k in range(count + 1):
+        for i in range(3):
+            for j in range(3):
+                out[k, i, j] = (
+                    (covariance[i, j] + sums[k, i] * column[j]) + column[i] * sums[k, j]
+                ) + p33 * (sums[k, i] * sums[k, j])
+    if count == 0:
+        return out
+    # The running sums over the commands before k ("before" in the closed form).
+    total = np.zeros((3, 3))
+    q_sum = np.zeros(3)
+    cross = np.zeros((3, 3))
+    weighted = np.zeros(3)
+    second = np.zeros((3, 3))
+    weight = 0.0
+    terms = np.empty((3, 3))
+    wheels = np.empty((3, 2))
+    for k in range(count + 1):
+        if k > 0:
+            command = k - 1
+            lever = distance[command] / (2.0 * wheel_base_m)
+            c, s = cos_h[command], sin_h[command]
+            wheels[0, 0] = 0.5 * c - lever * s
+            wheels[0, 1] = 0.5 * c + lever * s
+            wheels[1, 0] = 0.5 * s + lever * c
+            wheels[1, 1] = 0.5 * s - lever * c
+            wheels[2, 0] = inverse_base
+            wheels[2, 1] = negative_inverse_base
+            variance_right = variance_per_m * abs(right[command])
+            variance_left = variance_per_m * abs(left[command])
+            for i in range(3):
+                for j in range(3):
+                    terms[i, j] = (  # einsum's order: from zero, each product left to right
+                        0.0
+                        + wheels[i, 0] * variance_right * wheels[j, 0]
+                        + wheels[i, 1] * variance_left * wheels[j, 1]
+                    )
+            later = sums[k]
+            q33 = terms[2, 2]
+            first = k == 1
+            for i in range(3):
+                q_i = terms[i, 2]
+                q_sum[i] = q_i if first else q_sum[i] + q_i
+                weighted_i = q33 * later[i]
+                weighted[i] = weighted_i if first else weighted[i] + weighted_i
+                for j in range(3):
+                    total[i, j] = terms[i, j] if first else total[i, j] + terms[i, j]
+                    cross_ij = later[i] * terms[j, 2]
+                    cross[i, j] = cross_ij if first else cross[i, j] + cross_ij
+                    second_ij = q33 * (later[i] * later[j])
+                    second[i, j] = second_ij if first else second[i, j] + second_ij
+            weight = q33 if first else weight + q33
+        u = sums[k]
+        for i in range(3):
+            for j in range(3):
+                term = total[i, j] + u[i] * q_sum[j]  # left to right, as numpy adds them
+                term = term + q_sum[i] * u[j]
+                term = term - cross[i, j]
+                term = term - cross[j, i]
+                term = term + weight * (u[i] * u[j])
+                term = term - u[i] * weighted[j]
+                term = term - weighted[i] * u[j]
+                term = term + second[i, j]
+                out[k, i, j] = out[k, i, j] + term
+    for k in range(count + 1):
+        for i in range(3):
+            for j in range(i, 3):
+                value = 0.5 * (out[k, i, j] + out[k, j, i])
+                out[k, i, j] = value
+                out[k, j, i] = value
+    return out

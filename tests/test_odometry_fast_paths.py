@@ -1,5 +1,6 @@
-"""The compiled EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) against the array form it
-replaced, bit for bit, and the compiled angle helpers against Python's."""
+"""The compiled EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) and the compiled covariances
+of the run prediction's closed form against the array forms they replaced, bit for bit, and the
+compiled angle helpers against Python's."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from sonar_gym.compiled import remainder, wrap_angle
 from sonar_gym.odometry import (
     FilterIntegration,
     predict_over_motion,
+    predict_run,
     predict_step,
     wheel_increment_covariance,
 )
@@ -97,6 +99,88 @@ def test_compiled_prediction_is_the_array_forms_bit_for_bit(
                 pose, covariance, *increments[0].tolist(), 0.3, 2e-4, scale_variance, integration
             )[1],
         )
+
+
+def reference_run_covariances(
+    covariance: FloatArray, left: FloatArray, right: FloatArray, base: float, k: float
+) -> FloatArray:
+    """The array form of :func:`predict_run`'s closed-form covariances: one numpy expression
+    per term (see its comments for the algebra)."""
+    distance = 0.5 * (right + left)
+    turn = (right - left) / base
+    thetas = np.concatenate([[0.0], np.cumsum(turn)])
+    heading = thetas[:-1] + 0.5 * turn
+    cos_h, sin_h = np.cos(heading), np.sin(heading)
+    lever = distance / (2.0 * base)
+    wheels = np.empty((len(left), 3, 2))
+    wheels[:, 0, 0] = 0.5 * cos_h - lever * sin_h
+    wheels[:, 0, 1] = 0.5 * cos_h + lever * sin_h
+    wheels[:, 1, 0] = 0.5 * sin_h + lever * cos_h
+    wheels[:, 1, 1] = 0.5 * sin_h - lever * cos_h
+    wheels[:, 2, 0] = 1.0 / base
+    wheels[:, 2, 1] = -1.0 / base
+    variances = np.stack([k * np.abs(right), k * np.abs(left)], axis=1)
+    encoder_terms = np.einsum("kij,kj,klj->kil", wheels, variances, wheels)
+    sums = np.zeros((len(left) + 1, 3))
+    sums[1:, 0] = np.cumsum(-distance * sin_h)
+    sums[1:, 1] = np.cumsum(distance * cos_h)
+
+    def before(values: FloatArray) -> FloatArray:
+        return np.concatenate([np.zeros((1, *values.shape[1:])), np.cumsum(values, axis=0)])
+
+    def outer(a: FloatArray, b: FloatArray) -> FloatArray:
+        return a[:, :, None] * b[:, None, :]
+
+    column = np.broadcast_to(covariance[:, 2], sums.shape)
+    result = (
+        covariance
+        + outer(sums, column)
+        + outer(column, sums)
+        + covariance[2, 2] * outer(sums, sums)
+    )
+    if len(left):
+        q, q33, later = encoder_terms[:, :, 2], encoder_terms[:, 2, 2], sums[1:]
+        total, q_sum, weight = before(encoder_terms), before(q), before(q33)
+        cross = before(outer(later, q))
+        weighted = before(q33[:, None] * later)
+        second = before(q33[:, None, None] * outer(later, later))
+        result += (
+            total
+            + outer(sums, q_sum)
+            + outer(q_sum, sums)
+            - cross
+            - cross.transpose(0, 2, 1)
+            + weight[:, None, None] * outer(sums, sums)
+            - outer(sums, weighted)
+            - outer(weighted, sums)
+            + second
+        )
+    return np.asarray(0.5 * (result + result.transpose(0, 2, 1)))
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    count=st.integers(0, 80),
+    variance_per_m=st.sampled_from([0.0, 3e-7, 1e-3]),
+    turns=st.booleans(),
+)
+def test_compiled_run_covariances_are_the_array_forms_bit_for_bit(
+    seed: int, count: int, variance_per_m: float, turns: bool
+) -> None:
+    rng = np.random.default_rng(seed)
+    left = 0.03 + rng.normal(0.0, 0.002, count)
+    right = 0.03 + rng.normal(0.0, 0.002, count)
+    if turns:  # turns in place and standstills among the steps
+        spins = rng.random(count) < 0.2
+        left[spins], right[spins] = -0.04, 0.04
+        left[rng.random(count) < 0.1] = 0.0
+    covariance = _covariance(rng)
+    start = Pose(0.0, 0.0, 0.0)  # the reference integrates the heading from 0
+    _, covariances = predict_run(start, covariance, left, right, 0.3, variance_per_m)
+    expected = reference_run_covariances(covariance, left, right, 0.3, variance_per_m)
+    assert covariances.shape == expected.shape
+    assert covariances.tobytes() == expected.tobytes()
 
 
 def test_headings_are_wrapped_between_commands() -> None:
