@@ -27,7 +27,7 @@ from sonar_gym import drive_kernels
 from sonar_gym.localization.apcs import DetectedWall, MatchResult
 from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
 from sonar_gym.phase_timer import PhaseTimer
-from sonar_gym.pose import FloatArray, Pose, angle_difference, wrap_angle
+from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.scenario import Box, Scenario
 from sonar_gym.sonar.pulse_echo import FirstEchoes
@@ -137,16 +137,17 @@ class EpisodeTrace:
     corrections: list[tuple[Pose, Pose, Pose]] = field(default_factory=list)
 
 
-@dataclass
+@dataclass(frozen=True)
 class _Plan:
-    """Planned commands: ``(d_left, d_right)``, whether each is a straight step, the command
-    counts at the steering points (``stops``) with the waypoint aimed at from each, the draws."""
+    """Planned commands: ``(K, 2)`` ``(d_left, d_right)`` (metres), whether each is a straight
+    step, the command counts at the steering points (``stops``) with the waypoint aimed at
+    from each, the draws."""
 
     draws: CommandDraws
-    commanded: list[tuple[float, float]] = field(default_factory=list)
-    straight: list[bool] = field(default_factory=list)
-    stops: list[int] = field(default_factory=list)
-    next_waypoint: list[int] = field(default_factory=list)
+    commanded: FloatArray
+    straight: list[bool]
+    stops: list[int]
+    next_waypoint: list[int]
 
 
 class APCSRoute:
@@ -263,57 +264,38 @@ class APCSRoute:
     def _plan(
         self, targets: Sequence[FloatArray], waypoint: int, step_m: float, steps_per_aim: int
     ) -> _Plan:
-        """The commands from the current estimate to the last target (see :meth:`drive_through`)."""
-        base = self.robot.wheel_base_for(self.world)
-        encoder_std = self.robot.noise.encoder_std_m_per_sqrt_m
+        """The commands from the current estimate to the last target (see :meth:`drive_through`),
+        planned in one compiled loop (:func:`sonar_gym.drive_kernels.plan_to_targets`)."""
         estimate = self.tracker.estimate
-        x, y, theta = estimate.x, estimate.y, estimate.theta
-        plan = _Plan(CommandDraws.start(self.motion_rng))
         rng = self.motion_rng
-
-        def command(d_left: float, d_right: float, straight: bool) -> None:
-            nonlocal x, y, theta
-            normals, _ = plan.draws.draw(rng)
-            left = d_left + encoder_std * math.sqrt(abs(d_left)) * float(normals[0])
-            right = d_right + encoder_std * math.sqrt(abs(d_right)) * float(normals[1])
-            distance, turn = 0.5 * (right + left), (right - left) / base
-            heading = theta + 0.5 * turn
-            x, y = x + distance * math.cos(heading), y + distance * math.sin(heading)
-            theta = wrap_angle(theta + turn)
-            plan.commanded.append((d_left, d_right))
-            plan.straight.append(straight)
-
-        while waypoint < len(targets):
-            dx, dy = float(targets[waypoint][0]) - x, float(targets[waypoint][1]) - y
-            remaining = round(math.hypot(dx, dy) / step_m)
-            if remaining == 0:
-                waypoint += 1
-                continue
-            turn = angle_difference(math.atan2(dy, dx), theta)
-            if abs(turn) > REAIM_TOLERANCE_RAD:
-                half = 0.5 * turn * base
-                command(-half, half, straight=False)
-            count = min(remaining, steps_per_aim)
-            # command(step_m, step_m, straight=True) count times, compiled: the hot loop.
-            step_noise = encoder_std * math.sqrt(abs(step_m))
-            (x, y, theta), normals, uniforms = drive_kernels.dead_reckon_straight(
-                rng, (x, y, theta), count, step_m, step_noise, base
-            )
-            plan.draws.extend(normals, uniforms)
-            plan.commanded.extend([(step_m, step_m)] * count)
-            plan.straight.extend([True] * count)
-            if count < steps_per_aim:
-                waypoint += 1
-            plan.stops.append(len(plan.commanded))
-            plan.next_waypoint.append(waypoint)
-        plan.draws.finish(rng)
-        return plan
+        draws = CommandDraws.start(rng)
+        commanded, normals, uniforms, stops, _ = drive_kernels.plan_to_targets(
+            rng,
+            np.array(targets, dtype=np.float64).reshape(-1, 2),
+            waypoint,
+            (estimate.x, estimate.y, estimate.theta),
+            step_m,
+            steps_per_aim,
+            self.robot.wheel_base_for(self.world),
+            self.robot.noise.encoder_std_m_per_sqrt_m,
+            REAIM_TOLERANCE_RAD,
+        )
+        draws.extend(normals, uniforms)
+        draws.finish(rng)
+        return _Plan(
+            draws,
+            commanded,
+            # a turn in place rolls the wheels apart, a straight step both alike
+            (commanded[:, 0] == commanded[:, 1]).tolist(),
+            stops[:, 0].tolist(),
+            stops[:, 1].tolist(),
+        )
 
     def _execute(
         self, plan: _Plan, active_sides: Sequence[str], steps_per_sample: int, summary: LegSummary
     ) -> int:
         """Drive, sense and track ``plan``; returns the waypoint to plan for next."""
-        commanded = np.array(plan.commanded, dtype=np.float64)
+        commanded = plan.commanded
         motion = drive_commands(self.robot, self.world, commanded, plan.draws, self.motion_rng)
         samples: list[int] = []
         counters: list[int] = []
