@@ -34,12 +34,14 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
+from numba import types
 
+from sonar_gym.compiled import NUMBERS, TABLE, compiled
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.scenario import Emitter
 from sonar_gym.sonar.acoustics import REFERENCE_TEMPERATURE_C, speed_of_sound_mps
@@ -154,6 +156,9 @@ class BeaconRanger:
     firing_interval_s: float = 0.05
     noise: bool = True
     quantisation: bool = True
+    _firing_cache: _Firing | None = field(
+        default=None, init=False, repr=False, compare=False, hash=False
+    )
 
     def __post_init__(self) -> None:
         receivers = np.asarray(self.receivers_xy, dtype=np.float64)
@@ -264,7 +269,12 @@ class BeaconRanger:
         """
         if isinstance(n_rounds, bool) or int(n_rounds) != n_rounds or n_rounds < 1:
             raise ValueError(f"argument 'n_rounds' must be an integer >= 1; got {n_rounds!r}")
-        single = self.route_geometry(world, pose.position[None, :], emitter_names, [pose.theta])
+        # a Pose is finite: the checks of route_geometry's arguments have nothing to catch
+        single = self._geometry(
+            self._firing(world, emitter_names),
+            np.array([[pose.x, pose.y]]),
+            np.array([pose.theta]),
+        )
         return self._rounds(single, int(n_rounds), world.temperature_c, rng)
 
     def route_geometry(
@@ -290,27 +300,42 @@ class BeaconRanger:
                     f"argument 'headings_rad' must be {n_samples} finite radians (one per "
                     f"sample); got shape {headings.shape}"
                 )
-        emitters = self._emitters(world, emitter_names)
-        scenario = world.scenario
-        height = scenario.robot.sensor_height if self.height_m is None else self.height_m
-        offsets = np.asarray(self.receivers_xy, dtype=np.float64)  # (R, 2) in {R}
-        cos, sin = np.cos(headings)[:, None], np.sin(headings)[:, None]
-        # receivers in {W}, (n, R) each
-        receiver_x = positions[:, 0, None] + cos * offsets[:, 0] - sin * offsets[:, 1]
-        receiver_y = positions[:, 1, None] + sin * offsets[:, 0] + cos * offsets[:, 1]
-        emitter_xyz = np.array([e.position for e in emitters], dtype=np.float64).reshape(-1, 3)
-        emitter_x, emitter_y = emitter_xyz[:, 0], emitter_xyz[:, 1]
+        return self._geometry(self._firing(world, emitter_names), positions, headings)
 
-        path_x = emitter_x - receiver_x[:, :, None]  # (n, R, E), receiver to emitter
-        path_y = emitter_y - receiver_y[:, :, None]
-        rise = emitter_xyz[:, 2] - height
-        distance = np.sqrt((path_x * path_x + path_y * path_y) + rise * rise)
-        blocked = _blocked_by_walls(world, receiver_x, receiver_y, path_x, path_y)
-        heard = (distance <= self.max_range_m) & ~blocked
+    def _firing(self, world: WorldLike, emitter_names: Sequence[str] | None) -> _Firing:
+        """The pose-independent part of ranging ``world`` among ``emitter_names``, kept from the
+        last call while the world's scenario and geometry are the same (immutable) objects."""
+        if isinstance(emitter_names, str):
+            self._emitters(world, emitter_names)  # raises: one name is not a sequence of names
+        requested = None if emitter_names is None else tuple(emitter_names)
+        cached = self._firing_cache
+        if (
+            cached is not None
+            and cached.scenario is world.scenario
+            and cached.geometry is world.geometry
+            and cached.requested == requested
+        ):
+            return cached
+        firing = _Firing.of(self, world, self._emitters(world, emitter_names), requested)
+        object.__setattr__(self, "_firing_cache", firing)
+        return firing
 
+    def _geometry(
+        self, firing: _Firing, positions: FloatArray, headings: FloatArray
+    ) -> RouteGeometry:
+        """:meth:`route_geometry` of checked ``(n, 2)`` positions and ``(n,)`` headings."""
+        distance, heard = _route_geometry_loop(
+            positions,
+            np.cos(headings),
+            np.sin(headings),
+            firing.receivers,
+            firing.emitters,
+            firing.walls,
+            firing.constants,
+        )
         distance.flags.writeable = False
         heard.flags.writeable = False
-        return RouteGeometry(distance, heard, tuple(e.name for e in emitters))
+        return RouteGeometry(distance, heard, firing.emitter_names)
 
     def measure_geometry(
         self, geometry: RouteGeometry, temperature_c: float, rng: np.random.Generator | None
@@ -375,32 +400,120 @@ def _route_positions(xy: npt.ArrayLike) -> FloatArray:
     return positions
 
 
-def _blocked_by_walls(
-    world: WorldLike,
-    receiver_x: FloatArray,
-    receiver_y: FloatArray,
-    path_x: FloatArray,
-    path_y: FloatArray,
-) -> npt.NDArray[np.bool_]:
-    """``(n, R, E)``: whether each path's floor projection crosses a room or free wall.
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 3, "C"), types.Array(types.boolean, 3, "C"))),
+    TABLE,  # positions
+    NUMBERS,  # cos
+    NUMBERS,  # sin
+    TABLE,  # receivers
+    TABLE,  # emitters
+    TABLE,  # walls
+    NUMBERS,  # constants
+)
+def _route_geometry_loop(
+    positions: FloatArray,
+    cos: FloatArray,
+    sin: FloatArray,
+    receivers: FloatArray,
+    emitters: FloatArray,
+    walls: FloatArray,
+    constants: FloatArray,
+) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
+    """``(n, R, E)`` true 3D distances (metres) and whether each path is heard.
 
-    ``receiver_x``, ``receiver_y``: ``(n, R)`` receivers in {W}; ``path_x``, ``path_y``:
-    ``(n, R, E)`` the vectors from each receiver to each emitter (metres).
+    A path is heard when it is no longer than the maximum range and its floor projection, from
+    the receiver to the emitter, crosses no room or free wall: it meets a wall's segment at a
+    fraction ``u`` of the path strictly inside ``(tol, 1 - tol)`` and at a fraction ``v`` of the
+    wall in ``[0, 1]``. Elementwise IEEE arithmetic in numpy's order, so numpy's bits.
+
+    Args:
+        positions: ``(n, 2)`` robot positions in {W}, metres.
+        cos, sin: ``(n,)`` cosine and sine of the robot headings.
+        receivers: ``(2, R)`` receiver ``x`` and ``y`` in the robot frame {R}, metres.
+        emitters: ``(3, E)`` emitter ``x``, ``y`` in {W} and height above the receivers, metres.
+        walls: ``(4, S)`` each wall's start ``x``, ``y`` and direction ``x``, ``y`` (metres).
+        constants: the maximum range (metres) and the path-end tolerance ``tol``.
     """
-    scenario = world.scenario
-    # StaticGeometry lists the room's four walls first, then the free walls, then the boxes.
-    n_walls = (4 if scenario.room is not None else 0) + len(scenario.walls)
-    geometry = world.geometry
-    a = geometry.segment_starts[:n_walls]
-    d = geometry.segment_ends[:n_walls] - a
-    d_x, d_y = d[:, 0], d[:, 1]
-    path_x, path_y = path_x[..., None], path_y[..., None]  # (n, R, E, 1)
-    w_x = (a[:, 0] - receiver_x[..., None])[:, :, None, :]  # (n, R, 1, S)
-    w_y = (a[:, 1] - receiver_y[..., None])[:, :, None, :]
-    denominator = path_x * d_y - path_y * d_x
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = (w_x * d_y - w_y * d_x) / denominator
-        v = (w_x * path_y - w_y * path_x) / denominator
-    limit = 1.0 - PATH_END_TOLERANCE
-    crossing = (u > PATH_END_TOLERANCE) & (u < limit) & (v >= 0.0) & (v <= 1.0)
-    return np.asarray(crossing.any(axis=-1))
+    n_samples, n_receivers, n_emitters = positions.shape[0], receivers.shape[1], emitters.shape[1]
+    n_walls = walls.shape[1]
+    max_range, tolerance = constants[0], constants[1]
+    limit = 1.0 - tolerance
+    distance = np.empty((n_samples, n_receivers, n_emitters))
+    heard = np.empty((n_samples, n_receivers, n_emitters), dtype=np.bool_)
+    for i in range(n_samples):
+        c, s, x, y = cos[i], sin[i], positions[i, 0], positions[i, 1]
+        for j in range(n_receivers):
+            offset_x, offset_y = receivers[0, j], receivers[1, j]
+            receiver_x = x + c * offset_x - s * offset_y
+            receiver_y = y + s * offset_x + c * offset_y
+            for k in range(n_emitters):
+                path_x = emitters[0, k] - receiver_x  # receiver to emitter
+                path_y = emitters[1, k] - receiver_y
+                rise = emitters[2, k]
+                length = math.sqrt((path_x * path_x + path_y * path_y) + rise * rise)
+                distance[i, j, k] = length
+                blocked = False
+                for w in range(n_walls):
+                    d_x, d_y = walls[2, w], walls[3, w]
+                    w_x, w_y = walls[0, w] - receiver_x, walls[1, w] - receiver_y
+                    denominator = path_x * d_y - path_y * d_x
+                    u = (w_x * d_y - w_y * d_x) / denominator
+                    v = (w_x * path_y - w_y * path_x) / denominator
+                    if u > tolerance and u < limit and v >= 0.0 and v <= 1.0:
+                        blocked = True
+                        break
+                heard[i, j, k] = length <= max_range and not blocked
+    return distance, heard
+
+
+@dataclass(frozen=True)
+class _Firing:
+    """What ranging in one world among chosen emitters needs that no pose changes (metres).
+
+    Attributes:
+        scenario, geometry: the world's, which this was read from (both immutable).
+        requested: the emitter names asked for (None: all of the scenario's).
+        emitter_names: the firing emitters, in column order.
+        receivers: ``(2, R)`` the receivers' ``x`` and ``y`` in the robot frame {R}.
+        emitters: ``(3, E)`` the emitters' ``x``, ``y`` in {W} and height above the receivers.
+        walls: ``(4, S)`` the start ``x``, ``y`` and direction ``x``, ``y`` of each room wall
+            and free wall (the walls that block a path).
+        constants: the ranger's maximum range (metres) and the path-end tolerance.
+    """
+
+    scenario: Scenario
+    geometry: StaticGeometry
+    requested: tuple[str, ...] | None
+    emitter_names: tuple[str, ...]
+    receivers: FloatArray
+    emitters: FloatArray
+    walls: FloatArray
+    constants: FloatArray
+
+    @classmethod
+    def of(
+        cls,
+        ranger: BeaconRanger,
+        world: WorldLike,
+        emitters: tuple[Emitter, ...],
+        requested: tuple[str, ...] | None,
+    ) -> _Firing:
+        """Read ``world`` for ``ranger`` firing ``emitters`` (asked for as ``requested``)."""
+        scenario = world.scenario
+        height = scenario.robot.sensor_height if ranger.height_m is None else ranger.height_m
+        offsets = np.asarray(ranger.receivers_xy, dtype=np.float64)  # (R, 2) in {R}
+        emitter_xyz = np.array([e.position for e in emitters], dtype=np.float64).reshape(-1, 3)
+        # StaticGeometry lists the room's four walls first, then the free walls, then the boxes.
+        n_walls = (4 if scenario.room is not None else 0) + len(scenario.walls)
+        geometry = world.geometry
+        a = geometry.segment_starts[:n_walls]
+        d = geometry.segment_ends[:n_walls] - a
+        tables = (
+            np.ascontiguousarray(offsets.T),
+            np.array([emitter_xyz[:, 0], emitter_xyz[:, 1], emitter_xyz[:, 2] - height]),
+            np.array([a[:, 0], a[:, 1], d[:, 0], d[:, 1]]).reshape(4, n_walls),
+            np.array([ranger.max_range_m, PATH_END_TOLERANCE]),
+        )
+        for table in tables:
+            table.flags.writeable = False
+        return cls(scenario, geometry, requested, tuple(e.name for e in emitters), *tables)

@@ -9,6 +9,7 @@ import pytest
 
 from sonar_gym.pose import Pose
 from sonar_gym.sonar.acoustics import speed_of_sound_mps
+from sonar_gym.sonar.echoes import PATH_END_TOLERANCE
 from sonar_gym.sonar.ranging import BeaconRanger
 from sonar_gym.validation import MIN_TIMER_PERIOD_S
 from tests.sonar.worlds import world
@@ -262,3 +263,73 @@ def test_repeated_rounds_at_one_pose_match_a_route_that_repeats_the_pose(noise: 
 def test_bad_round_counts_raise_naming_the_argument(n_rounds) -> None:
     with pytest.raises(ValueError, match="n_rounds"):
         BeaconRanger(noise=False).measure_repeated(ceiling_room(), Pose(0.0, 0.0), n_rounds, None)
+
+
+def _array_form_geometry(ranger, room, xy, headings, emitters=EMITTERS):
+    """The numpy array form the compiled geometry loop replaced: distances and what is heard."""
+    offsets = np.asarray(ranger.receivers_xy)
+    cos, sin = np.cos(headings)[:, None], np.sin(headings)[:, None]
+    receiver_x = xy[:, 0, None] + cos * offsets[:, 0] - sin * offsets[:, 1]
+    receiver_y = xy[:, 1, None] + sin * offsets[:, 0] + cos * offsets[:, 1]
+    emitter_xyz = np.array([e["position"] for e in emitters])
+    path_x = emitter_xyz[:, 0] - receiver_x[:, :, None]
+    path_y = emitter_xyz[:, 1] - receiver_y[:, :, None]
+    rise = emitter_xyz[:, 2] - room.scenario.robot.sensor_height
+    distance = np.sqrt((path_x * path_x + path_y * path_y) + rise * rise)
+    n_walls = 4 + len(room.scenario.walls)
+    a = room.geometry.segment_starts[:n_walls]
+    d = room.geometry.segment_ends[:n_walls] - a
+    px, py = path_x[..., None], path_y[..., None]
+    w_x = (a[:, 0] - receiver_x[..., None])[:, :, None, :]
+    w_y = (a[:, 1] - receiver_y[..., None])[:, :, None, :]
+    denominator = px * d[:, 1] - py * d[:, 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = (w_x * d[:, 1] - w_y * d[:, 0]) / denominator
+        v = (w_x * py - w_y * px) / denominator
+    limit = 1.0 - PATH_END_TOLERANCE
+    crossing = (u > PATH_END_TOLERANCE) & (u < limit) & (v >= 0.0) & (v <= 1.0)
+    return distance, (distance <= ranger.max_range_m) & ~crossing.any(axis=-1)
+
+
+def test_the_compiled_geometry_gives_the_bits_of_the_array_form() -> None:
+    room = ceiling_room(
+        walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}, {"a": [-1.5, 0.3], "b": [0.2, 0.3]}]
+    )
+    ranger = BeaconRanger(
+        receivers_xy=((0.1, 0.2), (-0.3, 0.05), (0.0, -0.2)), max_range_m=2.5, noise=False
+    )
+    rng = np.random.default_rng(11)
+    xy = rng.uniform(-1.9, 1.9, (500, 2))
+    headings = rng.uniform(-math.pi, math.pi, 500)
+    geometry = ranger.route_geometry(room, xy, headings_rad=headings)
+    distance, heard = _array_form_geometry(ranger, room, xy, headings)
+    assert heard.any() and not heard.all()  # both walls and the range cut some paths
+    assert geometry.true_distances.tobytes() == distance.tobytes()
+    np.testing.assert_array_equal(geometry.heard, heard)
+
+
+def test_repeated_rounds_follow_a_change_of_scenario_and_of_emitters() -> None:
+    """The pose-independent part is kept between calls only for the same world and emitters."""
+    ranger = BeaconRanger.wu_tsai(noise=False, quantisation=False)
+    pose = Pose(0.7, -0.4, 0.6)
+    room = ceiling_room()
+    first = ranger.measure_repeated(room, pose, 2, None, ["T1", "T2"]).distances
+    np.testing.assert_allclose(
+        first[0], exact_distances(pose, ranger.receivers_xy, 0.5)[:, :2], rtol=1e-12
+    )
+    swapped = ranger.measure_repeated(room, pose, 2, None, ("T2", "T1")).distances
+    np.testing.assert_array_equal(swapped[:, :, ::-1], first)
+    moved = [{**e, "position": [e["position"][0] + 0.5, *e["position"][1:]]} for e in EMITTERS]
+    other = world(
+        20.0,
+        room={"min": [-2, -2], "max": [2, 2]},
+        emitters=moved,
+        robot={"radius": 0.25, "sensor_height": 0.5},
+    )
+    again = ranger.measure_repeated(other, pose, 2, None, ["T1", "T2"]).distances
+    np.testing.assert_allclose(
+        again[0], exact_distances(pose, ranger.receivers_xy, 0.5, moved)[:, :2], rtol=1e-12
+    )
+    walled = ceiling_room(walls=[{"a": [0.5, -1.0], "b": [0.5, 1.0]}])
+    assert np.isnan(ranger.measure_repeated(walled, pose, 2, None, ["T1"]).distances).all()
+    assert not np.isnan(ranger.measure_repeated(room, pose, 2, None, ["T1"]).distances).any()
