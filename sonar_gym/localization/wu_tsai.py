@@ -46,8 +46,10 @@ from typing import Literal
 
 import numpy as np
 import numpy.typing as npt
+from numba import types
 from scipy.optimize import least_squares
 
+from sonar_gym.compiled import TABLE, compiled, nan_max
 from sonar_gym.localization.result import OK, Localization
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 
@@ -649,8 +651,155 @@ def localize_repeated(
         raise ValueError(f"distances must have shape (n, n_receivers >= 1, 3), got {table.shape}")
     if (table < 0.0).any():
         raise ValueError("distances must be >= 0 metres (NaN marks a dropout)")
-    n, n_receivers = table.shape[0], table.shape[1]
+    n_receivers = table.shape[1]
     layout = _receiver_layout(_offsets_key(receiver_offsets), n_receivers)
+    if type(a) is float and n_receivers <= _MAX_COMPILED_RECEIVERS:
+        constants = np.array([a * a, 2.0 * a, z_sign, -_RELATIVE_RADICAND_TOLERANCE])
+        receivers, mean_receiver, cross, dot, codes = _receiver_fixes_loop(
+            table, layout.spread, constants
+        )
+        if not (codes == _CODE_SAFE_FORM).any():  # else the array form takes every row
+            return _fixes_from_receivers(receivers, mean_receiver, cross, dot, codes, layout)
+    return _localize_repeated_arrays(table, a, z_sign, layout)
+
+
+_MAX_COMPILED_RECEIVERS = 3
+"""Most receivers :func:`_receiver_fixes_loop` takes: numpy sums up to seven terms in order from
+0 (the ``2 R`` of the heading's dot product), as the loop does; longer sums go pairwise."""
+_CODE_SAFE_FORM = -1
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.float64, 3, "C"),
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.intp, 1, "C"),
+        )
+    ),
+    types.Array(types.float64, 3, "A", readonly=True),  # table
+    TABLE,  # spread
+    types.Array(types.float64, 1, "A", readonly=True),  # constants
+)
+def _receiver_fixes_loop(
+    table: FloatArray, spread: FloatArray, constants: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, npt.NDArray[np.intp]]:
+    """eqs (7)-(9) for every receiver of every fix, then the sums Theorem 2's heading needs.
+
+    The arithmetic of :func:`_localize_repeated_arrays` element by element, in its order (every
+    sum from 0 up, as numpy sums up to seven terms), so its bits.
+
+    Args:
+        table: ``(n, R, 3)`` distances, metres (NaN or inf: a dropout), ``R`` at most
+            :data:`_MAX_COMPILED_RECEIVERS`.
+        spread: ``(R, 2)`` the receivers' offsets in {AMR} about their mean, metres.
+        constants: ``a^2`` and ``2 a`` (``a`` in metres), ``z_sign`` and the negated relative
+            radicand tolerance.
+
+    Returns:
+        ``(n, R, 3)`` receiver positions, ``(n, 3)`` their means, ``(n,)`` the cross and dot
+        products of the offsets with the measured spread, and ``(n,)`` status codes: OK,
+        missing, inconsistent, or :data:`_CODE_SAFE_FORM` where a square leaves the float range.
+    """
+    n, n_receivers = table.shape[0], table.shape[1]
+    a_sq, two_a, z_sign, negative_tolerance = constants[0], constants[1], constants[2], constants[3]
+    receivers = np.empty((n, n_receivers, 3))
+    mean = np.empty((n, 3))
+    cross = np.empty(n)
+    dot = np.empty(n)
+    codes = np.zeros(n, dtype=np.intp)
+    for i in range(n):
+        finite = True
+        for j in range(n_receivers):
+            for k in range(3):
+                if not math.isfinite(table[i, j, k]):
+                    finite = False
+        representable = True
+        inconsistent = False
+        for j in range(n_receivers):
+            d0, d1, d2 = 0.0, 0.0, 0.0  # a dropout's row: the array form's zeros
+            if finite:
+                d0, d1, d2 = table[i, j, 0], table[i, j, 1], table[i, j, 2]
+            d0_sq, d1_sq, d2_sq = d0 * d0, d1 * d1, d2 * d2
+            x = (d0_sq - d1_sq + a_sq) / two_a
+            y = (d0_sq - d2_sq + a_sq) / two_a
+            radicand = d0_sq - x * x - y * y
+            representable = representable and math.isfinite(x + y + radicand)
+            inconsistent = inconsistent or radicand < negative_tolerance * (d0_sq + a_sq)
+            receivers[i, j, 0] = x
+            receivers[i, j, 1] = y
+            receivers[i, j, 2] = z_sign * math.sqrt(nan_max(radicand, 0.0))
+        if not finite:
+            codes[i] = _CODE_MISSING
+        elif not representable:
+            codes[i] = _CODE_SAFE_FORM
+        elif inconsistent:
+            codes[i] = _CODE_INCONSISTENT
+        for k in range(3):
+            total = 0.0
+            for j in range(n_receivers):
+                total += receivers[i, j, k]
+            mean[i, k] = total / n_receivers
+            if not math.isfinite(mean[i, k]):
+                codes[i] = _CODE_SAFE_FORM  # the mean overflows: the array form's fallback
+        cross_total = 0.0
+        dot_total = 0.0
+        for j in range(n_receivers):
+            spread_x = receivers[i, j, 0] - mean[i, 0]
+            spread_y = receivers[i, j, 1] - mean[i, 1]
+            cross_total += spread[j, 0] * spread_y - spread[j, 1] * spread_x
+            dot_total += spread[j, 0] * spread_x
+            dot_total += spread[j, 1] * spread_y
+        cross[i] = cross_total
+        dot[i] = dot_total
+    return receivers, mean, cross, dot, codes
+
+
+def _fixes_from_receivers(
+    receivers: FloatArray,
+    mean_receiver: FloatArray,
+    cross: FloatArray,
+    dot: FloatArray,
+    codes: npt.NDArray[np.intp],
+    layout: _ReceiverLayout,
+) -> RepeatedFixes:
+    """The fixes from their receivers: Theorem 2's heading and the reference point (in place)."""
+    if not layout.observable:
+        codes[codes == _CODE_OK] = _CODE_UNOBSERVABLE
+    n = len(codes)
+    with np.errstate(over="ignore", invalid="ignore"):
+        coincide = ~(np.hypot(cross, dot) >= _MIN_BASELINE_M**2)
+        heading = np.arctan2(cross, dot)
+        poses = np.empty((n, 3))
+        if layout.centred:  # the reference point is the receivers' mean: nothing to rotate
+            poses[:, :2] = mean_receiver[:, :2]
+        else:
+            c, s = np.cos(heading), np.sin(heading)
+            mean_offset = layout.mean
+            poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
+            poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
+        poses[:, 2] = heading
+    if coincide.any():
+        codes[(codes == _CODE_OK) & coincide] = _CODE_INCONSISTENT
+    good = codes == _CODE_OK
+    good &= np.isfinite(poses).all(axis=1) & np.isfinite(mean_receiver[:, 2])
+    z_fix = mean_receiver[:, 2].copy()
+    if not good.all():
+        codes[(codes == _CODE_OK) & ~good] = _CODE_INCONSISTENT
+        poses[~good] = np.nan
+        receivers[~good] = np.nan
+        z_fix[~good] = np.nan
+    return RepeatedFixes(_STATUS_NAMES[codes], poses, z_fix, receivers)
+
+
+def _localize_repeated_arrays(
+    table: FloatArray, a: float, z_sign: int, layout: _ReceiverLayout
+) -> RepeatedFixes:
+    """:func:`localize_repeated` as numpy array steps: for any number of receivers, and distances
+    whose squares leave the float range (their rows go through :func:`receiver_position`)."""
+    n, n_receivers = table.shape[0], table.shape[1]
     codes = np.zeros(n, dtype=np.intp)
     finite = np.all(np.isfinite(table), axis=(1, 2))
     all_finite = bool(finite.all())
@@ -680,9 +829,7 @@ def localize_repeated(
     receivers = np.empty((n, n_receivers, 3))  # (n, R, 3)
     receivers[..., 0], receivers[..., 1], receivers[..., 2] = x, y, z
 
-    offset_spread, mean_offset = layout.spread, layout.mean
-    if not layout.observable:
-        codes[codes == _CODE_OK] = _CODE_UNOBSERVABLE
+    offset_spread = layout.spread
     with np.errstate(over="ignore", invalid="ignore"):
         mean_receiver = np.add.reduce(receivers, axis=1) / n_receivers  # (n, 3)
         if not np.isfinite(mean_receiver).all():
@@ -694,28 +841,7 @@ def localize_repeated(
             axis=1,
         )
         dot = np.add.reduce(offset_spread[None] * measured_spread, axis=(1, 2))
-        coincide = ~(np.hypot(cross, dot) >= _MIN_BASELINE_M**2)
-        heading = np.arctan2(cross, dot)
-        c, s = np.cos(heading), np.sin(heading)
-        poses = np.empty((n, 3))
-        if layout.centred:  # the reference point is the receivers' mean: nothing to rotate
-            poses[:, :2] = mean_receiver[:, :2]
-        else:
-            poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
-            poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
-        poses[:, 2] = heading
-    if coincide.any():
-        codes[(codes == _CODE_OK) & coincide] = _CODE_INCONSISTENT
-    good = codes == _CODE_OK
-    good &= np.isfinite(poses).all(axis=1) & np.isfinite(mean_receiver[:, 2])
-    z_fix = mean_receiver[:, 2].copy()
-    if not good.all():
-        codes[(codes == _CODE_OK) & ~good] = _CODE_INCONSISTENT
-        poses[~good] = np.nan
-        receivers[~good] = np.nan
-        z_fix[~good] = np.nan
-    statuses = _STATUS_NAMES[codes]
-    return RepeatedFixes(statuses, poses, z_fix, receivers)
+    return _fixes_from_receivers(receivers, mean_receiver, cross, dot, codes, layout)
 
 
 @dataclass(frozen=True)

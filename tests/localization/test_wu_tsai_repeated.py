@@ -51,3 +51,42 @@ def test_no_fix_succeeding_averages_to_none() -> None:
     batch = localize_repeated(np.full((3, 2, 3), np.nan), A, OFFSETS)
     assert not batch.ok.any() and batch.average() is None
     assert np.isnan(batch.poses).all()
+
+
+def _same_bits(left: object, right: object) -> bool:
+    return bool(np.asarray(left).tobytes() == np.asarray(right).tobytes())
+
+
+@pytest.mark.parametrize(
+    "offsets",
+    [
+        PAPER_RECEIVER_OFFSETS_M,  # centred: the pose is the receivers' mean
+        ((0.1, 0.2), (0.1, -0.2)),  # off the {AMR} origin: the mean offset is rotated away
+        ((0.0, 0.2), (0.15, -0.1), (-0.15, -0.1)),  # three receivers
+        ((0.05, 0.1),),  # one receiver: no heading
+    ],
+)
+def test_the_compiled_fixes_give_the_bits_of_the_array_form(offsets) -> None:
+    from sonar_gym.localization.wu_tsai import _localize_repeated_arrays, _receiver_layout
+
+    rng = np.random.default_rng(8)
+    n_receivers = len(offsets)
+    transmitters = np.array([[0.0, 0.0, 0.0], [A, 0.0, 0.0], [0.0, A, 0.0]])
+    tables = np.empty((400, n_receivers, 3))
+    for table in tables:
+        pose = Pose(*rng.uniform(-1.5, 1.5, 2), rng.uniform(-np.pi, np.pi))
+        receivers = np.array([[*pose.transform_point(o), -1.9] for o in offsets])
+        exact = np.linalg.norm(receivers[:, None, :] - transmitters[None, :, :], axis=2)
+        table[:] = np.abs(exact + rng.normal(0.0, 0.01, exact.shape))
+    tables[::7, 0, 1] = np.nan  # dropouts
+    tables[3::11, -1, 2] = np.inf
+    tables[5::13, 0] = [0.1, 5.0, 5.0]  # no point (eq. (9) radicand < 0)
+    tables[6::17] = [[0.0, A, A]] * n_receivers  # every receiver below the first transmitter
+    tables[8::19] = A  # equidistant: the receivers coincide in (x, y)
+    compiled = localize_repeated(tables, A, offsets)
+    layout = _receiver_layout(tuple(map(tuple, offsets)), n_receivers)
+    arrays = _localize_repeated_arrays(tables, A, -1, layout)
+    assert len(set(compiled.statuses.tolist())) >= (2 if n_receivers == 1 else 3)
+    assert compiled.statuses.tolist() == arrays.statuses.tolist()
+    for name in ("poses", "z", "receivers"):
+        assert _same_bits(getattr(compiled, name), getattr(arrays, name)), name
