@@ -216,7 +216,6 @@ def predicted_fix_covariance(
         receivers_xy: receiver positions in the robot frame, metres (two, apart).
     """
     a = spacing_m
-    transmitters = ((0.0, 0.0), (a, 0.0), (0.0, a))
     c, s = math.cos(pose_in_t.theta), math.sin(pose_in_t.theta)
     x, y = pose_in_t.x, pose_in_t.y
     receivers = [(x + c * px - s * py, y + s * px + c * py) for px, py in receivers_xy]
@@ -224,10 +223,11 @@ def predicted_fix_covariance(
     z_sq = z_m * z_m
     ranges_to_xy = []  # per receiver J = [[d0, -d1, 0], [d0, 0, -d2]] / a
     for rx, ry in receivers:
-        d0, d1, d2 = (
-            math.sqrt(((tx - rx) * (tx - rx) + (ty - ry) * (ty - ry)) + z_sq)
-            for tx, ty in transmitters
-        )
+        # the horizontal offsets to the transmitters at (0, 0), (a, 0) and (0, a)
+        near_x, near_y, far_x, far_y = 0.0 - rx, 0.0 - ry, a - rx, a - ry
+        d0 = math.sqrt((near_x * near_x + near_y * near_y) + z_sq)
+        d1 = math.sqrt((far_x * far_x + near_y * near_y) + z_sq)
+        d2 = math.sqrt((near_x * near_x + far_y * far_y) + z_sq)
         ranges_to_xy.append(((d0 / a, -d1 / a, 0.0), (d0 / a, 0.0, -d2 / a)))
     jacobians = np.array(ranges_to_xy)  # (R, 2, 3)
     blocks = (range_variance_m2 * jacobians) @ jacobians.transpose(0, 2, 1)
@@ -243,12 +243,12 @@ def predicted_fix_covariance(
             "argument 'receivers_xy' must place the first and last receivers apart (their "
             f"baseline gives the heading); got {receivers_xy!r}"
         )
-    across = (-(front_y - back_y) / length_sq, (front_x - back_x) / length_sq)
+    across_x, across_y = -(front_y - back_y) / length_sq, (front_x - back_x) / length_sq
     heading_row = [0.0] * (2 * n_receivers)
-    heading_row[0] += across[0]
-    heading_row[1] += across[1]
-    heading_row[-2] -= across[0]
-    heading_row[-1] -= across[1]
+    heading_row[0] += across_x
+    heading_row[1] += across_y
+    heading_row[-2] -= across_x
+    heading_row[-1] -= across_y
     share = 1.0 / n_receivers
     jacobian = np.array(
         [[share, 0.0] * n_receivers, [0.0, share] * n_receivers, heading_row]
