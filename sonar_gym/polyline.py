@@ -116,9 +116,19 @@ def leg_is_free(
     """
     if margin_m is None:
         margin_m = world.robot_radius + ROUTE_CLEARANCE_M
-    count = max(2, math.ceil(float(np.linalg.norm(stop - start)) / step_m) + 1)
-    points = start + np.linspace(0.0, 1.0, count)[:, None] * (stop - start)
+    delta = stop - start
+    length = math.sqrt(delta.dot(delta))  # np.linalg.norm's own form
+    count = max(2, math.ceil(length / step_m) + 1)
+    points = start + _unit_fractions(count)[:, None] * delta
     return all(world.is_free(point, margin_m) for point in points)
+
+
+@functools.lru_cache(maxsize=256)
+def _unit_fractions(count: int) -> FloatArray:
+    """``np.linspace(0.0, 1.0, count)``, shared and read-only (legs repeat a few counts)."""
+    fractions = np.linspace(0.0, 1.0, count)
+    fractions.flags.writeable = False
+    return fractions
 
 
 def draw_polyline(
@@ -160,9 +170,15 @@ def draw_equal_legs(
     points = [world.sample_free_pose(rng, clearance=clearance_m).position]
     for _ in range(n_legs):
         here = points[-1]
+        here_x, here_y = here.tolist()
         for _ in range(tries):
             direction = float(rng.uniform(-math.pi, math.pi))
-            candidate = here + leg_length_m * np.array([math.cos(direction), math.sin(direction)])
+            candidate = np.array(
+                [
+                    here_x + leg_length_m * math.cos(direction),
+                    here_y + leg_length_m * math.sin(direction),
+                ]
+            )
             if leg_is_free(world, here, candidate, margin, step_m=0.1):
                 break
         else:
