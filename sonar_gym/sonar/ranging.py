@@ -358,22 +358,28 @@ class BeaconRanger:
         shape = distance.shape if n_repeats is None else (n_repeats, *distance.shape[1:])
         n_emitters = len(geometry.emitter_names)
         true_speed = speed_of_sound_mps(temperature_c)
-        tof = distance / true_speed
+        normals = _NO_NORMALS
         if self.noise and self.range_noise_std_m > 0.0:
             if rng is None:
                 raise ValueError("argument 'rng' is needed: the ranger adds noise")
-            tof = tof + rng.standard_normal(shape) * (self.range_noise_std_m / true_speed)
-        if self.quantisation and self.timer_period_s > 0.0:
-            tof = np.floor(tof / self.timer_period_s) * self.timer_period_s
-        if tof.shape != shape:
-            tof = np.broadcast_to(tof, shape)
+            normals = rng.standard_normal(shape)
+        quantised = self.quantisation and self.timer_period_s > 0.0
+        constants = np.array(
+            [
+                true_speed,
+                self.range_noise_std_m / true_speed,
+                self.timer_period_s if quantised else 0.0,
+                self.assumed_speed_of_sound_mps,
+                self.firing_interval_s,
+            ]
+        )
+        distances, timestamps = _rounds_loop(distance, heard, normals, constants, shape[0])
         if n_repeats is not None:
             distance = np.broadcast_to(distance, shape)
-        start = self.firing_interval_s * np.arange(n_emitters, dtype=np.float64)
         return RouteMeasurement(
-            distances=np.where(heard, tof * self.assumed_speed_of_sound_mps, np.nan),
+            distances=distances,
             true_distances=distance,
-            timestamps_s=np.where(heard, start + tof, start + self.firing_interval_s),
+            timestamps_s=timestamps,
             round_duration_s=n_emitters * self.firing_interval_s,
             emitter_names=geometry.emitter_names,
         )
@@ -464,6 +470,67 @@ def _route_geometry_loop(
                         break
                 heard[i, j, k] = length <= max_range and not blocked
     return distance, heard
+
+
+_DISTANCES = types.Array(types.float64, 3, "A", readonly=True)
+_NO_NORMALS = np.zeros((0, 0, 0))
+_NO_NORMALS.flags.writeable = False
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 3, "C"), types.Array(types.float64, 3, "C"))),
+    _DISTANCES,  # distance
+    types.Array(types.boolean, 3, "A", readonly=True),  # heard
+    _DISTANCES,  # normals
+    NUMBERS,  # constants
+    types.int64,  # n_rounds
+)
+def _rounds_loop(
+    distance: FloatArray,
+    heard: npt.NDArray[np.bool_],
+    normals: FloatArray,
+    constants: FloatArray,
+    n_rounds: int,
+) -> tuple[FloatArray, FloatArray]:
+    """``(n_rounds, R, E)`` measured distances (metres, NaN = dropout) and timestamps (s).
+
+    Steps 2-4 of the module docstring for every measurement: ``TOF = d / c_true`` plus the
+    jitter, the counter ``floor(TOF / T0) T0``, ``c_assumed TOF``; emitter ``k`` fires at
+    ``k`` intervals and its measurement completes a TOF later (a dropout: an interval later).
+    Elementwise IEEE arithmetic in numpy's order, so numpy's bits.
+
+    Args:
+        distance, heard: ``(n_rounds, R, E)`` true distances (metres) and what is heard, or
+            ``(1, R, E)`` shared by every round.
+        normals: ``(n_rounds, R, E)`` standard normals of the jitter, or empty without jitter.
+        constants: ``c_true`` (m/s), seconds of jitter per normal, ``T0`` (0: no counter),
+            ``c_assumed`` (m/s), the firing interval (s).
+        n_rounds: the rounds.
+    """
+    n_receivers, n_emitters = distance.shape[1], distance.shape[2]
+    true_speed, jitter, period = constants[0], constants[1], constants[2]
+    assumed_speed, interval = constants[3], constants[4]
+    noisy = normals.size > 0
+    shared = distance.shape[0] == 1
+    distances = np.empty((n_rounds, n_receivers, n_emitters))
+    timestamps = np.empty((n_rounds, n_receivers, n_emitters))
+    for i in range(n_rounds):
+        source = 0 if shared else i
+        for j in range(n_receivers):
+            for k in range(n_emitters):
+                tof = distance[source, j, k] / true_speed
+                if noisy:
+                    tof = tof + normals[i, j, k] * jitter
+                if period > 0.0:
+                    tof = np.floor(tof / period) * period
+                start = interval * k
+                if heard[source, j, k]:
+                    distances[i, j, k] = tof * assumed_speed
+                    timestamps[i, j, k] = start + tof
+                else:
+                    distances[i, j, k] = np.nan
+                    timestamps[i, j, k] = start + interval
+    return distances, timestamps
 
 
 @dataclass(frozen=True)

@@ -333,3 +333,30 @@ def test_repeated_rounds_follow_a_change_of_scenario_and_of_emitters() -> None:
     walled = ceiling_room(walls=[{"a": [0.5, -1.0], "b": [0.5, 1.0]}])
     assert np.isnan(ranger.measure_repeated(walled, pose, 2, None, ["T1"]).distances).all()
     assert not np.isnan(ranger.measure_repeated(room, pose, 2, None, ["T1"]).distances).any()
+
+
+@pytest.mark.parametrize(("noise", "quantisation"), [(True, True), (True, False), (False, True)])
+def test_the_compiled_rounds_give_the_bits_of_the_array_form(
+    noise: bool, quantisation: bool
+) -> None:
+    room = ceiling_room(walls=[{"a": [1.0, -1.0], "b": [1.0, 1.0]}])
+    ranger = BeaconRanger.wu_tsai(noise=noise, quantisation=quantisation, max_range_m=2.3)
+    rng = np.random.default_rng(4)
+    xy = rng.uniform(-1.9, 1.9, (300, 2))
+    geometry = ranger.route_geometry(room, xy, headings_rad=rng.uniform(-3.0, 3.0, 300))
+    assert geometry.heard.any() and not geometry.heard.all()
+    measured = ranger.measure_geometry(geometry, 31.0, np.random.default_rng(9))
+    # the array form: steps 2-4 of the module docstring on whole arrays
+    true_speed = speed_of_sound_mps(31.0)
+    tof = geometry.true_distances / true_speed
+    if noise:
+        normals = np.random.default_rng(9).standard_normal(tof.shape)
+        tof = tof + normals * (ranger.range_noise_std_m / true_speed)
+    if quantisation:
+        tof = np.floor(tof / ranger.timer_period_s) * ranger.timer_period_s
+    start = ranger.firing_interval_s * np.arange(3, dtype=np.float64)
+    heard = geometry.heard
+    distances = np.where(heard, tof * ranger.assumed_speed_of_sound_mps, np.nan)
+    timestamps = np.where(heard, start + tof, start + ranger.firing_interval_s)
+    assert measured.distances.tobytes() == distances.tobytes()
+    assert measured.timestamps_s.tobytes() == timestamps.tobytes()
