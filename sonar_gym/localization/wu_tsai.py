@@ -49,7 +49,7 @@ import numpy.typing as npt
 from numba import types
 from scipy.optimize import least_squares
 
-from sonar_gym.compiled import TABLE, compiled, nan_max
+from sonar_gym.compiled import NUMBERS, TABLE, compiled, nan_max
 from sonar_gym.localization.result import OK, Localization
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 
@@ -765,33 +765,100 @@ def _fixes_from_receivers(
     codes: npt.NDArray[np.intp],
     layout: _ReceiverLayout,
 ) -> RepeatedFixes:
-    """The fixes from their receivers: Theorem 2's heading and the reference point (in place)."""
-    if not layout.observable:
-        codes[codes == _CODE_OK] = _CODE_UNOBSERVABLE
-    n = len(codes)
+    """The fixes from their receivers: Theorem 2's heading and the reference point.
+
+    ``receivers`` and ``codes`` are fresh arrays of the caller's, finished in place.
+    """
     with np.errstate(over="ignore", invalid="ignore"):
-        coincide = ~(np.hypot(cross, dot) >= _MIN_BASELINE_M**2)
+        baseline = np.hypot(cross, dot)
         heading = np.arctan2(cross, dot)
-        poses = np.empty((n, 3))
         if layout.centred:  # the reference point is the receivers' mean: nothing to rotate
-            poses[:, :2] = mean_receiver[:, :2]
+            c = s = _NO_VALUES
         else:
             c, s = np.cos(heading), np.sin(heading)
-            mean_offset = layout.mean
-            poses[:, 0] = mean_receiver[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
-            poses[:, 1] = mean_receiver[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
-        poses[:, 2] = heading
-    if coincide.any():
-        codes[(codes == _CODE_OK) & coincide] = _CODE_INCONSISTENT
-    good = codes == _CODE_OK
-    good &= np.isfinite(poses).all(axis=1) & np.isfinite(mean_receiver[:, 2])
-    z_fix = mean_receiver[:, 2].copy()
-    if not good.all():
-        codes[(codes == _CODE_OK) & ~good] = _CODE_INCONSISTENT
-        poses[~good] = np.nan
-        receivers[~good] = np.nan
-        z_fix[~good] = np.nan
+    mean_offset = layout.mean
+    constants = np.array(
+        [_MIN_BASELINE_M**2, float(layout.observable), mean_offset[0], mean_offset[1]]
+    )
+    poses, z_fix = _finish_fixes_loop(
+        receivers, mean_receiver, baseline, heading, c, s, codes, constants
+    )
     return RepeatedFixes(_STATUS_NAMES[codes], poses, z_fix, receivers)
+
+
+_NO_VALUES = np.zeros(0)
+_NO_VALUES.flags.writeable = False
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 2, "C"), types.Array(types.float64, 1, "C"))),
+    types.Array(types.float64, 3, "C"),  # receivers
+    TABLE,  # mean_receiver
+    NUMBERS,  # baseline
+    NUMBERS,  # heading
+    NUMBERS,  # cos
+    NUMBERS,  # sin
+    types.Array(types.intp, 1, "C"),  # codes
+    NUMBERS,  # constants
+)
+def _finish_fixes_loop(
+    receivers: FloatArray,
+    mean_receiver: FloatArray,
+    baseline: FloatArray,
+    heading: FloatArray,
+    cos: FloatArray,
+    sin: FloatArray,
+    codes: npt.NDArray[np.intp],
+    constants: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """``(n, 3)`` poses ``[x, y, heading]`` and ``(n,)`` heights of the fixes; NaN where a fix
+    fails, whose receivers are set to NaN and whose code says why (``codes``, in place).
+
+    A fix fails when its code is not OK already, when the receivers cannot give a heading
+    (``constants[1] == 0``: they are not apart on the robot, Theorem 1), when their measured
+    ``(x, y)`` coincide (``baseline`` below ``constants[0]``), or when its numbers are not
+    finite.
+
+    Args:
+        receivers: ``(n, R, 3)`` receiver positions in {T}, metres.
+        mean_receiver: ``(n, 3)`` their means.
+        baseline, heading: ``(n,)`` ``hypot`` and ``atan2`` of the heading's cross and dot
+            products (radians).
+        cos, sin: ``(n,)`` of ``heading``, or empty when the reference point is the
+            receivers' mean.
+        codes: ``(n,)`` status codes so far.
+        constants: the least baseline, whether the heading is observable (1 or 0), and the
+            receivers' mean offset in {AMR} (metres).
+    """
+    n = codes.shape[0]
+    least_baseline, observable = constants[0], constants[1] > 0.0
+    offset_x, offset_y = constants[2], constants[3]
+    centred = cos.shape[0] == 0
+    poses = np.empty((n, 3))
+    z_fix = np.empty(n)
+    for i in range(n):
+        if codes[i] == _CODE_OK and not observable:
+            codes[i] = _CODE_UNOBSERVABLE
+        if codes[i] == _CODE_OK and not baseline[i] >= least_baseline:
+            codes[i] = _CODE_INCONSISTENT
+        if centred:
+            x, y = mean_receiver[i, 0], mean_receiver[i, 1]
+        else:
+            c, s = cos[i], sin[i]
+            x = mean_receiver[i, 0] - (c * offset_x - s * offset_y)
+            y = mean_receiver[i, 1] - (s * offset_x + c * offset_y)
+        z = mean_receiver[i, 2]
+        finite = math.isfinite(x) and math.isfinite(y) and math.isfinite(heading[i])
+        if codes[i] == _CODE_OK and not (finite and math.isfinite(z)):
+            codes[i] = _CODE_INCONSISTENT
+        if codes[i] == _CODE_OK:
+            poses[i, 0], poses[i, 1], poses[i, 2] = x, y, heading[i]
+            z_fix[i] = z
+        else:
+            poses[i, :] = np.nan
+            receivers[i, :, :] = np.nan
+            z_fix[i] = np.nan
+    return poses, z_fix
 
 
 def _localize_repeated_arrays(

@@ -57,6 +57,54 @@ def _same_bits(left: object, right: object) -> bool:
     return bool(np.asarray(left).tobytes() == np.asarray(right).tobytes())
 
 
+def _array_form(
+    table: np.ndarray, a: float, offsets
+) -> tuple[list[str], np.ndarray, np.ndarray, np.ndarray]:
+    """localize_repeated as whole-array numpy steps (distances whose squares stay finite)."""
+    n, n_receivers = table.shape[:2]
+    offsets = np.asarray(offsets, dtype=np.float64)
+    mean_offset = offsets.mean(axis=0)
+    spread = offsets - mean_offset
+    observable = bool(np.any(np.hypot(spread[:, 0], spread[:, 1]) >= 1e-9))
+    status = np.full(n, "ok", dtype=object)
+    finite = np.all(np.isfinite(table), axis=(1, 2))
+    status[~finite] = "missing_distance"
+    clean = np.where(finite[:, None, None], table, 0.0)
+    squares = clean * clean
+    d0_sq, d1_sq, d2_sq = squares[..., 0], squares[..., 1], squares[..., 2]
+    x = (d0_sq - d1_sq + a * a) / (2.0 * a)
+    y = (d0_sq - d2_sq + a * a) / (2.0 * a)
+    radicand = d0_sq - x * x - y * y
+    assert np.isfinite(x + y + radicand).all()
+    z = -1 * np.sqrt(np.maximum(radicand, 0.0))
+    inconsistent = (radicand < -1e-9 * (d0_sq + a * a)).any(axis=1)
+    status[finite & inconsistent] = "inconsistent_distances"
+    if not observable:
+        status[status == "ok"] = "heading_unobservable"
+    receivers = np.stack([x, y, z], axis=-1)
+    mean = np.add.reduce(receivers, axis=1) / n_receivers
+    measured = receivers[:, :, :2] - mean[:, None, :2]
+    cross = np.add.reduce(
+        spread[None, :, 0] * measured[:, :, 1] - spread[None, :, 1] * measured[:, :, 0], axis=1
+    )
+    dot = np.add.reduce(spread[None] * measured, axis=(1, 2))
+    heading = np.arctan2(cross, dot)
+    c, s = np.cos(heading), np.sin(heading)
+    poses = np.empty((n, 3))
+    poses[:, 0] = mean[:, 0] - (c * mean_offset[0] - s * mean_offset[1])
+    poses[:, 1] = mean[:, 1] - (s * mean_offset[0] + c * mean_offset[1])
+    if np.all(mean_offset == 0.0):
+        poses[:, :2] = mean[:, :2]
+    poses[:, 2] = heading
+    status[(status == "ok") & ~(np.hypot(cross, dot) >= 1e-18)] = "inconsistent_distances"
+    good = (status == "ok") & np.isfinite(poses).all(axis=1) & np.isfinite(mean[:, 2])
+    status[(status == "ok") & ~good] = "inconsistent_distances"
+    z_fix = np.where(good, mean[:, 2], np.nan)
+    poses[~good] = np.nan
+    receivers[~good] = np.nan
+    return status.tolist(), poses, z_fix, receivers
+
+
 @pytest.mark.parametrize(
     "offsets",
     [
@@ -64,9 +112,10 @@ def _same_bits(left: object, right: object) -> bool:
         ((0.1, 0.2), (0.1, -0.2)),  # off the {AMR} origin: the mean offset is rotated away
         ((0.0, 0.2), (0.15, -0.1), (-0.15, -0.1)),  # three receivers
         ((0.05, 0.1),),  # one receiver: no heading
+        ((0.0, 0.1), (0.1, 0.0), (0.0, -0.1), (-0.1, 0.0)),  # four: beyond the compiled loop
     ],
 )
-def test_the_compiled_fixes_give_the_bits_of_the_array_form(offsets) -> None:
+def test_repeated_fixes_give_the_bits_of_the_array_form(offsets) -> None:
     from sonar_gym.localization.wu_tsai import _localize_repeated_arrays, _receiver_layout
 
     rng = np.random.default_rng(8)
@@ -83,10 +132,14 @@ def test_the_compiled_fixes_give_the_bits_of_the_array_form(offsets) -> None:
     tables[5::13, 0] = [0.1, 5.0, 5.0]  # no point (eq. (9) radicand < 0)
     tables[6::17] = [[0.0, A, A]] * n_receivers  # every receiver below the first transmitter
     tables[8::19] = A  # equidistant: the receivers coincide in (x, y)
-    compiled = localize_repeated(tables, A, offsets)
+    statuses, poses, z, receivers = _array_form(tables, A, offsets)
+    assert len(set(statuses)) >= (2 if n_receivers == 1 else 3)
     layout = _receiver_layout(tuple(map(tuple, offsets)), n_receivers)
-    arrays = _localize_repeated_arrays(tables, A, -1, layout)
-    assert len(set(compiled.statuses.tolist())) >= (2 if n_receivers == 1 else 3)
-    assert compiled.statuses.tolist() == arrays.statuses.tolist()
-    for name in ("poses", "z", "receivers"):
-        assert _same_bits(getattr(compiled, name), getattr(arrays, name)), name
+    for fixes in (
+        localize_repeated(tables, A, offsets),
+        _localize_repeated_arrays(tables, A, -1, layout),
+    ):
+        assert fixes.statuses.tolist() == statuses
+        assert _same_bits(fixes.poses, poses)
+        assert _same_bits(fixes.z, z)
+        assert _same_bits(fixes.receivers, receivers)
