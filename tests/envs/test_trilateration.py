@@ -166,6 +166,19 @@ def test_reward_is_the_documented_error_score_minus_the_time_cost() -> None:
         assert reward == pytest.approx(expected, rel=1e-9)
 
 
+@pytest.mark.parametrize("firing_interval_s", [0.05, 0.07])
+def test_measurement_time_is_the_sum_of_the_round_durations(firing_interval_s: float) -> None:
+    """The rounds' durations summed as numpy sums them, also when a fix count comes again."""
+    env = gym.make(ENV_ID, firing_interval_s=firing_interval_s, n_decision_points=12)
+    env.reset(seed=2)
+    duration = 3 * firing_interval_s
+    for n in (20, 3, 20, 10, 3, 1, 10):
+        info = env.step(env.unwrapped.action_for(n))[4]
+        expected = float(np.sum(np.full(n, duration)))
+        assert info["measurement_time_s"] == expected
+        assert info["sensing_time_s"] > 0.0
+
+
 def test_no_fix_keeps_dead_reckoning_and_a_fix_resets_the_since_fix_features() -> None:
     env = gym.make(ENV_ID, route_length_m=6.0, n_decision_points=6)
     layout = env.unwrapped.observation_layout
