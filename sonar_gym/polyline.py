@@ -119,16 +119,20 @@ def leg_is_free(
     delta = stop - start
     length = math.sqrt(delta.dot(delta))  # np.linalg.norm's own form
     count = max(2, math.ceil(length / step_m) + 1)
-    points = start + _unit_fractions(count)[:, None] * delta
-    return all(world.is_free(point, margin_m) for point in points)
+    start_x, start_y = np.asarray(start, dtype=np.float64).tolist()
+    delta_x, delta_y = delta.tolist()
+    for fraction in _unit_fractions(count):  # start + fraction * delta, as numpy rounds it
+        if not world.is_free(
+            (start_x + fraction * delta_x, start_y + fraction * delta_y), margin_m
+        ):
+            return False
+    return True
 
 
 @functools.lru_cache(maxsize=256)
-def _unit_fractions(count: int) -> FloatArray:
-    """``np.linspace(0.0, 1.0, count)``, shared and read-only (legs repeat a few counts)."""
-    fractions = np.linspace(0.0, 1.0, count)
-    fractions.flags.writeable = False
-    return fractions
+def _unit_fractions(count: int) -> tuple[float, ...]:
+    """``np.linspace(0.0, 1.0, count)`` as floats, shared (legs repeat a few counts)."""
+    return tuple(np.linspace(0.0, 1.0, count).tolist())
 
 
 def draw_polyline(

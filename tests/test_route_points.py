@@ -1,4 +1,4 @@
-"""Route.point_at in floats is the NumPy interpolation along the polyline, bit for bit."""
+"""Route points in floats are the NumPy interpolation along the polyline, bit for bit."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from sonar_gym.localization.kim import TABLE_1_TRUE_POSITIONS_M
-from sonar_gym.polyline import Route
+from sonar_gym.polyline import Route, leg_is_free
 
 
 def _reference_point(route: Route, s_m: float) -> np.ndarray:
@@ -30,3 +30,36 @@ def test_point_at_matches_the_numpy_interpolation(points: np.ndarray) -> None:
         point = route.point_at(float(s))
         assert point.dtype == np.float64 and point.shape == (2,)
         assert np.array_equal(point, _reference_point(route, float(s)))
+
+
+class _RecordingWorld:
+    """A world whose every point is free; it records the points a leg check asks about."""
+
+    robot_radius = 0.25
+
+    def __init__(self, blocked_after: int | None = None) -> None:
+        self.asked: list[tuple[float, float]] = []
+        self.blocked_after = blocked_after
+
+    def is_free(self, position_xy, radius: float) -> bool:
+        x, y = position_xy
+        self.asked.append((float(x), float(y)))
+        return self.blocked_after is None or len(self.asked) <= self.blocked_after
+
+
+@pytest.mark.parametrize("step_m", [0.02, 0.1, 0.37])
+def test_a_leg_check_asks_about_the_numpy_points_in_order(step_m: float) -> None:
+    rng = np.random.default_rng(6)
+    for _ in range(200):
+        start, stop = rng.uniform(-3.0, 3.0, 2), rng.uniform(-3.0, 3.0, 2)
+        world = _RecordingWorld()
+        assert leg_is_free(world, start, stop, 0.1, step_m)  # type: ignore[arg-type]
+        count = max(2, int(np.ceil(float(np.linalg.norm(stop - start)) / step_m)) + 1)
+        expected = start + np.linspace(0.0, 1.0, count)[:, None] * (stop - start)
+        assert np.array(world.asked).tobytes() == expected.tobytes()
+
+
+def test_a_leg_check_stops_at_the_first_point_that_is_not_free() -> None:
+    world = _RecordingWorld(blocked_after=3)
+    assert not leg_is_free(world, np.zeros(2), np.array([1.0, 0.0]), 0.1)  # type: ignore[arg-type]
+    assert len(world.asked) == 4
