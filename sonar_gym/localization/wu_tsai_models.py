@@ -169,8 +169,8 @@ class TransmitterFrame:
 
     def to_world(self, pose_in_t: Pose) -> Pose:
         """A planar pose in {T} expressed in {W}."""
-        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
-        return Pose(
+        c, s = self._rotation_cos_sin
+        return _pose(
             self.origin_xyz[0] + c * pose_in_t.x - s * pose_in_t.y,
             self.origin_xyz[1] + s * pose_in_t.x + c * pose_in_t.y,
             pose_in_t.theta + self.rotation_rad,
@@ -178,9 +178,14 @@ class TransmitterFrame:
 
     def to_transmitter(self, pose_in_w: Pose) -> Pose:
         """A planar pose in {W} expressed in {T}."""
-        c, s = math.cos(self.rotation_rad), math.sin(self.rotation_rad)
+        c, s = self._rotation_cos_sin
         dx, dy = pose_in_w.x - self.origin_xyz[0], pose_in_w.y - self.origin_xyz[1]
-        return Pose(c * dx + s * dy, -s * dx + c * dy, pose_in_w.theta - self.rotation_rad)
+        return _pose(c * dx + s * dy, -s * dx + c * dy, pose_in_w.theta - self.rotation_rad)
+
+    @functools.cached_property
+    def _rotation_cos_sin(self) -> tuple[float, float]:
+        """``cos`` and ``sin`` of ``rotation_rad``."""
+        return math.cos(self.rotation_rad), math.sin(self.rotation_rad)
 
     def height_in_t(self, height_above_floor_m: float) -> float:
         """``z`` in {T} of a point ``height_above_floor_m`` above the floor (negative below)."""
@@ -190,6 +195,13 @@ class TransmitterFrame:
         """The centroid of the three transmitters in {W}, metres."""
         reference = self.to_world(Pose(self.spacing_m / 3.0, self.spacing_m / 3.0, 0.0))
         return reference.position
+
+
+def _pose(x: float, y: float, theta: float) -> Pose:
+    """``Pose(x, y, theta)`` of floats made from a pose's: only an overflow needs the checks."""
+    if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
+        return Pose.unchecked(x, y, theta)
+    return Pose(x, y, theta)  # raises, naming the coordinate
 
 
 def predicted_fix_covariance(

@@ -508,3 +508,14 @@ def test_the_observation_vector_matches_the_feature_spec_written_by_name(seed: i
     writer["steps_remaining"] = 11 / 16
     assert vector.dtype == np.float32
     np.testing.assert_array_equal(vector, writer.vector)
+
+
+def test_transmitter_frame_changes_keep_the_pose_checks_on_overflow() -> None:
+    frame = TransmitterFrame((1.0, -2.0, 2.6), math.radians(30.0), A_M, ("T1", "T2", "T3"))
+    pose = Pose(-1.0, 0.7, 2.5)
+    back = frame.to_world(frame.to_transmitter(pose)).as_array()
+    assert back == pytest.approx(pose.as_array(), abs=1e-12)
+    with pytest.raises(ValueError, match=r"Pose\.[xy] must be finite"):
+        frame.to_world(Pose(1.5e308, 1.5e308, 0.0))
+    with pytest.raises(ValueError, match=r"Pose\.[xy] must be finite"):
+        frame.to_transmitter(Pose(1.7e308, 1.7e308, 0.0))
