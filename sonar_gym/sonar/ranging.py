@@ -316,7 +316,7 @@ class BeaconRanger:
             and cached.requested == requested
         ):
             return cached
-        firing = _Firing.of(self, world, self._emitters(world, emitter_names), requested)
+        firing = _Firing.of(self, world, self._emitters(world, requested), requested)
         object.__setattr__(self, "_firing_cache", firing)
         return firing
 

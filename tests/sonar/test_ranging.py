@@ -360,3 +360,9 @@ def test_the_compiled_rounds_give_the_bits_of_the_array_form(
     timestamps = np.where(heard, start + tof, start + ranger.firing_interval_s)
     assert measured.distances.tobytes() == distances.tobytes()
     assert measured.timestamps_s.tobytes() == timestamps.tobytes()
+
+
+def test_emitter_names_may_be_any_iterable_of_names_once() -> None:
+    ranger = BeaconRanger.wu_tsai(noise=False)
+    rounds = ranger.measure_repeated(ceiling_room(), Pose(0.2, 0.1), 2, None, iter(["T3", "T1"]))
+    assert rounds.emitter_names == ("T3", "T1") and rounds.distances.shape == (2, 2, 2)
