@@ -41,7 +41,7 @@ class _RecordingWorld:
         self.asked: list[tuple[float, float]] = []
         self.blocked_after = blocked_after
 
-    def is_free(self, position_xy, radius: float) -> bool:
+    def is_free(self, position_xy: tuple[float, float], radius: float) -> bool:
         x, y = position_xy
         self.asked.append((float(x), float(y)))
         return self.blocked_after is None or len(self.asked) <= self.blocked_after
