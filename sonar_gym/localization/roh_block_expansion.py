@@ -47,15 +47,17 @@ from sonar_gym.localization.roh_path_errors import (
     distances_to_polyline_reference as distances_to_polyline_reference,
 )
 from sonar_gym.localization.roh_trilateration import (
+    DEFAULT_COLLINEARITY_TOLERANCE,
+    DEFAULT_HEIGHT_TOLERANCE_M,
     DEFAULT_MAX_CALIBRATION_CONDITION,
     DEFAULT_SENSOR_HEIGHT_M,
     TRILATERATION_METHODS,
     CalibrationResult,
     TrilaterationResult,
     _frozen,
+    _trilaterate_rows,
     auto_calibrate,
     trilaterate,
-    trilaterate_path,
 )
 from sonar_gym.pose import FloatArray, Pose
 
@@ -922,11 +924,15 @@ class BlockExpansion:
             beacons = np.array([known[n] for n in config.areas[area]])
             area_beacons.append(_frozen(beacons))
             area_columns.append(columns)  # type: ignore[arg-type]
-            fixes = trilaterate_path(
+            # The config validated the beacons, height and method, the table is checked above
+            # and a calibrated beacon is finite: trilaterate_path's checks would repeat.
+            fixes = _trilaterate_rows(
                 beacons,
                 table[start:, list(columns)],
                 config.sensor_height_m,
                 config.trilateration_method,
+                DEFAULT_HEIGHT_TOLERANCE_M,
+                DEFAULT_COLLINEARITY_TOLERANCE,
             )
             statuses[start:] = fixes.statuses
             fixes_xy[start:] = fixes.positions

@@ -1,10 +1,12 @@
-"""Compiled inner loops of Roh et al.'s localization: the paper centroids of a range table and
-the nearest-segment search of the path errors (numba, :mod:`sonar_gym.compiled`).
+"""Compiled inner loops of Roh et al.'s localization: the usable rows and radii of a range
+table, its paper centroids, the check of the fixes, and the nearest-segment search of the path
+errors (numba, :mod:`sonar_gym.compiled`).
 
-Both do the arithmetic of the array forms they replace element by element, in the same order
-(:func:`sonar_gym.localization.roh_trilateration._paper_centroids` and the windowed search of
-:class:`sonar_gym.localization.roh_path_errors.TruePath`), so they return the same bits; the
-array forms paid numpy's per-call cost on arrays of a few hundred rows.
+Each does the arithmetic of the array form it replaces element by element, in the same order
+(:func:`sonar_gym.localization.roh_trilateration.trilaterate_path` and
+:func:`~sonar_gym.localization.roh_trilateration._paper_centroids`, and the windowed search
+of :class:`sonar_gym.localization.roh_path_errors.TruePath`), so they return the same bits;
+the array forms paid numpy's per-call cost on arrays of a few hundred rows.
 """
 
 from __future__ import annotations
@@ -173,3 +175,86 @@ def window_nearest_sq(
                 best = squared
         nearest[point] = best
     return nearest
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.boolean, 1, "C"),
+            types.Array(types.boolean, 1, "C"),
+        )
+    ),
+    TABLE,  # ranges
+    NUMBERS,  # vertical
+    types.float64,  # height_tolerance
+)
+def usable_radii(
+    ranges: FloatArray, vertical: FloatArray, height_tolerance: float
+) -> tuple[FloatArray, np.ndarray, np.ndarray]:
+    """The rows of a range table ``(n, 3)`` (metres) that the paper method can use, and their
+    horizontal radii, with the arithmetic of :func:`trilaterate_path`'s array form.
+
+    Args:
+        ranges: ``(n, 3)`` slant ranges, metres; NaN or inf marks a missing one.
+        vertical: ``(3,)`` each beacon's height above the sensor plane, metres.
+        height_tolerance: how far (metres) a range may fall below ``|vertical|``.
+
+    Returns:
+        ``(radii (k, 3), usable (n,), valid (n,))``: ``valid`` where every range is finite,
+        ``usable`` where valid and no range falls short of its beacon's height, and
+        ``sqrt(max(d^2 - vertical^2, 0))`` of the ``k`` usable rows in row order, metres.
+    """
+    n_rows, n_columns = ranges.shape
+    limits = np.empty(n_columns)
+    for column in range(n_columns):
+        limits[column] = abs(vertical[column]) - height_tolerance
+    valid = np.empty(n_rows, dtype=np.bool_)
+    usable = np.empty(n_rows, dtype=np.bool_)
+    count = 0
+    for row in range(n_rows):
+        finite, short = True, False
+        for column in range(n_columns):
+            value = ranges[row, column]
+            if not math.isfinite(value):
+                finite = False
+            if value < limits[column]:
+                short = True
+        valid[row] = finite
+        usable[row] = finite and not short
+        if usable[row]:
+            count += 1
+    radii = np.empty((count, n_columns))
+    kept = 0
+    for row in range(n_rows):
+        if not usable[row]:
+            continue
+        for column in range(n_columns):
+            value = ranges[row, column]
+            squared = value * value - vertical[column] * vertical[column]
+            # np.maximum(squared, 0.0): a NaN stays NaN.
+            radii[kept, column] = math.sqrt(0.0 if squared < 0.0 else squared)
+        kept += 1
+    return radii, usable, valid
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.int64, 1, "C"),
+    TABLE,  # positions
+    FLAGS,  # ok
+)
+def unfinished_rows(positions: FloatArray, ok: np.ndarray) -> np.ndarray:
+    """Indices of the rows of ``positions`` ``(n, 2)`` (metres) marked ``ok`` whose position
+    has a non-finite coordinate, in order."""
+    n_rows, n_columns = positions.shape
+    found = np.empty(n_rows, dtype=np.int64)
+    count = 0
+    for row in range(n_rows):
+        if not ok[row]:
+            continue
+        for column in range(n_columns):
+            if not math.isfinite(positions[row, column]):
+                found[count] = row
+                count += 1
+                break
+    return found[:count].copy()

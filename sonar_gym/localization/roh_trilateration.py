@@ -664,6 +664,23 @@ def trilaterate_path(
         raise ValueError(f"height_tolerance_m must be >= 0, got {height_tolerance_m!r}")
     if not collinearity_tolerance >= 0.0:
         raise ValueError(f"collinearity_tolerance must be >= 0, got {collinearity_tolerance!r}")
+    return _trilaterate_rows(
+        beacon_array, table, height, method, height_tolerance_m, collinearity_tolerance
+    )
+
+
+def _trilaterate_rows(
+    beacon_array: FloatArray,
+    table: FloatArray,
+    height: float,
+    method: str,
+    height_tolerance_m: float,
+    collinearity_tolerance: float,
+) -> PathFixes:
+    """:func:`trilaterate_path` of inputs it has validated: finite ``(b, 3)`` beacons
+    (metres), an ``(n, b)`` float64 table of non-negative or missing ranges (metres), a finite
+    height (metres), a known method and non-negative tolerances. The block expansion runner,
+    whose inputs are validated by its config, calls it directly."""
     n_rows = len(table)
     positions = np.full((n_rows, 2), np.nan)
     statuses = [OK] * n_rows
@@ -676,20 +693,19 @@ def trilaterate_path(
         one_by_one = np.arange(n_rows)
         ok: npt.NDArray[np.bool_] = np.ones(n_rows, dtype=bool)
     else:
-        valid = np.asarray(np.isfinite(table).all(axis=1))
         vertical = beacon_array[:, 2] - height
-        with np.errstate(invalid="ignore"):
-            short = (table < np.abs(vertical) - height_tolerance_m).any(axis=1) & valid
-        usable: npt.NDArray[np.bool_] = valid & ~short
-        for row in np.flatnonzero(~usable).tolist():
-            statuses[row] = STATUS_DISTANCE_BELOW_HEIGHT if valid[row] else STATUS_TOO_FEW_BEACONS
+        radii, usable, valid = roh_kernels.usable_radii(table, vertical, height_tolerance_m)
+        if not usable.all():
+            for row in np.flatnonzero(~usable).tolist():
+                statuses[row] = (
+                    STATUS_DISTANCE_BELOW_HEIGHT if valid[row] else STATUS_TOO_FEW_BEACONS
+                )
         centres = beacon_array[:, :2]
         rows = np.flatnonzero(usable)
         if _centres_are_collinear(centres.tobytes(), collinearity_tolerance):
             for row in rows.tolist():
                 statuses[row] = STATUS_COLLINEAR_BEACONS
             return PathFixes(tuple(statuses), positions, fallback)
-        radii = np.sqrt(np.maximum(table[usable] ** 2 - vertical**2, 0.0))
         centroid, met = _paper_centroids(centres, radii)
         ok = usable
         if met.all():
@@ -711,7 +727,7 @@ def trilaterate_path(
         fallback[row] = fix.used_radical_centre
         if fix.position is not None:
             positions[row] = fix.position
-    bad = np.flatnonzero(ok & ~np.isfinite(positions).all(axis=1))
+    bad = roh_kernels.unfinished_rows(positions, ok)
     for row in bad.tolist():
         statuses[row] = STATUS_NUMERICAL_FAILURE
     positions[bad] = np.nan
@@ -724,16 +740,30 @@ def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | Non
     The same least-squares problem as :func:`linearised_least_squares`, solved for all rows
     at once (one right-hand side per row); ``None`` when the centres are collinear.
     """
-    squared_norms = np.einsum("ij,ij->i", centres, centres)
-    design = -2.0 * (centres - centres.mean(axis=0))
-    radii_sq = radii**2
-    rhs = (radii_sq - np.mean(radii_sq, axis=1, keepdims=True)) - (
-        squared_norms - squared_norms.mean()
+    design, centred_norms = _radical_design(
+        np.ascontiguousarray(centres, dtype=np.float64).tobytes()
     )
+    radii_sq = radii**2
+    rhs = (radii_sq - np.mean(radii_sq, axis=1, keepdims=True)) - centred_norms
     solution, _, rank, _ = np.linalg.lstsq(design, rhs.T, rcond=None)
     if rank < 2:
         return None
     return np.asarray(solution.T)
+
+
+@functools.lru_cache(maxsize=64)
+def _radical_design(centres: bytes) -> tuple[FloatArray, FloatArray]:
+    """The parts of :func:`_radical_centres`' problem that depend only on the centres, given
+    as the bytes of a float64 ``(k, 2)`` array (kept per beacon set): the design matrix
+    ``-2 (c_i - c_mean)`` ``(k, 2)`` and ``|c_i|^2 - mean(|c|^2)`` ``(k,)``, metres and
+    square metres (read-only)."""
+    points = np.frombuffer(centres).reshape(-1, 2)
+    squared_norms = np.einsum("ij,ij->i", points, points)
+    design = -2.0 * (points - points.mean(axis=0))
+    centred_norms = squared_norms - squared_norms.mean()
+    design.flags.writeable = False
+    centred_norms.flags.writeable = False
+    return design, centred_norms
 
 
 _CENTROID_PAIRS = ((0, 1), (1, 2), (0, 2))

@@ -402,3 +402,38 @@ def test_true_path_distances_of_outliers_are_the_general_search(n_outliers: int)
     np.testing.assert_array_equal(
         true_path._distances(points, y_difference), distances_to_polyline(points, path)
     )
+
+
+def test_the_compiled_usable_radii_are_the_array_forms_bit_for_bit() -> None:
+    from sonar_gym.localization.roh_kernels import usable_radii
+
+    rng = np.random.default_rng(21)
+    vertical = AREA_1[:, 2] - HEIGHT_M
+    table = noisy_table(AREA_1, parabolic_path(x_end_m=1.3), 0.05, seed=9)
+    table[::17, 1] = np.inf
+    table[::23, 2] = -np.inf
+    table[::29] = np.abs(vertical) - 0.01  # exactly at the height tolerance: usable, r = 0
+    table[::31, 0] = rng.uniform(0.0, 2.0, len(table[::31]))
+    radii, usable, valid = usable_radii(table, vertical, 0.01)
+    expected_valid = np.isfinite(table).all(axis=1)
+    with np.errstate(invalid="ignore"):
+        short = (table < np.abs(vertical) - 0.01).any(axis=1) & expected_valid
+    expected_usable = expected_valid & ~short
+    expected_radii = np.sqrt(np.maximum(table[expected_usable] ** 2 - vertical**2, 0.0))
+    np.testing.assert_array_equal(valid, expected_valid)
+    np.testing.assert_array_equal(usable, expected_usable)
+    assert radii.view(np.int64).tolist() == expected_radii.view(np.int64).tolist()
+    assert 0 < usable.sum() < valid.sum() < len(table)
+
+
+def test_the_unfinished_rows_are_the_ok_rows_with_a_non_finite_coordinate() -> None:
+    from sonar_gym.localization.roh_kernels import unfinished_rows
+
+    positions = np.zeros((6, 2))
+    positions[1, 0] = np.nan
+    positions[2, 1] = np.inf
+    positions[3, 0] = -np.inf
+    positions[4] = np.nan
+    ok = np.array([True, True, True, False, True, True])
+    assert unfinished_rows(positions, ok).tolist() == [1, 2, 4]
+    assert unfinished_rows(positions[:0], ok[:0]).tolist() == []
