@@ -1,6 +1,6 @@
 """Compiled inner loops of Roh et al.'s localization: the usable rows and radii of a range
-table, its paper centroids, the check of the fixes, and the nearest-segment search of the path
-errors (numba, :mod:`sonar_gym.compiled`).
+table, its paper centroids, the check of the fixes, and the windowed nearest-segment search of
+the path errors (numba, :mod:`sonar_gym.compiled`).
 
 Each does the arithmetic of the array form it replaces element by element, in the same order
 (:func:`sonar_gym.localization.roh_trilateration.trilaterate_path` and
@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max, nan_min
 from sonar_gym.pose import FloatArray
 
 
@@ -124,60 +124,6 @@ def paper_centroids(
 
 
 @compiled(  # type: ignore[misc]
-    types.Array(types.float64, 1, "C"),  # squared distances
-    TABLE,  # points
-    INDICES,  # first
-    INDICES,  # last
-    NUMBERS,  # sx
-    NUMBERS,  # sy
-    NUMBERS,  # dx
-    NUMBERS,  # dy
-    NUMBERS,  # safe_length_sq
-    FLAGS,  # degenerate
-)
-def window_nearest_sq(
-    points: FloatArray,
-    first: np.ndarray,
-    last: np.ndarray,
-    sx: FloatArray,
-    sy: FloatArray,
-    dx: FloatArray,
-    dy: FloatArray,
-    safe_length_sq: FloatArray,
-    degenerate: np.ndarray,
-) -> FloatArray:
-    """``(m,)`` squared distance (m^2) of each point to the nearest of segments
-    ``first[i]..last[i]`` (inclusive) of a polyline.
-
-    Args:
-        points: ``(m, 2)`` points, metres.
-        first, last: ``(m,)`` int64 segment index windows.
-        sx, sy, dx, dy, safe_length_sq, degenerate: per segment its start and direction
-            (metres), its squared length (1 where degenerate) and whether that length is 0.
-    """
-    n_points = points.shape[0]
-    nearest = np.empty(n_points)
-    for point in range(n_points):
-        px, py = points[point, 0], points[point, 1]
-        best = np.inf
-        for segment in range(first[point], last[point] + 1):
-            rx, ry = px - sx[segment], py - sy[segment]
-            t = (rx * dx[segment] + ry * dy[segment]) / safe_length_sq[segment]
-            if t < 0.0:
-                t = 0.0
-            elif t > 1.0:
-                t = 1.0
-            if degenerate[segment]:
-                t = 0.0
-            gx, gy = rx - t * dx[segment], ry - t * dy[segment]
-            squared = gx * gx + gy * gy
-            if squared < best or squared != squared:
-                best = squared
-        nearest[point] = best
-    return nearest
-
-
-@compiled(  # type: ignore[misc]
     types.Tuple(
         (
             types.Array(types.float64, 2, "C"),
@@ -258,3 +204,101 @@ def unfinished_rows(positions: FloatArray, ok: np.ndarray) -> np.ndarray:
                 count += 1
                 break
     return found[:count].copy()
+
+
+def _sorted_position(values: FloatArray, value: float, right: bool, start: int) -> int:
+    """``np.searchsorted(values, value, side)`` of a finite ``value`` in ascending
+    ``values``: the first index whose value is greater (``right``) or not less.
+
+    The scan starts at ``start`` (any index in ``[0, len(values)]``; the answer does not
+    depend on it): near the answer, as for the consecutive points of a path, it takes a few
+    steps.
+    """
+    index = min(max(start, 0), values.shape[0])
+    while index > 0 and not (values[index - 1] < value or (right and values[index - 1] == value)):
+        index -= 1
+    while index < values.shape[0] and (values[index] < value or (right and values[index] == value)):
+        index += 1
+    return index
+
+
+_sorted_position_compiled = compiled(
+    types.int64, NUMBERS, types.float64, types.boolean, types.int64, inline=True
+)(_sorted_position)
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 1, "C"),  # distances
+    TABLE,  # points
+    NUMBERS,  # y_difference
+    NUMBERS,  # ends
+    NUMBERS,  # xs
+    types.boolean,  # increasing
+    NUMBERS,  # sx
+    NUMBERS,  # sy
+    NUMBERS,  # dx
+    NUMBERS,  # dy
+    NUMBERS,  # safe_length_sq
+    FLAGS,  # degenerate
+)
+def path_distances(
+    points: FloatArray,
+    y_difference: FloatArray,
+    ends: FloatArray,
+    xs: FloatArray,
+    increasing: bool,
+    sx: FloatArray,
+    sy: FloatArray,
+    dx: FloatArray,
+    dy: FloatArray,
+    safe_length_sq: FloatArray,
+    degenerate: np.ndarray,
+) -> FloatArray:
+    """``(m,)`` distance (metres) of each point to a path ``y = f(x)``: the windowed search of
+    :meth:`sonar_gym.localization.roh_path_errors.TruePath._distances`, whose array form it
+    replaces with the same arithmetic per point.
+
+    Args:
+        points: ``(m, 2)`` finite points, metres.
+        y_difference: ``(m,)`` each point's ``y - f(x)``, metres.
+        ends: ``(4,)`` the path's first and last vertex ``(x0, y0, x1, y1)``, metres.
+        xs: ``(n,)`` the vertices' x in ascending order, metres.
+        increasing: whether the path's x increases along it.
+        sx, sy, dx, dy, safe_length_sq, degenerate: per path segment its start and direction
+            (metres), its squared length (1 where degenerate) and whether that length is 0.
+    """
+    n_points = points.shape[0]
+    n_segments = xs.shape[0] - 1
+    distances = np.empty(n_points)
+    below, above = 0, 0  # the last searchsorted answers, where the next point's scans start
+    for point in range(n_points):
+        px, py = points[point, 0], points[point, 1]
+        to_ends = nan_min(
+            np.hypot(px - ends[0], py - ends[1]), np.hypot(px - ends[2], py - ends[3])
+        )
+        bound = to_ends
+        if px >= xs[0] and px <= xs[n_segments]:
+            bound = nan_min(abs(y_difference[point]), to_ends)
+        bound = bound * (1.0 + 1e-9) + 1e-12  # rounding slack
+        below = _sorted_position_compiled(xs, px - bound, True, below)
+        above = _sorted_position_compiled(xs, px + bound, False, above)
+        first = min(max(below - 1, 0), n_segments - 1)
+        last = min(max(above, 1), n_segments) - 1
+        if not increasing:  # segment k of the ascending vertices is path segment n - 1 - k
+            first, last = n_segments - 1 - last, n_segments - 1 - first
+        best = np.inf
+        for segment in range(first, last + 1):
+            rx, ry = px - sx[segment], py - sy[segment]
+            t = (rx * dx[segment] + ry * dy[segment]) / safe_length_sq[segment]
+            if t < 0.0:
+                t = 0.0
+            elif t > 1.0:
+                t = 1.0
+            if degenerate[segment]:
+                t = 0.0
+            gx, gy = rx - t * dx[segment], ry - t * dy[segment]
+            squared = gx * gx + gy * gy
+            if squared < best or squared != squared:
+                best = squared
+        distances[point] = math.sqrt(best)
+    return distances

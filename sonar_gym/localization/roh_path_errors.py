@@ -168,15 +168,22 @@ class TruePath:
         self._low_slope = (ys[1] - ys[0]) / (xs[1] - xs[0])
         self._high_slope = (ys[-1] - ys[-2]) / (xs[-1] - xs[-2])
         self._segments = _Segments(line)
+        self._ends = np.array([line[0, 0], line[0, 1], line[-1, 0], line[-1, 1]])
 
     def y_at(self, x: FloatArray) -> FloatArray:
         """``f(x)``: linear interpolation between vertices; beyond the ends, linear
         extrapolation of the end segments, metres."""
         xs, ys = self._xs, self._ys
-        inside = np.interp(x, xs, ys)
-        below = ys[0] + self._low_slope * (x - xs[0])
-        above = ys[-1] + self._high_slope * (x - xs[-1])
-        return np.where(x < xs[0], below, np.where(x > xs[-1], above, inside))
+        x = np.asarray(x, dtype=np.float64)
+        y = np.asarray(np.interp(x, xs, ys))
+        # Only the points beyond the ends are extrapolated (the same arithmetic per element).
+        below = x < xs[0]
+        if below.any():
+            y[below] = ys[0] + self._low_slope * (x[below] - xs[0])
+        above = x > xs[-1]
+        if above.any():
+            y[above] = ys[-1] + self._high_slope * (x[above] - xs[-1])
+        return y
 
     def errors(self, estimated: npt.ArrayLike) -> tuple[float, float]:
         """``(sigma, sigma_prime)`` of localized points against this path, metres (see
@@ -197,39 +204,26 @@ class TruePath:
         The vertical gap ``|y - f(x)|`` (inside the path's x range), or the distance to the
         nearer end vertex, bounds each point's distance ``u``; the nearest point of the path
         then lies within ``x +- u``, so only the segments overlapping that x window can hold
-        it. The windows are searched point by point in
-        :func:`sonar_gym.localization.roh_kernels.window_nearest_sq`, with the per-segment
+        it. The windows are found and searched point by point in
+        :func:`sonar_gym.localization.roh_kernels.path_distances`, with the per-segment
         arithmetic of :func:`distances_to_polyline`, so the results agree.
         """
-        line, xs = self.vertices, self._xs
-        to_ends = np.minimum(
-            np.hypot(points[:, 0] - line[0, 0], points[:, 1] - line[0, 1]),
-            np.hypot(points[:, 0] - line[-1, 0], points[:, 1] - line[-1, 1]),
-        )
-        within = (points[:, 0] >= xs[0]) & (points[:, 0] <= xs[-1])
-        bound = np.where(within, np.minimum(np.abs(y_difference), to_ends), to_ends)
-        bound = bound * (1.0 + 1e-9) + 1e-12  # rounding slack
-        n_segments = len(line) - 1
-        # Segment k spans [xs[k], xs[k + 1]]; those meeting [x - bound, x + bound]:
-        first = np.clip(
-            np.searchsorted(xs, points[:, 0] - bound, side="right") - 1, 0, n_segments - 1
-        )
-        last = np.clip(np.searchsorted(xs, points[:, 0] + bound, side="left"), 1, n_segments) - 1
-        if not self._increasing:  # segment k of the reversed vertices is path segment n - 1 - k
-            first, last = n_segments - 1 - last, n_segments - 1 - first
         segments = self._segments
-        nearest_sq = roh_kernels.window_nearest_sq(
-            points,
-            first.astype(np.int64, copy=False),
-            last.astype(np.int64, copy=False),
-            segments.sx,
-            segments.sy,
-            segments.dx,
-            segments.dy,
-            segments.safe_length_sq,
-            segments.degenerate,
+        return np.asarray(
+            roh_kernels.path_distances(
+                points,
+                y_difference,
+                self._ends,
+                self._xs,
+                self._increasing,
+                segments.sx,
+                segments.sy,
+                segments.dx,
+                segments.dy,
+                segments.safe_length_sq,
+                segments.degenerate,
+            )
         )
-        return np.sqrt(nearest_sq)
 
 
 def path_errors(estimated: npt.ArrayLike, true: npt.ArrayLike) -> tuple[float, float]:

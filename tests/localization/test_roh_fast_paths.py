@@ -389,12 +389,17 @@ def test_the_extractors_point_distance_is_distance_to_segment() -> None:
             assert extractor._point_distance(point) == float(distance_to_segment(point, a, b))
 
 
+@pytest.mark.parametrize("increasing", [False, True])
 @pytest.mark.parametrize("n_outliers", [1, 3, 200])
-def test_true_path_distances_of_outliers_are_the_general_search(n_outliers: int) -> None:
+def test_true_path_distances_of_outliers_are_the_general_search(
+    n_outliers: int, increasing: bool
+) -> None:
     from sonar_gym.localization.roh_path_errors import TruePath
 
     rng = np.random.default_rng(n_outliers)
     path = parabolic_path(x_end_m=1.3)
+    if increasing:
+        path = path[::-1].copy()
     points = path[rng.integers(0, len(path), 400)] + rng.normal(0.0, 0.01, (400, 2))
     points[rng.choice(400, n_outliers, replace=False)] += rng.normal(0.0, 1.0, (n_outliers, 2))
     true_path = TruePath(path)
@@ -437,3 +442,18 @@ def test_the_unfinished_rows_are_the_ok_rows_with_a_non_finite_coordinate() -> N
     ok = np.array([True, True, True, False, True, True])
     assert unfinished_rows(positions, ok).tolist() == [1, 2, 4]
     assert unfinished_rows(positions[:0], ok[:0]).tolist() == []
+
+
+def test_true_path_y_is_interpolated_inside_and_extrapolated_beyond_the_ends() -> None:
+    from sonar_gym.localization.roh_path_errors import TruePath
+
+    path = parabolic_path(x_end_m=1.3)
+    true_path = TruePath(path)
+    x = np.random.default_rng(5).uniform(0.5, 3.5, 500)
+    xs, ys = path[::-1, 0], path[::-1, 1]
+    below = ys[0] + (ys[1] - ys[0]) / (xs[1] - xs[0]) * (x - xs[0])
+    above = ys[-1] + (ys[-1] - ys[-2]) / (xs[-1] - xs[-2]) * (x - xs[-1])
+    expected = np.where(x < xs[0], below, np.where(x > xs[-1], above, np.interp(x, xs, ys)))
+    assert (x < xs[0]).any() and (x > xs[-1]).any()
+    assert true_path.y_at(x).view(np.int64).tolist() == expected.view(np.int64).tolist()
+    assert true_path.y_at(float(x[0])).shape == ()
