@@ -542,12 +542,14 @@ class BlockExpansionEnv(SonarEnv):
     def _errors(self, result: BlockExpansionResult, until: int) -> tuple[float, float]:
         """``(sigma, sigma')`` of the successful fixes before path index ``until``, metres."""
         episode = self._require_episode()
-        before = result.estimated_indices < until
-        if not np.any(before):
+        indices = result.estimated_indices
+        if len(indices) == 0 or indices[0] >= until:
             capped = self.config.failure_penalty * self.config.sigma_scale_m
             return capped, capped
         true_path = self._true_path.get(episode.path_parameters, lambda: TruePath(episode.path))
-        return true_path.errors(result.estimated_xy[before])
+        # The fix indices ascend: the fixes before ``until`` are a leading run of them.
+        count = len(indices) if indices[-1] < until else int(np.searchsorted(indices, until))
+        return true_path.errors(result.estimated_xy[:count])
 
     def _loss(self, result: BlockExpansionResult, sigma_prime_m: float) -> float:
         """The episode's loss (see Rewards), without the sensing cost."""

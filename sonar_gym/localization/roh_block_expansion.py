@@ -37,6 +37,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import brentq
 
+from sonar_gym.localization import roh_kernels
 from sonar_gym.localization.result import OK
 from sonar_gym.localization.roh_path_errors import (
     distances_to_polyline,
@@ -318,6 +319,11 @@ class ThreePointExtractor:
         return len(self._indices)
 
     @property
+    def indices(self) -> tuple[int, ...]:
+        """Sample indices of the points saved so far (see :class:`ThreePoints`)."""
+        return tuple(self._indices)
+
+    @property
     def fractions(self) -> tuple[float, ...]:
         """Fractions of the crossings saved so far (see :class:`ThreePoints`)."""
         return tuple(self._fractions)
@@ -365,13 +371,14 @@ class ThreePointExtractor:
         while current < len(points) and not self.done:
             if self._reference_sign is not None:
                 target = self.distances_m[self.found]
-                sides = np.sign(distances[current:] - target)
-                changes = np.flatnonzero(sides != self._reference_sign)
-                if len(changes) == 0:
+                change = roh_kernels.first_side_change(
+                    distances, current, target, self._reference_sign
+                )
+                if change == len(points):
                     self._previous = points[-1].copy()
                     return len(points)
-                if changes[0] > 0:
-                    current += int(changes[0])
+                if change > current:
+                    current = change
                     self._previous = points[current - 1].copy()
             self._update(points[current].copy(), int(index_array[current]))
             current += 1
@@ -978,7 +985,7 @@ class BlockExpansion:
         used = current.extractor.update_path(ok_xy, start + ok)
         if not current.extractor.done:
             return None
-        for index in current.extractor.result().indices:
+        for index in current.extractor.indices:
             current.points.append(np.array(fixes_xy[index - start]))
             current.ranges.append(float(table[index, current.new_column]))
         current.calibration = auto_calibrate(

@@ -302,3 +302,25 @@ def path_distances(
                 best = squared
         distances[point] = math.sqrt(best)
     return distances
+
+
+@compiled(types.int64, NUMBERS, types.int64, types.float64, types.float64)  # type: ignore[misc]
+def first_side_change(
+    distances: FloatArray, start: int, target: float, reference_sign: float
+) -> int:
+    """The first index from ``start`` on where ``np.sign(distances - target)`` differs from
+    ``reference_sign`` (NaN differs from every sign), or ``len(distances)`` if none; the
+    distances and ``target`` in metres."""
+    for index in range(start, distances.shape[0]):
+        excess = distances[index] - target
+        if excess > 0.0:
+            side = 1.0
+        elif excess < 0.0:
+            side = -1.0
+        elif excess == 0.0:
+            side = 0.0
+        else:
+            return index
+        if side != reference_sign:
+            return index
+    return distances.shape[0]

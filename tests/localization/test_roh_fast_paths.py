@@ -457,3 +457,18 @@ def test_true_path_y_is_interpolated_inside_and_extrapolated_beyond_the_ends() -
     assert (x < xs[0]).any() and (x > xs[-1]).any()
     assert true_path.y_at(x).view(np.int64).tolist() == expected.view(np.int64).tolist()
     assert true_path.y_at(float(x[0])).shape == ()
+
+
+def test_the_first_side_change_is_where_the_sign_of_the_excess_first_differs() -> None:
+    from sonar_gym.localization.roh_kernels import first_side_change
+
+    rng = np.random.default_rng(3)
+    distances = rng.uniform(0.0, 1.0, 300)
+    distances[::37] = 0.5  # on the target: sign 0, which differs from both sides
+    distances[250] = np.nan
+    for start in range(0, 300, 7):
+        for reference in (-1.0, 1.0):
+            changes = np.flatnonzero(np.sign(distances[start:] - 0.5) != reference)
+            expected = start + int(changes[0]) if len(changes) else len(distances)
+            assert first_side_change(distances, start, 0.5, reference) == expected
+    assert first_side_change(np.full(5, 0.7), 0, 0.5, 1.0) == 5
