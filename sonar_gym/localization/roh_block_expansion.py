@@ -269,6 +269,12 @@ class ThreePoints:
         return self.status == OK
 
 
+def _require_distinct(boundary_a: FloatArray, boundary_b: FloatArray) -> None:
+    """A ValueError unless the ``(2,)`` boundary points differ."""
+    if boundary_a.tolist() == boundary_b.tolist():
+        raise ValueError("boundary_a and boundary_b must be distinct points")
+
+
 class ThreePointExtractor:
     """The online three-point extraction of Sec. III.C, one position at a time.
 
@@ -289,16 +295,36 @@ class ThreePointExtractor:
     def __init__(
         self, boundary_a: npt.ArrayLike, boundary_b: npt.ArrayLike, distances: npt.ArrayLike
     ) -> None:
-        self.boundary_a = _planar_point(boundary_a, "boundary_a")
-        self.boundary_b = _planar_point(boundary_b, "boundary_b")
-        if np.array_equal(self.boundary_a, self.boundary_b):
-            raise ValueError("boundary_a and boundary_b must be distinct points")
+        planar_a = _planar_point(boundary_a, "boundary_a")
+        planar_b = _planar_point(boundary_b, "boundary_b")
+        _require_distinct(planar_a, planar_b)
         targets = np.asarray(distances, dtype=np.float64)
         if targets.shape != (3,) or not np.all(np.isfinite(targets)) or np.any(targets < 0.0):
             raise ValueError(
                 f"distances must be three finite non-negative metres, got {distances!r}"
             )
-        self.distances_m: tuple[float, ...] = tuple(float(d) for d in targets)
+        self._start(planar_a, planar_b, tuple(float(d) for d in targets))
+
+    @classmethod
+    def _of_checked(
+        cls, boundary_a: FloatArray, boundary_b: FloatArray, distances: tuple[float, ...]
+    ) -> ThreePointExtractor:
+        """An extractor for inputs already checked: finite ``(2,)`` or ``(3,)`` boundary
+        beacons and three finite non-negative distances, metres (the runner's, which its
+        config validated). Only the distinctness of the boundary points is checked here."""
+        planar_a, planar_b = boundary_a[:2].copy(), boundary_b[:2].copy()
+        _require_distinct(planar_a, planar_b)
+        extractor = cls.__new__(cls)
+        extractor._start(planar_a, planar_b, distances)
+        return extractor
+
+    def _start(
+        self, boundary_a: FloatArray, boundary_b: FloatArray, distances: tuple[float, ...]
+    ) -> None:
+        """Set up for the distinct ``(2,)`` boundary points and the distances, metres."""
+        self.boundary_a = boundary_a
+        self.boundary_b = boundary_b
+        self.distances_m: tuple[float, ...] = distances
         self._direction = self.boundary_b - self.boundary_a
         self._length_sq = float(self._direction @ self._direction)
         self._indices: list[int] = []
@@ -784,7 +810,7 @@ class _BoundaryProgress:
         self.boundary = config.boundaries[number]
         self.new_beacon = config.new_beacons[number]
         self.new_column = config.beacon_names.index(self.new_beacon)
-        self.extractor = ThreePointExtractor(
+        self.extractor = ThreePointExtractor._of_checked(
             known[self.boundary[0]], known[self.boundary[1]], config.calibration_distances_m[number]
         )
         opposite = next(n for n in config.areas[number] if n not in self.boundary)

@@ -472,3 +472,13 @@ def test_the_first_side_change_is_where_the_sign_of_the_excess_first_differs() -
             expected = start + int(changes[0]) if len(changes) else len(distances)
             assert first_side_change(distances, start, 0.5, reference) == expected
     assert first_side_change(np.full(5, 0.7), 0, 0.5, 1.0) == 5
+
+
+def test_a_boundary_of_two_beacons_above_one_point_is_refused_by_extractor_and_runner() -> None:
+    with pytest.raises(ValueError, match="boundary_a and boundary_b must be distinct points"):
+        ThreePointExtractor((1.0, 2.0, 1.4), (1.0, 2.0, 0.9), (0.45, 0.25, 0.05))
+    beacons = dict(TABLE_I_BEACONS_M)
+    beacons["C"] = (beacons["B"][0], beacons["B"][1], 1.2)  # C right above B's projection
+    config = BlockExpansionConfig(beacons_m=beacons)
+    with pytest.raises(ValueError, match="boundary_a and boundary_b must be distinct points"):
+        BlockExpansion(config).run(parabolic_path(x_end_m=1.3))
