@@ -50,14 +50,15 @@ from sonar_gym.localization.roh_path_errors import (
 from sonar_gym.localization.roh_trilateration import (
     DEFAULT_COLLINEARITY_TOLERANCE,
     DEFAULT_HEIGHT_TOLERANCE_M,
+    DEFAULT_INTERSECTION_TOLERANCE_M,
     DEFAULT_MAX_CALIBRATION_CONDITION,
     DEFAULT_SENSOR_HEIGHT_M,
     TRILATERATION_METHODS,
     CalibrationResult,
     TrilaterationResult,
+    _auto_calibrate_checked,
     _frozen,
     _trilaterate_rows,
-    auto_calibrate,
     trilaterate,
 )
 from sonar_gym.pose import FloatArray, Pose
@@ -1014,11 +1015,14 @@ class BlockExpansion:
         for index in current.extractor.indices:
             current.points.append(np.array(fixes_xy[index - start]))
             current.ranges.append(float(table[index, current.new_column]))
-        current.calibration = auto_calibrate(
-            np.array(current.points),
+        # The saved fixes are finite, the ranges non-negative or NaN (the table is checked)
+        # and the config validated the height and condition: auto_calibrate's checks repeat.
+        positions = np.array(current.points)
+        current.calibration = _auto_calibrate_checked(
+            np.column_stack([positions, np.full(3, self.config.sensor_height_m)]),
             np.array(current.ranges),
-            self.config.sensor_height_m,
-            max_condition=self.config.max_calibration_condition,
+            self.config.max_calibration_condition,
+            DEFAULT_INTERSECTION_TOLERANCE_M,
         )
         if not current.calibration.ok:
             return None

@@ -153,13 +153,23 @@ far from overflow and underflow); larger or smaller ones are first scaled by a p
 which is exact, and the results scaled back."""
 
 
+_FEW_VALUES = 16
+"""Arrays up to this size are scanned as Python floats by :func:`unit_scale`."""
+
+
 def unit_scale(*arrays: npt.ArrayLike) -> float:
     """The power of two to divide lengths by so that the largest finite magnitude of
     ``arrays`` is about 1, or 1.0 when every magnitude lies within ``2**+-SAFE_EXPONENT``."""
     largest = 0.0
     for values in arrays:
-        magnitudes = np.abs(np.asarray(values, dtype=np.float64))
-        finite = magnitudes[np.isfinite(magnitudes)]
+        array = np.asarray(values, dtype=np.float64)
+        if array.size <= _FEW_VALUES:  # the same largest magnitude, without numpy's per-call cost
+            magnitudes = [abs(value) for value in array.ravel().tolist() if math.isfinite(value)]
+            if magnitudes:
+                largest = max(largest, max(magnitudes))
+            continue
+        magnitudes_array = np.abs(array)
+        finite = magnitudes_array[np.isfinite(magnitudes_array)]
         if finite.size:
             largest = max(largest, float(finite.max()))
     if largest == 0.0 or math.ldexp(1.0, -SAFE_EXPONENT) <= largest <= math.ldexp(
@@ -864,6 +874,12 @@ def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> Fl
     return array
 
 
+def _norm(vector: FloatArray) -> float:
+    """``np.linalg.norm`` of a contiguous 1-d float64 vector (metres), computed as it does
+    (``sqrt(x.dot(x))``) without its per-call checks."""
+    return math.sqrt(float(vector.dot(vector)))
+
+
 def _cross3(a: FloatArray, b: FloatArray) -> FloatArray:
     """``np.cross`` of two 3-vectors, with its products and differences in its order."""
     a0, a1, a2 = a.tolist()
@@ -921,6 +937,15 @@ def auto_calibrate(
         raise ValueError(f"max_condition must be > 1, got {max_condition!r}")
     if not intersection_tolerance_m >= 0.0:
         raise ValueError(f"intersection_tolerance_m must be >= 0, got {intersection_tolerance_m!r}")
+    return _auto_calibrate_checked(points, ranges, max_condition, intersection_tolerance_m)
+
+
+def _auto_calibrate_checked(
+    points: FloatArray, ranges: FloatArray, max_condition: float, intersection_tolerance_m: float
+) -> CalibrationResult:
+    """:func:`auto_calibrate` of inputs it has validated: finite ``(3, 3)`` positions and
+    ``(3,)`` non-negative or missing ranges (metres), ``max_condition > 1`` and a
+    non-negative tolerance (metres). The block expansion runner calls it directly."""
     scale = unit_scale(points, ranges)
     if scale != 1.0:
         return _scaled_back(
@@ -935,7 +960,7 @@ def auto_calibrate(
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
-    area = 0.5 * float(np.linalg.norm(_cross3(displacements[0], displacements[1])))
+    area = 0.5 * _norm(_cross3(displacements[0], displacements[1]))
     if singular_values[1] > 0.0:
         condition = float(singular_values[0] / singular_values[1])
     else:
@@ -956,11 +981,11 @@ def auto_calibrate(
         )
 
     d1, d2, d3 = (float(value) for value in ranges)
-    separation = float(np.linalg.norm(displacements[0]))
+    separation = _norm(displacements[0])
     e_x = displacements[0] / separation
     along_x = float(e_x @ displacements[1])
     across = displacements[1] - along_x * e_x
-    along_y = float(np.linalg.norm(across))
+    along_y = _norm(across)
     if not along_y > 0.0:
         return CalibrationResult(
             status=STATUS_COLLINEAR_POSITIONS,

@@ -482,3 +482,35 @@ def test_a_boundary_of_two_beacons_above_one_point_is_refused_by_extractor_and_r
     config = BlockExpansionConfig(beacons_m=beacons)
     with pytest.raises(ValueError, match="boundary_a and boundary_b must be distinct points"):
         BlockExpansion(config).run(parabolic_path(x_end_m=1.3))
+
+
+def test_unit_scale_of_few_values_is_that_of_the_array_scan() -> None:
+    from sonar_gym.localization.roh_trilateration import unit_scale
+
+    def array_scan(*arrays: np.ndarray) -> float:
+        largest = 0.0
+        for values in arrays:
+            magnitudes = np.abs(np.asarray(values, dtype=np.float64))
+            finite = magnitudes[np.isfinite(magnitudes)]
+            if finite.size:
+                largest = max(largest, float(finite.max()))
+        return largest
+
+    rng = np.random.default_rng(6)
+    for _ in range(300):
+        values = rng.normal(size=int(rng.integers(1, 12))) * 10.0 ** rng.integers(-300, 300)
+        values[rng.random(values.size) < 0.2] = rng.choice([np.nan, np.inf, -np.inf, 0.0])
+        other = rng.normal(size=(3, 3)) * 10.0 ** rng.integers(-250, 250)
+        large = rng.normal(size=40) * 10.0 ** rng.integers(-250, 250)
+        assert unit_scale(values, other) == unit_scale(large[:0], values, other.tolist())
+        largest = array_scan(values, other)
+        expected = unit_scale(np.array([largest] * 20))  # above _FEW_VALUES: the array scan
+        assert unit_scale(values, other) == expected
+
+
+def test_the_calibration_norm_is_numpys_norm_bit_for_bit() -> None:
+    from sonar_gym.localization.roh_trilateration import _norm
+
+    rng = np.random.default_rng(14)
+    vectors = rng.normal(size=(5000, 3)) * 10.0 ** rng.integers(-5, 5, (5000, 1))
+    assert all(_norm(vector) == float(np.linalg.norm(vector)) for vector in vectors)
