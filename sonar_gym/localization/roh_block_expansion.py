@@ -270,6 +270,19 @@ class ThreePoints:
         return self.status == OK
 
 
+_CROSSING_RTOL = 4.0 * float(np.finfo(float).eps)
+"""brentq's relative tolerance for a crossing fraction: its smallest allowed (4 eps)."""
+
+
+def _sign(value: float) -> float:
+    """``np.sign`` of a float: 1.0, -1.0, 0.0, or NaN for NaN."""
+    if value > 0.0:
+        return 1.0
+    if value < 0.0:
+        return -1.0
+    return 0.0 if value == 0.0 else math.nan
+
+
 def _require_distinct(boundary_a: FloatArray, boundary_b: FloatArray) -> None:
     """A ValueError unless the ``(2,)`` boundary points differ."""
     if boundary_a.tolist() == boundary_b.tolist():
@@ -328,6 +341,10 @@ class ThreePointExtractor:
         self.distances_m: tuple[float, ...] = distances
         self._direction = self.boundary_b - self.boundary_a
         self._length_sq = float(self._direction @ self._direction)
+        # A' and A'B' as floats, for the per-point arithmetic on plain floats.
+        ax, ay = boundary_a.tolist()
+        self._corner = (ax, ay)
+        self._side_vector = (boundary_b.tolist()[0] - ax, boundary_b.tolist()[1] - ay)
         self._indices: list[int] = []
         self._samples: list[FloatArray] = []
         self._points: list[FloatArray] = []
@@ -418,22 +435,22 @@ class ThreePointExtractor:
             return self.boundary_distance(point)
         along = float((point - self.boundary_a) @ self._direction) / self._length_sq
         t = min(max(along, 0.0), 1.0)
-        foot_x = float(self.boundary_a[0]) + t * float(self._direction[0])
-        foot_y = float(self.boundary_a[1]) + t * float(self._direction[1])
-        return float(np.hypot(float(point[0]) - foot_x, float(point[1]) - foot_y))
+        (ax, ay), (ux, uy) = self._corner, self._side_vector
+        x, y = point.tolist()
+        return float(np.hypot(x - (ax + t * ux), y - (ay + t * uy)))
 
     def _update(self, point: FloatArray, index: int) -> None:
         boundary_distance = self._point_distance(point)
         if self._reference_sign is not None and not self.done:
             target = self.distances_m[self.found]
-            side = float(np.sign(boundary_distance - target))
+            side = _sign(boundary_distance - target)
             if side != self._reference_sign:
                 assert self._previous is not None
                 fraction = self._crossing_fraction(self._previous, point, target, side)
                 self._save(index, point, fraction)
                 self._reference_sign = None
         while not self.done and self._reference_sign is None:
-            side = float(np.sign(boundary_distance - self.distances_m[self.found]))
+            side = _sign(boundary_distance - self.distances_m[self.found])
             if side == 0.0:
                 self._save(index, point, 1.0)
             else:
@@ -469,11 +486,11 @@ class ThreePointExtractor:
         if current_side == 0.0:
             return 1.0
 
-        ax, ay = (float(v) for v in self.boundary_a)
-        ux, uy = float(self.boundary_b[0]) - ax, float(self.boundary_b[1]) - ay
+        (ax, ay), (ux, uy) = self._corner, self._side_vector
         length_sq = ux * ux + uy * uy
-        px, py = float(previous[0]) - ax, float(previous[1]) - ay
-        qx, qy = float(current[0]) - float(previous[0]), float(current[1]) - float(previous[1])
+        (previous_x, previous_y), (current_x, current_y) = previous.tolist(), current.tolist()
+        px, py = previous_x - ax, previous_y - ay
+        qx, qy = current_x - previous_x, current_y - previous_y
 
         def excess(t: float) -> float:
             # D(previous + t (current - previous)) - target, in plain floats.
@@ -484,9 +501,7 @@ class ThreePointExtractor:
         # D carries rounding noise of about 1e-16 m, which moves its root along the segment
         # by more than 1e-15: the root is asked to 1e-12, and brentq is not asked to raise if
         # the noise keeps it from meeting even that.
-        return float(
-            brentq(excess, 0.0, 1.0, xtol=1e-12, rtol=4.0 * np.finfo(float).eps, disp=False)
-        )
+        return float(brentq(excess, 0.0, 1.0, xtol=1e-12, rtol=_CROSSING_RTOL, disp=False))
 
 
 def extract_three_points(
