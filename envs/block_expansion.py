@@ -355,6 +355,12 @@ class BlockExpansionEnv(SonarEnv):
         self._slot_names = (*self._areas[0], *new_beacons_of_areas(self._areas))
         self._new_beacons = self._slot_names[3:]
         self._static_world = World(self._base_scenario, temperature_c=TEMPERATURE_C)
+        # The Table I positions of the slots' beacons and the room's bounds: the base
+        # scenario is frozen, so they are read once.
+        self._table_i = {
+            name: self._base_scenario.emitter(name).position for name in self._slot_names
+        }
+        self._bounds = self._base_scenario.bounds
         self._paper_path = dataclasses.replace(
             PAPER_PATH, x_end_m=PAPER_PATH_X_END_M[config.n_areas]
         )
@@ -434,13 +440,12 @@ class BlockExpansionEnv(SonarEnv):
     def _reset_task(self, options: dict[str, Any] | None) -> dict[str, Any]:
         config = self.config
         rng = self.np_random
-        table_i = {name: self._base_scenario.emitter(name).position for name in self._slot_names}
         beacons_m, path_parameters, samples = draw_beacons_and_route(
             rng,
-            table_i,
+            dict(self._table_i),
             self._paper_path,
             self._areas,
-            self._base_scenario.bounds,
+            self._bounds,
             jitter_m=(LAYOUT_JITTER_XY_M, LAYOUT_JITTER_Z_M) if config.layout == "random" else None,
             route_x_end_m=PAPER_PATH_X_END_M[config.n_areas] if config.path == "random" else None,
             curvature_range_per_m=RANDOM_CURVATURE_PER_M,

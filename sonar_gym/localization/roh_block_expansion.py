@@ -283,6 +283,13 @@ def _sign(value: float) -> float:
     return 0.0 if value == 0.0 else math.nan
 
 
+def _read_only(array: FloatArray) -> FloatArray:
+    """A float64 array the runner made and hands over, marked read-only in place (a result
+    keeps it; :func:`_frozen` would copy it first)."""
+    array.flags.writeable = False
+    return array
+
+
 def _require_distinct(boundary_a: FloatArray, boundary_b: FloatArray) -> None:
     """A ValueError unless the ``(2,)`` boundary points differ."""
     if boundary_a.tolist() == boundary_b.tolist():
@@ -971,7 +978,7 @@ class BlockExpansion:
         while True:
             columns = tuple(names.index(n) for n in config.areas[area])
             beacons = np.array([known[n] for n in config.areas[area]])
-            area_beacons.append(_frozen(beacons))
+            area_beacons.append(_read_only(beacons))
             area_columns.append(columns)  # type: ignore[arg-type]
             # The config validated the beacons, height and method, the table is checked above
             # and a calibrated beacon is finite: trilaterate_path's checks would repeat.
@@ -1000,9 +1007,9 @@ class BlockExpansion:
 
         log = PathFixLog(
             statuses=tuple(statuses),
-            positions=_frozen(fixes_xy),
+            positions=_read_only(fixes_xy),
             used_radical_centre=used_radical_centre,
-            ranges_m=_frozen(table),
+            ranges_m=_read_only(table),
             area_beacons_m=tuple(area_beacons),
             area_columns=tuple(area_columns),
             sensor_height_m=config.sensor_height_m,
@@ -1053,8 +1060,9 @@ class BlockExpansion:
     ) -> BlockExpansionResult:
         config = self.config
         calibrations: list[BoundaryCalibration] = []
+        new_beacons = config.new_beacons
         for number in range(len(config.areas) - 1):
-            new_beacon = config.new_beacons[number]
+            new_beacon = new_beacons[number]
             truth = _frozen(config.beacons_m[new_beacon])
             if number >= len(progress):
                 calibrations.append(
@@ -1120,7 +1128,7 @@ class BlockExpansion:
             fixes=log,
             area_indices=area_indices,
             estimated_indices=ok_indices,
-            estimated_xy=_frozen(estimated),
+            estimated_xy=_read_only(estimated),
             calibrations=tuple(calibrations),
             message=message,
         )

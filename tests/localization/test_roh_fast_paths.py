@@ -514,3 +514,11 @@ def test_the_calibration_norm_is_numpys_norm_bit_for_bit() -> None:
     rng = np.random.default_rng(14)
     vectors = rng.normal(size=(5000, 3)) * 10.0 ** rng.integers(-5, 5, (5000, 1))
     assert all(_norm(vector) == float(np.linalg.norm(vector)) for vector in vectors)
+
+
+def test_the_extractors_sign_is_numpys_sign() -> None:
+    from sonar_gym.localization.roh_block_expansion import _sign
+
+    for value in (2.5, -1e-300, 0.0, -0.0, math.inf, -math.inf, math.nan, 5e-324):
+        expected = float(np.sign(value))
+        assert _sign(value) == expected or (math.isnan(expected) and math.isnan(_sign(value)))
