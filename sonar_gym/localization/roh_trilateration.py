@@ -794,16 +794,26 @@ def _pair_geometry(
     distance and its square ``(3,)`` and the unit vector first -> second ``(3, 2)`` of three
     centres given as the bytes of a float64 ``(3, 2)`` array (kept per beacon set); None when
     two centres coincide."""
-    points = np.frombuffer(centres).reshape(3, 2)
-    first, second, third = (points[indices] for indices in _PAIR_CIRCLES)
-    offset = second - first
-    separations = [math.hypot(dx, dy) for dx, dy in offset.tolist()]
+    # On Python floats: three pairs are too few for numpy's per-call cost to pay off.
+    points = np.frombuffer(centres).reshape(3, 2).tolist()
+    first = [points[i] for i, _ in _CENTROID_PAIRS]
+    third = [points[3 - i - j] for i, j in _CENTROID_PAIRS]
+    offsets = [
+        (points[j][0] - points[i][0], points[j][1] - points[i][1]) for i, j in _CENTROID_PAIRS
+    ]
+    separations = [math.hypot(dx, dy) for dx, dy in offsets]
     if 0.0 in separations:
         return None
-    separation = np.array(separations)
-    separation_sq = np.array([value**2 for value in separations])
-    units = np.column_stack([offset[:, 0] / separation, offset[:, 1] / separation])
-    return first, third, separation, separation_sq, units
+    units = [
+        (dx / length, dy / length) for (dx, dy), length in zip(offsets, separations, strict=True)
+    ]
+    return (
+        np.array(first),
+        np.array(third),
+        np.array(separations),
+        np.array([value**2 for value in separations]),
+        np.array(units),
+    )
 
 
 def _paper_centroids(
