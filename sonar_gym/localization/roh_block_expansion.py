@@ -58,6 +58,7 @@ from sonar_gym.localization.roh_trilateration import (
     TrilaterationResult,
     _auto_calibrate_checked,
     _frozen,
+    _norm,
     _trilaterate_rows,
     trilaterate,
 )
@@ -584,15 +585,26 @@ class BlockExpansionConfig:
     def __post_init__(self) -> None:
         beacons: dict[str, tuple[float, float, float]] = {}
         for name, xyz in dict(self.beacons_m).items():
-            if isinstance(xyz, tuple) and len(xyz) == 3 and all(type(v) is float for v in xyz):
+            if (
+                type(xyz) is tuple
+                and len(xyz) == 3
+                and type(xyz[0]) is float
+                and type(xyz[1]) is float
+                and type(xyz[2]) is float
+            ):
                 triple = xyz  # already three floats (the usual case): no array needed
+            elif isinstance(xyz, tuple) and len(xyz) == 3 and all(type(v) is float for v in xyz):
+                triple = xyz  # a tuple subclass of three floats
             else:
                 values = np.asarray(xyz, dtype=np.float64)
                 if values.shape != (3,):
                     triple = (math.nan, math.nan, math.nan)
                 else:
                     triple = (float(values[0]), float(values[1]), float(values[2]))
-            if not isinstance(name, str) or not all(math.isfinite(v) for v in triple):
+            finite = (
+                math.isfinite(triple[0]) and math.isfinite(triple[1]) and math.isfinite(triple[2])
+            )
+            if not isinstance(name, str) or not finite:
                 raise ValueError(
                     f"beacons_m must map names to finite (x, y, z) metres; bad entry {name!r}"
                 )
@@ -1093,22 +1105,24 @@ class BlockExpansion:
                 status = OK
             error = None
             if calibration is not None and calibration.position is not None:
-                error = float(np.linalg.norm(calibration.position - truth))
+                error = _norm(calibration.position - truth)
             calibrations.append(
                 BoundaryCalibration(
                     boundary=item.boundary,
                     new_beacon=new_beacon,
                     status=status,
                     three_points=three_points,
-                    calibration_points_xy=_frozen(np.array(item.points).reshape(-1, 2)),
-                    calibration_ranges_m=_frozen(np.array(item.ranges, dtype=np.float64)),
+                    calibration_points_xy=_read_only(
+                        np.array(item.points, dtype=np.float64).reshape(-1, 2)
+                    ),
+                    calibration_ranges_m=_read_only(np.array(item.ranges, dtype=np.float64)),
                     calibration=calibration,
                     true_position_m=truth,
                     error_m=error,
                     switch_index=item.switch_index,
                 )
             )
-        ok_indices = np.flatnonzero(np.isfinite(log.positions[:, 0])).astype(np.int64)
+        ok_indices = np.flatnonzero(np.isfinite(log.positions[:, 0])).astype(np.int64, copy=False)
         estimated = log.positions[ok_indices]
         failed_boundaries = [c for c in calibrations if c.status != OK]
         if failed_boundaries:
@@ -1120,8 +1134,7 @@ class BlockExpansion:
             message = f"{len(positions) - len(ok_indices)} of {len(positions)} fixes failed"
         else:
             status, message = OK, ""
-        area_indices = area_indices.copy()
-        area_indices.flags.writeable = False
+        area_indices.flags.writeable = False  # the run's own array, handed over
         ok_indices.flags.writeable = False
         return BlockExpansionResult(
             status=status,
