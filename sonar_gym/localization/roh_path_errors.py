@@ -10,6 +10,8 @@ localized point to the true polyline (the per-point "path error" of Figs. 5, 7 a
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import numpy.typing as npt
 
@@ -32,6 +34,12 @@ def points_array(points: npt.ArrayLike, name: str, min_count: int = 1) -> FloatA
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite")
     return array
+
+
+def _mean(values: FloatArray) -> float:
+    """``np.mean`` of a non-empty 1-d float64 array, with its arithmetic (numpy's sum,
+    divided by the count) without its per-call cost."""
+    return float(values.sum()) / len(values)
 
 
 class _Segments:
@@ -194,8 +202,8 @@ class TruePath:
         """
         points = points_array(estimated, "estimated")
         y_difference = points[:, 1] - self.y_at(points[:, 0])
-        sigma = float(np.sqrt(np.mean(y_difference**2)))
-        sigma_prime = float(np.mean(self._distances(points, y_difference)))
+        sigma = math.sqrt(_mean(y_difference**2))
+        sigma_prime = _mean(self._distances(points, y_difference))
         return sigma, sigma_prime
 
     def _distances(self, points: FloatArray, y_difference: FloatArray) -> FloatArray:

@@ -754,7 +754,10 @@ def _radical_centres(centres: FloatArray, radii: FloatArray) -> FloatArray | Non
         np.ascontiguousarray(centres, dtype=np.float64).tobytes()
     )
     radii_sq = radii**2
-    rhs = (radii_sq - np.mean(radii_sq, axis=1, keepdims=True)) - centred_norms
+    # np.mean's own arithmetic (the sum along the row, divided by the count) without its
+    # per-call cost.
+    row_means = radii_sq.sum(axis=1, keepdims=True) / radii_sq.shape[1]
+    rhs = (radii_sq - row_means) - centred_norms
     solution, _, rank, _ = np.linalg.lstsq(design, rhs.T, rcond=None)
     if rank < 2:
         return None

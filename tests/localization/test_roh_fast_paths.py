@@ -522,3 +522,30 @@ def test_the_extractors_sign_is_numpys_sign() -> None:
     for value in (2.5, -1e-300, 0.0, -0.0, math.inf, -math.inf, math.nan, 5e-324):
         expected = float(np.sign(value))
         assert _sign(value) == expected or (math.isnan(expected) and math.isnan(_sign(value)))
+
+
+def test_the_path_error_mean_is_numpys_mean_bit_for_bit() -> None:
+    from sonar_gym.localization.roh_path_errors import _mean
+
+    rng = np.random.default_rng(17)
+    for size in [*range(1, 40), 127, 128, 129, 255, 513, 1000, 4097]:
+        values = rng.lognormal(-4.0, 2.0, size)
+        assert _mean(values) == float(np.mean(values))
+
+
+def test_the_radical_centres_of_a_table_are_the_array_forms_bit_for_bit() -> None:
+    from sonar_gym.localization.roh_trilateration import _radical_centres
+
+    rng = np.random.default_rng(23)
+    for _ in range(100):
+        centres = rng.uniform(-3.0, 3.0, (3, 2))
+        radii = rng.uniform(0.0, 4.0, (int(rng.integers(1, 40)), 3))
+        squared_norms = np.einsum("ij,ij->i", centres, centres)
+        design = -2.0 * (centres - centres.mean(axis=0))
+        rhs = (radii**2 - np.mean(radii**2, axis=1, keepdims=True)) - (
+            squared_norms - squared_norms.mean()
+        )
+        expected = np.linalg.lstsq(design, rhs.T, rcond=None)[0].T
+        centre = _radical_centres(centres, radii)
+        assert centre is not None
+        assert centre.view(np.int64).tolist() == expected.view(np.int64).tolist()
