@@ -388,9 +388,45 @@ def _centres_are_collinear(centres: bytes, tolerance: float) -> bool:
 
 def _are_collinear(points: FloatArray, tolerance: float) -> bool:
     """Whether 2D points lie on one line: spread across the best-fit line vs along it."""
+    if _clearly_spread(points, tolerance):
+        return False
     centred = points - points.mean(axis=0)
     singular_values = np.linalg.svd(centred, compute_uv=False)
     return bool(singular_values[0] == 0.0 or singular_values[1] <= tolerance * singular_values[0])
+
+
+_CLEAR_SPREAD_RATIO = 1e-4
+""":func:`_clearly_spread` answers only for singular-value ratios above this (and above four
+times the tolerance); closer cases are left to the svd."""
+
+
+def _clearly_spread(points: FloatArray, tolerance: float) -> bool:
+    """Whether :func:`_are_collinear` certainly answers False for ``(3, 2)`` points (metres),
+    found on floats without its svd (a new calibrated beacon misses the cache every episode).
+
+    The squared ratio of the centred points' singular values is ``det / lambda_max^2`` of
+    their 2x2 Gram matrix, at least ``det / trace^2``. When that bound puts the ratio above
+    :data:`_CLEAR_SPREAD_RATIO` and four times the tolerance, and the spread is not lost in
+    the coordinates' magnitude, the rounding of either computation (relative 1e-8 at most
+    here) cannot bring the svd's ratio down to the tolerance. False means: ask the svd.
+    """
+    if points.shape != (3, 2):
+        return False
+    (x0, y0), (x1, y1), (x2, y2) = points.tolist()
+    mean_x, mean_y = (x0 + x1 + x2) / 3.0, (y0 + y1 + y2) / 3.0
+    dx0, dx1, dx2 = x0 - mean_x, x1 - mean_x, x2 - mean_x
+    dy0, dy1, dy2 = y0 - mean_y, y1 - mean_y, y2 - mean_y
+    a = dx0 * dx0 + dx1 * dx1 + dx2 * dx2
+    c = dy0 * dy0 + dy1 * dy1 + dy2 * dy2
+    b = dx0 * dy0 + dx1 * dy1 + dx2 * dy2
+    trace, det = a + c, a * c - b * b
+    magnitude = max(abs(x0), abs(x1), abs(x2), abs(y0), abs(y1), abs(y2))
+    if not (math.isfinite(trace) and math.isfinite(det) and det > 0.0):
+        return False
+    if not trace > (_CLEAR_SPREAD_RATIO * magnitude) ** 2:
+        return False
+    threshold = max(_CLEAR_SPREAD_RATIO, 4.0 * tolerance)
+    return det / (trace * trace) > threshold * threshold
 
 
 def _dilution_of_precision(

@@ -549,3 +549,29 @@ def test_the_radical_centres_of_a_table_are_the_array_forms_bit_for_bit() -> Non
         centre = _radical_centres(centres, radii)
         assert centre is not None
         assert centre.view(np.int64).tolist() == expected.view(np.int64).tolist()
+
+
+@pytest.mark.parametrize("tolerance", [0.0, 1e-6, 1e-3, 0.3, 2.0])
+def test_the_collinearity_shortcut_agrees_with_the_svd(tolerance: float) -> None:
+    from sonar_gym.localization.roh_trilateration import _are_collinear, _clearly_spread
+
+    def by_svd(points: np.ndarray) -> bool:
+        singular_values = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+        return bool(
+            singular_values[0] == 0.0 or singular_values[1] <= tolerance * singular_values[0]
+        )
+
+    rng = np.random.default_rng(31)
+    shortcuts = 0
+    for _ in range(3000):
+        start, direction = rng.uniform(-5.0, 5.0, 2), rng.normal(size=2)
+        along = rng.uniform(-2.0, 2.0, 3)
+        across = rng.normal(size=3) * 10.0 ** rng.uniform(-12.0, 1.0)
+        normal = np.array([-direction[1], direction[0]])
+        points = start + along[:, None] * direction + across[:, None] * normal
+        points *= 10.0 ** rng.integers(-3, 4)
+        shortcuts += _clearly_spread(points, tolerance)
+        assert _are_collinear(points, tolerance) == by_svd(points)
+    # A ratio of singular values is at most 1: above a quarter the svd always decides.
+    assert (shortcuts > 100) == (tolerance < 0.25)
+    assert not _clearly_spread(np.zeros((3, 2)), tolerance)
