@@ -418,6 +418,11 @@ class ThreePointExtractor:
                 f"indices must hold one index per position ({len(points)}), "
                 f"got shape {index_array.shape}"
             )
+        return self._update_path_checked(points, index_array)
+
+    def _update_path_checked(self, points: FloatArray, index_array: npt.NDArray[np.int64]) -> int:
+        """:meth:`update_path` of finite ``(m, 2)`` float64 positions (metres) and their
+        ``(m,)`` int64 indices, as the runner passes them (its successful fixes)."""
         distances = distance_to_segment(points, self.boundary_a, self.boundary_b)
         current = 0
         while current < len(points) and not self.done:
@@ -1043,7 +1048,7 @@ class BlockExpansion:
         """
         ok = np.flatnonzero(np.isfinite(fixes_xy[:, 0]))
         ok_xy = fixes_xy[ok]
-        used = current.extractor.update_path(ok_xy, start + ok)
+        used = current.extractor._update_path_checked(ok_xy, start + ok)
         if not current.extractor.done:
             return None
         for index in current.extractor.indices:

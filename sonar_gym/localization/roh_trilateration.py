@@ -758,13 +758,15 @@ def _trilaterate_rows(
             positions[rows] = centroid
             one_by_one = rows[:0]
         else:
+            missed = ~met
+            missed_rows = rows[missed]
             positions[rows[met]] = centroid
-            centre = _radical_centres(centres, radii[~met])
+            centre = _radical_centres(centres, radii[missed])
             if centre is None:
-                one_by_one = rows[~met]
+                one_by_one = missed_rows
             else:
-                positions[rows[~met]] = centre
-                fallback[rows[~met]] = True
+                positions[missed_rows] = centre
+                fallback[missed_rows] = True
                 one_by_one = rows[:0]
     for row in one_by_one.tolist():
         fix = trilaterate(beacon_array, table[row], height, method, **options)  # type: ignore[arg-type]
