@@ -11,6 +11,11 @@ the clearance of the whole planned path against the world's static geometry, and
 command from the first one that comes near a shape to ``drive`` itself (pymunk), so contacts
 are resolved exactly as before. The odometry integrates the encoder increments per physics
 substep, as ``drive`` does.
+
+:meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_commands` is the compiled form of the
+same drive that the other tasks use; the two agree to rounding (the odometry's substep sums
+and the clearance test are written differently). The APCS route keeps this one because its
+task's seeded rollouts pin these bits.
 """
 
 from __future__ import annotations
