@@ -367,7 +367,6 @@ class TrilaterationEnv(SonarEnv):
             n_decision_points=config.n_decision_points,
         )
         self._episode: TrilaterationEpisode | None = None
-        self._measurement_times_s: dict[tuple[int, float], float] = {}
 
     # --- actions -----------------------------------------------------------------------
     def fix_count(self, action: Any) -> int:
@@ -507,7 +506,7 @@ class TrilaterationEnv(SonarEnv):
                     self.np_random,
                     self.transmitter_frame.names,
                 )
-            measurement_time_s = self._measurement_time_s(n_fixes, rounds.round_duration_s)
+            measurement_time_s = float(np.sum(rounds.round_durations_s))
             with self._timed("localization"):
                 repeated = localize_repeated(
                     rounds.distances,
@@ -551,16 +550,6 @@ class TrilaterationEnv(SonarEnv):
         if not done:
             self._drive_next_leg(episode)
         return StepOutcome(reward_terms=terms, terminated=done, info=info)
-
-    def _measurement_time_s(self, n_rounds: int, round_duration_s: float) -> float:
-        """Seconds that ``n_rounds`` ranging rounds of ``round_duration_s`` each take, summed as
-        ``np.sum`` sums the rounds' durations (kept: a few values of ``n`` recur all along)."""
-        key = (n_rounds, round_duration_s)
-        total = self._measurement_times_s.get(key)
-        if total is None:
-            total = float(np.sum(np.full(n_rounds, round_duration_s)))
-            self._measurement_times_s[key] = total
-        return total
 
     def _correct(self, episode: TrilaterationEpisode, fix_pose: Pose, n_ok: int) -> None:
         """Correct the estimate with an averaged fix of ``n_ok`` fixes (see ``correction``)."""

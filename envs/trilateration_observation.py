@@ -9,7 +9,6 @@ The table of features, their mappings and bounds is in the ``TrilaterationEnv`` 
 from __future__ import annotations
 
 import functools
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,7 +18,7 @@ from sonar_gym.envs.features import Feature, Fraction, Heading, ObservationSpec,
 from sonar_gym.localization.wu_tsai import Fix
 from sonar_gym.localization.wu_tsai_models import heading_std_rad, position_std_m
 from sonar_gym.metrics import heading_error_rad, position_error_m
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, vector_norm
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
 
@@ -127,7 +126,7 @@ def trilateration_observation(
     x, y = estimate.x, estimate.y
     offset = estimate.position - scales.transmitter_centroid_xy
     offset_x, offset_y = offset.tolist()
-    offset_length = math.sqrt(offset.dot(offset))  # np.linalg.norm's own form
+    offset_length = vector_norm(offset)
     position_scale, heading_scale = scales.position_scale_m, scales.heading_scale_rad
     n = scales.n_decision_points
     # the room's centre and half size, not its corners: the env's own form of the scaling

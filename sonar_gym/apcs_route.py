@@ -253,7 +253,9 @@ class APCSRoute:
         is planned again from the corrected estimate (the random streams and the robot are
         put back where the first plan left them at that point).
         """
-        targets = [np.asarray(target, dtype=np.float64).reshape(2) for target in waypoints]
+        targets = np.array(
+            [np.asarray(target, dtype=np.float64).reshape(2) for target in waypoints]
+        ).reshape(-1, 2)
         waypoint = 0
         while waypoint < len(targets):
             plan = self._plan(targets, waypoint, step_m, steps_per_aim)
@@ -261,9 +263,7 @@ class APCSRoute:
                 return
             waypoint = self._execute(plan, active_sides, steps_per_sample, summary)
 
-    def _plan(
-        self, targets: Sequence[FloatArray], waypoint: int, step_m: float, steps_per_aim: int
-    ) -> _Plan:
+    def _plan(self, targets: FloatArray, waypoint: int, step_m: float, steps_per_aim: int) -> _Plan:
         """The commands from the current estimate to the last target (see :meth:`drive_through`),
         planned in one compiled loop (:func:`sonar_gym.drive_kernels.plan_to_targets`)."""
         estimate = self.tracker.estimate
@@ -271,7 +271,7 @@ class APCSRoute:
         draws = CommandDraws.start(rng)
         commanded, normals, uniforms, stops, _ = drive_kernels.plan_to_targets(
             rng,
-            np.array(targets, dtype=np.float64).reshape(-1, 2),
+            targets,
             waypoint,
             (estimate.x, estimate.y, estimate.theta),
             step_m,

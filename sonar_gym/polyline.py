@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from sonar_gym.odometry import predict_over_motion, propagate_covariance
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, vector_norm
 from sonar_gym.robot import DifferentialDriveRobot, MotionResult
 from sonar_gym.world import World
 
@@ -117,7 +117,7 @@ def leg_is_free(
     if margin_m is None:
         margin_m = world.robot_radius + ROUTE_CLEARANCE_M
     delta = stop - start
-    length = math.sqrt(delta.dot(delta))  # np.linalg.norm's own form
+    length = vector_norm(delta)
     count = max(2, math.ceil(length / step_m) + 1)
     start_x, start_y = np.asarray(start, dtype=np.float64).tolist()
     delta_x, delta_y = delta.tolist()

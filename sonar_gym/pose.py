@@ -27,6 +27,12 @@ def wrap_angles(angles_rad: npt.ArrayLike) -> FloatArray:
     return np.where(wrapped <= -np.pi, np.pi, wrapped)
 
 
+def vector_norm(vector: FloatArray) -> float:
+    """``np.linalg.norm`` of a 1-d float64 vector (metres), in its own form ``sqrt(x . x)``
+    (so the same bits), without its per-call checks."""
+    return math.sqrt(float(vector.dot(vector)))
+
+
 def angle_difference(a_rad: float, b_rad: float) -> float:
     """Signed smallest difference ``a - b`` in radians, in (-pi, pi]."""
     return wrap_angle(a_rad - b_rad)

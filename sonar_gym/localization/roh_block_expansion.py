@@ -57,12 +57,12 @@ from sonar_gym.localization.roh_trilateration import (
     CalibrationResult,
     TrilaterationResult,
     _auto_calibrate_checked,
+    _calibration_positions,
     _frozen,
-    _norm,
     _trilaterate_rows,
     trilaterate,
 )
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, vector_norm
 
 IntArray = npt.NDArray[np.int64]
 
@@ -591,15 +591,13 @@ class BlockExpansionConfig:
         beacons: dict[str, tuple[float, float, float]] = {}
         for name, xyz in dict(self.beacons_m).items():
             if (
-                type(xyz) is tuple
+                isinstance(xyz, tuple)
                 and len(xyz) == 3
                 and type(xyz[0]) is float
                 and type(xyz[1]) is float
                 and type(xyz[2]) is float
             ):
                 triple = xyz  # already three floats (the usual case): no array needed
-            elif isinstance(xyz, tuple) and len(xyz) == 3 and all(type(v) is float for v in xyz):
-                triple = xyz  # a tuple subclass of three floats
             else:
                 values = np.asarray(xyz, dtype=np.float64)
                 if values.shape != (3,):
@@ -1056,9 +1054,8 @@ class BlockExpansion:
             current.ranges.append(float(table[index, current.new_column]))
         # The saved fixes are finite, the ranges non-negative or NaN (the table is checked)
         # and the config validated the height and condition: auto_calibrate's checks repeat.
-        positions = np.array(current.points)
         current.calibration = _auto_calibrate_checked(
-            np.column_stack([positions, np.full(3, self.config.sensor_height_m)]),
+            _calibration_positions(current.points, self.config.sensor_height_m),
             np.array(current.ranges),
             self.config.max_calibration_condition,
             DEFAULT_INTERSECTION_TOLERANCE_M,
@@ -1110,7 +1107,7 @@ class BlockExpansion:
                 status = OK
             error = None
             if calibration is not None and calibration.position is not None:
-                error = _norm(calibration.position - truth)
+                error = vector_norm(calibration.position - truth)
             calibrations.append(
                 BoundaryCalibration(
                     boundary=item.boundary,

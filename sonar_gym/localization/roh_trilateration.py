@@ -43,7 +43,7 @@ from scipy.optimize import least_squares
 
 from sonar_gym.localization import roh_kernels
 from sonar_gym.localization.result import OK, OUT_OF_FLOAT_RANGE, Localization
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, vector_norm
 
 TRILATERATION_METHODS: tuple[str, ...] = ("paper", "least_squares")
 """Names accepted by :func:`trilaterate`'s ``method`` argument."""
@@ -925,12 +925,6 @@ def _calibration_positions(positions: npt.ArrayLike, sensor_height: float) -> Fl
     return array
 
 
-def _norm(vector: FloatArray) -> float:
-    """``np.linalg.norm`` of a contiguous 1-d float64 vector (metres), computed as it does
-    (``sqrt(x.dot(x))``) without its per-call checks."""
-    return math.sqrt(float(vector.dot(vector)))
-
-
 def _cross3(a: FloatArray, b: FloatArray) -> FloatArray:
     """``np.cross`` of two 3-vectors, with its products and differences in its order."""
     a0, a1, a2 = a.tolist()
@@ -1011,7 +1005,7 @@ def _auto_calibrate_checked(
 
     displacements = points[1:] - points[0]
     singular_values = np.linalg.svd(displacements, compute_uv=False)
-    area = 0.5 * _norm(_cross3(displacements[0], displacements[1]))
+    area = 0.5 * vector_norm(_cross3(displacements[0], displacements[1]))
     if singular_values[1] > 0.0:
         condition = float(singular_values[0] / singular_values[1])
     else:
@@ -1032,11 +1026,11 @@ def _auto_calibrate_checked(
         )
 
     d1, d2, d3 = (float(value) for value in ranges)
-    separation = _norm(displacements[0])
+    separation = vector_norm(displacements[0])
     e_x = displacements[0] / separation
     along_x = float(e_x @ displacements[1])
     across = displacements[1] - along_x * e_x
-    along_y = _norm(across)
+    along_y = vector_norm(across)
     if not along_y > 0.0:
         return CalibrationResult(
             status=STATUS_COLLINEAR_POSITIONS,

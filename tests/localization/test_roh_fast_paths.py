@@ -508,12 +508,12 @@ def test_unit_scale_of_few_values_is_that_of_the_array_scan() -> None:
         assert unit_scale(values, other) == expected
 
 
-def test_the_calibration_norm_is_numpys_norm_bit_for_bit() -> None:
-    from sonar_gym.localization.roh_trilateration import _norm
+def test_the_shared_vector_norm_is_numpys_norm_bit_for_bit() -> None:
+    from sonar_gym.pose import vector_norm
 
     rng = np.random.default_rng(14)
     vectors = rng.normal(size=(5000, 3)) * 10.0 ** rng.integers(-5, 5, (5000, 1))
-    assert all(_norm(vector) == float(np.linalg.norm(vector)) for vector in vectors)
+    assert all(vector_norm(vector) == float(np.linalg.norm(vector)) for vector in vectors)
 
 
 def test_the_extractors_sign_is_numpys_sign() -> None:
