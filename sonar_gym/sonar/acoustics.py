@@ -332,10 +332,15 @@ class PistonBeam:
         front, theta, sin_front = _table_grid()
         x = wavenumber_ka * sin_front  # k a sin(theta) of the samples in front
         values = np.zeros(len(theta))  # behind the transducer the pattern is 0
-        values[front] = _piston_directivity_of(x) ** 2
         beyond_main_lobe = (theta >= first_null_rad(wavenumber_ka)) | ~front
-        if not side_lobes:
-            values[beyond_main_lobe] = 0.0
+        if side_lobes:
+            values[front] = _piston_directivity_of(x) ** 2
+        else:
+            # Without side lobes the pattern is 0 beyond the first null, so 2 J1(x) / x is
+            # evaluated on the main lobe alone (about a sixth of the samples for k a = 17.6);
+            # each sample is computed as before, so the table is the same bits.
+            main_lobe = ~beyond_main_lobe
+            values[main_lobe] = _piston_directivity_of(x[main_lobe[front]]) ** 2
         last_monotone = int(np.argmax(beyond_main_lobe)) - 1
         if leakage > 0.0:
             leaking = x >= leakage_onset_argument(leakage)

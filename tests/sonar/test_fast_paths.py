@@ -321,3 +321,21 @@ def test_pattern_in_front_and_reachable_limits_equal_the_checked_forms(leakage: 
     np.testing.assert_array_equal(
         beam.main_lobe_cos_limits(levels, reachable=True), beam.main_lobe_cos_limits(levels)
     )
+
+
+@pytest.mark.parametrize("side_lobes", [False, True])
+@pytest.mark.parametrize("leakage", [0.0, 0.07])
+def test_beam_table_samples_are_the_exact_pattern_at_the_grid_angles(
+    side_lobes: bool, leakage: float
+) -> None:
+    """Without side lobes the table evaluates 2 J1(x) / x on the main lobe alone; every sample,
+    main lobe, null, leakage floor and back, must still be :func:`two_way_pattern` exactly."""
+    from sonar_gym.sonar.acoustics import _table_grid, two_way_pattern
+
+    _, theta, _ = _table_grid()
+    rng = np.random.default_rng(5)
+    for ka in [17.6, 14.3, 3.9, 1.2, *rng.uniform(0.5, 40.0, 20)]:
+        beam = PistonBeam.for_ka.__wrapped__(float(ka), side_lobes, leakage)
+        exact = two_way_pattern(theta, float(ka), side_lobes=side_lobes, side_lobe_leakage=leakage)
+        np.testing.assert_array_equal(beam.cells[:, 0], exact[:-1])
+        np.testing.assert_array_equal(beam.cells[:, 1], np.diff(exact))
