@@ -18,6 +18,7 @@ Side sonars (Yamamoto et al., APCS, sec. 6)
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -81,12 +82,14 @@ class SweptSonar(PulseEchoSonar):
 
     def sweep_angles(self, sector_center: float = 0.0) -> FloatArray:
         """Ping angles in {R}, radians: from ``center - half`` to ``center + half`` inclusive."""
+        return self._grid(sector_center)[0].copy()
+
+    def _grid(self, sector_center: float) -> tuple[FloatArray, FloatArray]:
         if not math.isfinite(sector_center):
             raise ValueError(
                 f"argument 'sector_center' must be a finite angle in radians; got {sector_center!r}"
             )
-        n = math.floor(2.0 * self.half_sweep_rad / self.step_rad + 1e-9) + 1
-        return sector_center - self.half_sweep_rad + self.step_rad * np.arange(n, dtype=np.float64)
+        return _sweep_grid(float(sector_center), self.half_sweep_rad, self.step_rad)
 
     def sweep(
         self,
@@ -96,15 +99,30 @@ class SweptSonar(PulseEchoSonar):
         sector_center: float = 0.0,
     ) -> Scan:
         """One sweep from the robot at ``pose`` ({W}) about ``sector_center`` (radians, {R})."""
-        angles = self.sweep_angles(sector_center)
+        angles, directions = self._grid(sector_center)
         sensor_xy = pose.transform_point(world.scenario.robot.sensor_offset)
-        directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
         ranges, amplitudes = self.ping(world, pose, sensor_xy, directions, rng)
         transducer = self.transducer
         duration = (angles[-1] - angles[0]) / transducer.pan_speed_rad_s + len(
             angles
         ) * transducer.listen_time_s
-        return Scan(angles=angles, ranges=ranges, amplitudes=amplitudes, duration_s=float(duration))
+        return Scan(
+            angles=angles.copy(), ranges=ranges, amplitudes=amplitudes, duration_s=float(duration)
+        )
+
+
+@functools.lru_cache(maxsize=256)
+def _sweep_grid(
+    sector_center: float, half_sweep_rad: float, step_rad: float
+) -> tuple[FloatArray, FloatArray]:
+    """Sweep angles and their unit vectors in {R}, read-only (cached: a task sweeps the same
+    few sectors again and again)."""
+    n = math.floor(2.0 * half_sweep_rad / step_rad + 1e-9) + 1
+    angles = sector_center - half_sweep_rad + step_rad * np.arange(n, dtype=np.float64)
+    directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    angles.flags.writeable = False
+    directions.flags.writeable = False
+    return angles, directions
 
 
 @dataclass(frozen=True)
