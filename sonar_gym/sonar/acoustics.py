@@ -363,6 +363,29 @@ class PistonBeam:
         (:data:`TABLE_STEPS_PER_UNIT` cells per unit), read by linear interpolation."""
         return self._cells
 
+    @functools.cached_property
+    def widest_main_lobe_cos(self) -> float:
+        """The least of :meth:`main_lobe_cos_limits` over every positive level: the cosine limit
+        of the faintest one. No path with a smaller cosine is heard through the main lobe."""
+        return float(self.main_lobe_cos_limits(np.array([_FAINTEST_LEVEL]))[0])
+
+    @property
+    def reaches_back(self) -> bool:
+        """Whether the pattern is nonzero at 90 deg (it then drops to 0 behind the transducer)."""
+        return self._reaches_back
+
+    @property
+    def main_lobe_rising(self) -> FloatArray:
+        """The falling pattern from its last monotone sample back to the axis, rising: where
+        :meth:`main_lobe_cos_limits` searches a level."""
+        return self._main_lobe_rising
+
+    @property
+    def main_lobe_cells(self) -> FloatArray:
+        """``(len(main_lobe_rising) + 1, 3)`` per search position of a level, the (cell number,
+        value, slope) of the cell :meth:`main_lobe_cos_limits` interpolates in."""
+        return self._main_lobe_cells
+
     def two_way_from_cos(self, cos_off_axis: FloatArray) -> FloatArray:
         """The pattern at off-axis angles given by their cosines (any shape, values in [-1, 1])."""
         # Out-of-place arithmetic throughout: on arrays this small numpy's in-place operators
@@ -410,8 +433,10 @@ class PistonBeam:
         s_limit = (cells[:, 0] + (clipped - cells[:, 1]) / cells[:, 2]) * (
             1.0 / TABLE_STEPS_PER_UNIT
         )
-        limits = np.maximum(1.0 - s_limit * s_limit, _SMALLEST_COSINE)
+        limits = np.maximum(1.0 - s_limit * s_limit, SMALLEST_COSINE)
         return limits if reachable else np.where(levels > 1.0, 2.0, limits)
 
 
-_SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))
+SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))
+_FAINTEST_LEVEL = SMALLEST_COSINE  # the smallest positive float, as a level
+"""The smallest positive cosine: the limit of a level the whole front half-space hears."""

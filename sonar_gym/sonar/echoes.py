@@ -125,12 +125,12 @@ def edge_echo_amplitude(
     """On-axis echo of a convex edge: ``s / r^2`` (``"weak"``) or ``G / (2 sqrt(pi k) r^1.5)``
     (``"gtd"``); ``r`` in metres, ``k`` in rad/m."""
     r = np.asarray(range_m, dtype=np.float64)
-    weak, constant = _edge_law(edge_law, wavenumber).tolist()
+    weak, constant = edge_law_constants(edge_law, wavenumber).tolist()
     return constant / (r * r) if weak else constant / (r * np.sqrt(r))
 
 
 @functools.lru_cache(maxsize=16)
-def _edge_law(edge_law: str, wavenumber: float) -> np.ndarray:
+def edge_law_constants(edge_law: str, wavenumber: float) -> np.ndarray:
     """``(1, s)`` for the weak edge law, ``(0, G / (2 sqrt(pi k)))`` for the GTD law."""
     if edge_law == "weak":
         law = np.array((1.0, EDGE_ECHO_STRENGTH_M))
@@ -235,7 +235,7 @@ def echo_candidates(
         tables.search_layout,
         tables.radius_padded,
         tables.radius,
-        _edge_law(edge_law, wavenumber),
+        edge_law_constants(edge_law, wavenumber),
     )
     ranges = mapped[tables.ranges_rows]
     amplitudes = mapped[tables.amplitudes_rows]

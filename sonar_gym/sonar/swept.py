@@ -26,9 +26,16 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from sonar_gym.pose import FloatArray, Pose
-from sonar_gym.sonar.acoustics import PistonBeam, speed_of_sound_mps, wavenumber_per_m
+from sonar_gym.sonar import side_kernels
+from sonar_gym.sonar.acoustics import (
+    SMALLEST_COSINE,
+    TABLE_STEPS_PER_UNIT,
+    PistonBeam,
+    speed_of_sound_mps,
+    wavenumber_per_m,
+)
 from sonar_gym.sonar.echo_tables import echo_tables
-from sonar_gym.sonar.echoes import EchoKind, edge_echo_amplitude
+from sonar_gym.sonar.echoes import EchoKind, edge_echo_amplitude, edge_law_constants
 from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.pulse_echo import FirstEchoes, PulseEchoSonar, WorldLike, concatenate_echoes
 from sonar_gym.sonar.scan import Scan
@@ -289,15 +296,6 @@ class SideSonars(PulseEchoSonar):
         return echoes
 
 
-_FAINTEST_LEVEL = float(np.nextafter(0.0, 1.0))
-
-
-def widest_main_lobe_cos(beam: PistonBeam) -> float:
-    """The least of :meth:`~sonar_gym.sonar.acoustics.PistonBeam.main_lobe_cos_limits` over
-    every positive level: the cosine limit of the faintest one."""
-    return float(beam.main_lobe_cos_limits(np.array([_FAINTEST_LEVEL]))[0])
-
-
 def _side_first_echoes(
     sonar: SideSonars,
     world: WorldLike,
@@ -307,6 +305,99 @@ def _side_first_echoes(
     side_sign: FloatArray,
 ) -> FirstEchoes:
     """First echoes of pings along ``heading + side_sign pi/2`` from each of ``sensors``.
+
+    :func:`_side_first_echoes_arrays` through the compiled loops of
+    :mod:`sonar_gym.sonar.side_kernels`: the same numbers, bit for bit. numpy keeps the steps
+    it rounds its own way: the BLAS products, the absorption's ``exp`` and the receiver's gain.
+    """
+    transducer = sonar.transducer
+    speed = speed_of_sound_mps(world.temperature_c)
+    wavenumber = wavenumber_per_m(transducer.frequency_hz, speed)
+    threshold = transducer.detection_threshold
+    tables = echo_tables(world.geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
+    layout = tables.search_layout[:4]
+    count = len(sensors)
+    homogeneous = np.column_stack([sensors, np.ones(count)])  # (P, 3)
+    mapped = homogeneous @ tables.position_map.T  # (P, M)
+    rel, ranges, safe, amplitudes, centre_distance, concave = side_kernels.side_ranges(
+        mapped, layout, tables.radius, edge_law_constants(sonar.edge_law, wavenumber)
+    )
+    if transducer.absorption_db_per_m > 0.0:
+        amplitudes = amplitudes * np.exp(
+            (-transducer.absorption_db_per_m * math.log(10.0) / 10.0) * safe
+        )
+    if transducer.time_varying_gain is not None:
+        amplitudes = amplitudes * transducer.time_varying_gain.gain(safe)
+    beam = PistonBeam.for_ka(
+        transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
+    )
+    sensor_frames = np.column_stack(
+        [np.cos(headings), np.sin(headings), side_sign, sensors - centres]
+    )
+    heard, cosines, facing = side_kernels.side_heard(
+        mapped,
+        rel,
+        ranges,
+        safe,
+        amplitudes,
+        concave,
+        sensor_frames,
+        layout,
+        tables.solid_side,
+        tables.twin,
+        tables.twin_comes_first,
+        np.array(
+            (
+                max(transducer.min_range_m, 1e-9),
+                threshold,
+                world.scenario.robot.radius,
+                transducer.min_range_m,
+                beam.widest_main_lobe_cos,
+                1.0 if beam.side_lobes else 0.0,
+                float(TABLE_STEPS_PER_UNIT),
+                1.0 / TABLE_STEPS_PER_UNIT,
+                SMALLEST_COSINE,
+                1.0 if beam.reaches_back else 0.0,
+            )
+        ),
+        beam.cells,
+        beam.main_lobe_rising,
+        beam.main_lobe_cells,
+    )
+    sensor_rows, candidate_rows = np.nonzero(heard)
+    matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
+        len(sensor_rows), 3 * tables.n_segments + tables.n_circles, 3
+    )
+    detected, path_lengths, first_amplitudes = side_kernels.side_first(
+        matrix,
+        rel,
+        sensor_rows,
+        candidate_rows,
+        ranges,
+        cosines,
+        amplitudes,
+        facing,
+        tables.encloses,
+        centre_distance,
+        tables.radius_sq,
+        np.array(
+            (_UV_CENTRE_SCALAR, float(TABLE_STEPS_PER_UNIT), 1.0 if beam.reaches_back else 0.0)
+        ),
+        beam.cells,
+    )
+    return FirstEchoes(detected=detected, path_lengths=path_lengths, amplitudes=first_amplitudes)
+
+
+def _side_first_echoes_arrays(
+    sonar: SideSonars,
+    world: WorldLike,
+    sensors: FloatArray,
+    centres: FloatArray,
+    headings: FloatArray,
+    side_sign: FloatArray,
+) -> FirstEchoes:
+    """:func:`_side_first_echoes` as ``(P, N)`` arrays, the reference its loops are checked
+    against.
 
     Row by row the computation of :func:`~sonar_gym.sonar.echoes.echo_candidates` followed by
     :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, over ``P`` sensor positions at once.
@@ -387,7 +478,7 @@ def _side_first_echoes(
     else:
         # The limit grows with the level, so no path outside the widest main lobe (that of
         # the faintest level) is heard: the limits are needed only inside it.
-        inside = valid & (cosines >= widest_main_lobe_cos(beam))
+        inside = valid & (cosines >= beam.widest_main_lobe_cos)
         heard = np.zeros_like(valid)
         limits = beam.main_lobe_cos_limits(threshold / amplitudes[inside])
         heard[inside] = cosines[inside] >= limits

@@ -17,7 +17,6 @@ from sonar_gym.sonar.swept import (
     APCS_SPEED_MPS,
     SideSonars,
     SweptSonar,
-    widest_main_lobe_cos,
 )
 from tests.sonar.worlds import cluttered_room, degrees, world
 
@@ -168,7 +167,7 @@ def test_no_main_lobe_limit_is_wider_than_that_of_the_faintest_level(
     beam = PistonBeam.for_ka(transducer.wavenumber_ka(343.2), False, leakage)
     levels = np.concatenate([np.geomspace(1e-300, 10.0, 20_001), [1.0, 1.0 + 1e-12]])
     limits = beam.main_lobe_cos_limits(levels)
-    widest = widest_main_lobe_cos(beam)
+    widest = beam.widest_main_lobe_cos
     assert 0.0 < widest < 1.0
     assert np.all(limits >= widest)
     order = np.argsort(levels)

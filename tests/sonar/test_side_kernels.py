@@ -1,0 +1,259 @@
+"""The side sonars' compiled first echoes against the array form they replace, bit for bit.
+
+:func:`~sonar_gym.sonar.swept._side_first_echoes` runs the loops of
+:mod:`sonar_gym.sonar.side_kernels`; :func:`~sonar_gym.sonar.swept._side_first_echoes_arrays`
+is the ``(P, N)`` array form (itself checked pose by pose against the pan's echo search in
+``test_swept.py``). Every transducer option the loops branch on is covered: air absorption,
+the receiver's gain, side lobes, leakage, the GTD edge law, sensors off the robot centre, the
+robot's footprint, cylinders, T-junctions and occlusion.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from sonar_gym.scenario import load_scenario
+from sonar_gym.sonar import side_kernels, swept
+from sonar_gym.sonar.acoustics import TABLE_STEPS_PER_UNIT, PistonBeam
+from sonar_gym.sonar.pulse_echo import FirstEchoes
+from sonar_gym.sonar.swept import SIDE_NAMES, SideSonars
+from sonar_gym.world import World
+from tests.fuzzing import fuzz_settings
+from tests.sonar.worlds import cluttered_room, world
+
+
+def _sonar_variants() -> dict[str, SideSonars]:
+    apcs = SideSonars.apcs()
+    transducer = apcs.transducer
+    return {
+        "apcs": apcs,
+        "polaroid_gain": SideSonars.apcs(preset="polaroid-6500"),
+        "srf04": SideSonars.apcs(preset="srf04"),
+        "side_lobes": dataclasses.replace(
+            apcs, transducer=dataclasses.replace(transducer, side_lobes=True)
+        ),
+        "side_lobes_leakage": dataclasses.replace(
+            apcs,
+            transducer=dataclasses.replace(transducer, side_lobes=True, side_lobe_leakage=0.05),
+        ),
+        "leakage": dataclasses.replace(
+            apcs, transducer=dataclasses.replace(transducer, side_lobe_leakage=0.05)
+        ),
+        "no_absorption": dataclasses.replace(
+            apcs, transducer=dataclasses.replace(transducer, absorption_db_per_m=0.0)
+        ),
+        "gtd_edges": dataclasses.replace(apcs, edge_law="gtd"),
+        "offset_sensors": dataclasses.replace(apcs, lateral_offset_m=0.15),
+    }
+
+
+SONARS = _sonar_variants()
+
+
+def _worlds() -> dict[str, Any]:
+    return {
+        "cluttered_room": cluttered_room(),
+        "apcs_corridor": World(load_scenario("apcs_corridor"), temperature_c=15.0),
+        "kim_arena": World(load_scenario("kim_arena"), temperature_c=30.0),
+    }
+
+
+WORLDS = _worlds()
+
+
+def _both(sonar: SideSonars, world: Any, poses: np.ndarray) -> tuple[FirstEchoes, FirstEchoes]:
+    """The compiled and the array first echoes of both sensors at ``poses`` ``(P, 3)``."""
+    n = len(poses)
+    headings = np.repeat(poses[:, 2], 2)
+    side_sign = np.tile([1.0, -1.0], n)
+    centres = np.repeat(poses[:, :2], 2, axis=0)
+    angle = headings + side_sign * (math.pi / 2.0)
+    sensors = centres + sonar.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+    arguments = (sonar, world, sensors, centres, headings, side_sign)
+    return swept._side_first_echoes(*arguments), swept._side_first_echoes_arrays(*arguments)
+
+
+def _assert_same_bits(compiled: FirstEchoes, arrays: FirstEchoes) -> None:
+    for name in ("detected", "path_lengths", "amplitudes"):
+        got, want = getattr(compiled, name), getattr(arrays, name)
+        assert got.dtype == want.dtype and got.shape == want.shape, name
+        assert got.tobytes() == want.tobytes(), name
+
+
+def _poses_in(world: Any, rng: np.random.Generator, n: int) -> np.ndarray:
+    """Poses anywhere in the room's bounds (in boxes, on walls, with a wall inside the robot's
+    footprint) with any heading, but with no sensor inside a cylinder: no robot gets there,
+    and there the array form's side-lobe pattern is read at cosines beyond 1 (the echo point
+    of a cylinder around the sensor is 1 nm away by the clipped range)."""
+    room = world.scenario.room
+    low, high = np.asarray(room.min) - 0.2, np.asarray(room.max) + 0.2
+    xy = rng.uniform(low, high, size=(4 * n, 2))
+    poses = np.column_stack([xy, rng.uniform(-math.pi, math.pi, 4 * n)])
+    return poses[_no_sensor_in_a_cylinder(world, poses)][:n]
+
+
+def _no_sensor_in_a_cylinder(world: Any, poses: np.ndarray) -> np.ndarray:
+    """Per pose, whether every sensor of every variant (offsets 0 and 0.15 m) is outside every
+    cylinder."""
+    keep = np.ones(len(poses), dtype=bool)
+    for offset in {sonar.lateral_offset_m for sonar in SONARS.values()}:
+        for sign in (1.0, -1.0):
+            angle = poses[:, 2] + sign * math.pi / 2.0
+            sensor_x = poses[:, 0] + offset * np.cos(angle)
+            sensor_y = poses[:, 1] + offset * np.sin(angle)
+            for cylinder in world.scenario.cylinders:
+                centre_x, centre_y = cylinder.center
+                distance = np.hypot(sensor_x - centre_x, sensor_y - centre_y)
+                keep &= distance > cylinder.radius
+    return keep
+
+
+@pytest.mark.parametrize("world_name", sorted(WORLDS))
+@pytest.mark.parametrize("sonar_name", sorted(SONARS))
+def test_compiled_side_echoes_are_the_array_echoes(world_name: str, sonar_name: str) -> None:
+    world, sonar = WORLDS[world_name], SONARS[sonar_name]
+    rng = np.random.default_rng(sum(map(ord, world_name + sonar_name)))
+    detected = total = 0
+    for count in (1, 2, 3, 40, 160):
+        compiled, arrays = _both(sonar, world, _poses_in(world, rng, count))
+        _assert_same_bits(compiled, arrays)
+        detected += int(arrays.detected.sum())
+        total += arrays.detected.size
+    assert 0 < detected < total  # both outcomes were compared
+
+
+def test_occlusion_decides_some_first_echoes(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The comparisons above cover occlusion: here some sensors' nearest heard paths are
+    blocked, so their first echoes come from farther (or from nothing)."""
+    world, sonar = WORLDS["cluttered_room"], SONARS["apcs"]
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+    side_heard = side_kernels.side_heard
+
+    def recording(*arguments: Any) -> Any:
+        heard, cosines, facing = side_heard(*arguments)
+        seen.append((heard, arguments[2]))  # heard paths and their ranges
+        return heard, cosines, facing
+
+    monkeypatch.setattr(side_kernels, "side_heard", recording)
+    compiled, arrays = _both(sonar, world, _poses_in(world, np.random.default_rng(3), 400))
+    _assert_same_bits(compiled, arrays)
+    ((heard, ranges),) = seen
+    nearest_heard = np.where(heard, ranges, np.inf).min(axis=1)
+    blocked = heard.any(axis=1) & (~compiled.detected | (compiled.path_lengths > nearest_heard))
+    assert blocked.sum() >= 5
+
+
+def test_a_leg_of_no_poses_or_of_one_sensor_side_reads_nothing_or_that_side() -> None:
+    world, sonar = WORLDS["apcs_corridor"], SONARS["apcs"]
+    none = sonar.first_echoes_along(world, np.zeros((0, 3)))
+    assert none.detected.shape == (0,)
+    poses = _poses_in(world, np.random.default_rng(5), 30)
+    both = sonar.first_echoes_along(world, poses)
+    for index, side in enumerate(SIDE_NAMES):
+        alone = sonar.first_echoes_along(world, poses, sides=(side,))
+        rows = slice(index, None, 2)
+        assert alone.path_lengths[rows].tobytes() == both.path_lengths[rows].tobytes()
+        assert not alone.detected[1 - index :: 2].any()
+
+
+@fuzz_settings(200)
+@given(
+    x=st.floats(-3.5, 3.5),
+    y=st.floats(-3.0, 3.0),
+    heading=st.floats(-4.0, 4.0),
+    step=st.floats(0.0, 0.2),
+    count=st.integers(1, 12),
+)
+def test_compiled_side_echoes_are_the_array_echoes_along_any_leg(
+    x: float, y: float, heading: float, step: float, count: int
+) -> None:
+    """Legs from anywhere (on walls, in boxes, outside the room), any heading and spacing."""
+    world = WORLDS["cluttered_room"]
+    along = np.arange(count) * step
+    poses = np.column_stack(
+        [x + along * math.cos(heading), y + along * math.sin(heading), np.full(count, heading)]
+    )
+    poses = poses[_no_sensor_in_a_cylinder(world, poses)]
+    for sonar in (SONARS["apcs"], SONARS["offset_sensors"], SONARS["side_lobes_leakage"]):
+        _assert_same_bits(*_both(sonar, world, poses))
+
+
+def test_equally_near_paths_give_the_first_candidates_echo() -> None:
+    """Two free walls' ends at exactly equal ranges, both heard (GTD edges): the first
+    candidate's echo wins, as numpy's ``argmin`` picks it. The heading makes their cosines, so
+    their echoes, differ."""
+    test_world = world(
+        room={"min": [-3.0, -3.0], "max": [3.0, 3.0]},
+        walls=[{"a": [-0.02, 0.31], "b": [-0.02, 1.6]}, {"a": [0.02, 0.31], "b": [0.02, 1.6]}],
+    )
+    sonar = SONARS["gtd_edges"]
+    amplitudes = []
+    for heading in (0.02, -0.02):
+        compiled, arrays = _both(sonar, test_world, np.array([[0.0, 0.0, heading]]))
+        _assert_same_bits(compiled, arrays)
+        assert compiled.detected[0] and compiled.path_lengths[0] == math.hypot(0.02, 0.31)
+        amplitudes.append(compiled.amplitudes[0])
+    assert amplitudes[0] != amplitudes[1]  # the same wall end both times: the first one
+
+
+def test_a_foot_exactly_at_a_walls_end_is_no_plane_echo() -> None:
+    """``along`` is exactly 0: the wall gives no specular echo (strictly inside only), its end's
+    edge echo is too weak, and the room behind is hidden by the wall's end."""
+    test_world = world(
+        room={"min": [-3.0, -3.0], "max": [3.0, 3.0]}, walls=[{"a": [0.0, 0.35], "b": [2.0, 0.35]}]
+    )
+    compiled, arrays = _both(SONARS["apcs"], test_world, np.array([[0.0, 0.0, 0.0]]))
+    _assert_same_bits(compiled, arrays)
+    assert not compiled.detected[0] and compiled.detected[1]
+
+
+@pytest.mark.parametrize("side_lobes", [False, True])
+def test_compiled_pattern_is_the_beams_pattern_at_every_cosine(side_lobes: bool) -> None:
+    beam = PistonBeam.for_ka(5.0, side_lobes, 0.05)  # wide, leaking: it reaches behind
+    assert beam.reaches_back
+    tiny = np.nextafter(0.0, 1.0)
+    cosines = np.concatenate(
+        [np.linspace(-1.0, 1.0, 4001), [0.0, -0.0, tiny, -tiny, np.nextafter(1.0, 0.0)]]
+    )
+    steps = float(TABLE_STEPS_PER_UNIT)
+    compiled = np.array(
+        [
+            side_kernels._two_way_from_cos(cosine, beam.cells, steps, beam.reaches_back)
+            for cosine in cosines
+        ]
+    )
+    assert compiled.tobytes() == beam.two_way_from_cos(cosines).tobytes()
+
+
+def test_compiled_occlusion_products_are_numpys_einsum() -> None:
+    rng = np.random.default_rng(1)
+    matrix = rng.normal(size=(20, 30, 3)) * 10.0 ** rng.uniform(-4, 4, size=(20, 30, 3))
+    paths = rng.normal(size=(20, 3)) * 10.0 ** rng.uniform(-4, 4, size=(20, 3))
+    compiled = np.array(
+        [
+            [side_kernels._product(matrix, path, row, *paths[path]) for row in range(30)]
+            for path in range(20)
+        ]
+    )
+    assert compiled.tobytes() == np.einsum("hrk,hk->hr", matrix, paths).tobytes()
+
+
+def test_numpys_einsum_of_three_terms_sums_first_and_third_then_second() -> None:
+    """The order :func:`sonar_gym.sonar.side_kernels._product` sums the occlusion products in:
+    if numpy's ``einsum`` changes it, this says so before the comparisons above fail."""
+    rng = np.random.default_rng(0)
+    matrix = rng.normal(size=(60, 70, 3)) * 10.0 ** rng.uniform(-4, 4, size=(60, 70, 3))
+    paths = rng.normal(size=(60, 3)) * 10.0 ** rng.uniform(-4, 4, size=(60, 3))
+    terms = matrix * paths[:, None, :]
+    ordered = (terms[..., 0] + terms[..., 2]) + terms[..., 1]
+    sequential = (terms[..., 0] + terms[..., 1]) + terms[..., 2]
+    einsum = np.einsum("hrk,hk->hr", matrix, paths)
+    assert einsum.tobytes() == ordered.tobytes()
+    assert einsum.tobytes() != sequential.tobytes()  # the order shows in these numbers
