@@ -438,5 +438,5 @@ class PistonBeam:
 
 
 SMALLEST_COSINE = float(np.nextafter(0.0, 1.0))
-_FAINTEST_LEVEL = SMALLEST_COSINE  # the smallest positive float, as a level
 """The smallest positive cosine: the limit of a level the whole front half-space hears."""
+_FAINTEST_LEVEL = SMALLEST_COSINE  # the smallest positive float, as a level
