@@ -24,7 +24,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sonar_gym.pose import FloatArray
-from sonar_gym.scenario import Scenario
+from sonar_gym.scenario import Room, Scenario, Vec2, Wall
 
 _MERGE_TOLERANCE_M = 1e-6
 _FLUSH_TOLERANCE_M = 1e-3
@@ -89,36 +89,23 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
     The corner analysis finds coincident end points and segments through a point with k-d
     trees (:class:`_SegmentIndex`), so the build takes O(n log n) in the number of segments.
     """
-    starts: list[tuple[float, float]] = []
-    ends: list[tuple[float, float]] = []
-    mapped: list[bool] = []
-
-    def add_polygon(corners: tuple[tuple[float, float], ...], is_mapped: bool) -> None:
+    starts, ends, mapped = _room_and_wall_segments(scenario.room, scenario.walls)
+    n_room_and_walls = len(starts)
+    for box in scenario.boxes:
+        corners = box.corners
         for i, corner in enumerate(corners):
             starts.append(corner)
             ends.append(corners[(i + 1) % len(corners)])
-            mapped.append(is_mapped)
-
-    if scenario.room is not None:
-        add_polygon(scenario.room.corners, True)
-    for wall in scenario.walls:
-        starts.append(wall.a)
-        ends.append(wall.b)
-        mapped.append(wall.mapped)
-
-    n_room_and_walls = len(starts)
-    for box in scenario.boxes:
-        add_polygon(box.corners, box.mapped)
+            mapped.append(box.mapped)
 
     segment_starts = np.array(starts, dtype=np.float64).reshape(-1, 2)
     segment_ends = np.array(ends, dtype=np.float64).reshape(-1, 2)
-    walls = _SegmentIndex(segment_starts[:n_room_and_walls], segment_ends[:n_room_and_walls])
-    vertices, arms = _merge_vertices(walls)
+    walls = _wall_corners(scenario.room, scenario.walls)
     box_corners, box_arms = _box_corner_arms(
-        segment_starts[n_room_and_walls:].reshape(-1, 4, 2), walls
+        segment_starts[n_room_and_walls:].reshape(-1, 4, 2), walls.index
     )
-    vertices = np.concatenate([vertices, box_corners])
-    arms = np.concatenate([arms, box_arms])
+    vertices = np.concatenate([walls.vertices, box_corners])
+    arms = np.concatenate([walls.arms, box_arms])
     circles = np.array(
         [[c.center[0], c.center[1], c.radius] for c in scenario.cylinders], dtype=np.float64
     ).reshape(-1, 3)
@@ -145,6 +132,54 @@ def static_geometry(scenario: Scenario) -> StaticGeometry:
     last :data:`GEOMETRY_CACHE_SIZE` scenarios are kept.
     """
     return build_static_geometry(scenario)
+
+
+def _room_and_wall_segments(
+    room: Room | None, walls: tuple[Wall, ...]
+) -> tuple[list[Vec2], list[Vec2], list[bool]]:
+    """Start points, end points and map flags of the room's four walls (counter-clockwise
+    from ``room.min``) then of the free walls, in scenario order."""
+    starts: list[Vec2] = []
+    ends: list[Vec2] = []
+    mapped: list[bool] = []
+    if room is not None:
+        corners = room.corners
+        for i, corner in enumerate(corners):
+            starts.append(corner)
+            ends.append(corners[(i + 1) % len(corners)])
+            mapped.append(True)
+    for wall in walls:
+        starts.append(wall.a)
+        ends.append(wall.b)
+        mapped.append(wall.mapped)
+    return starts, ends, mapped
+
+
+@dataclass(frozen=True, eq=False)
+class _WallCorners:
+    """The room's and free walls' segments, indexed, with their merged vertices and arms."""
+
+    index: _SegmentIndex
+    vertices: FloatArray
+    arms: FloatArray
+
+
+@functools.lru_cache(maxsize=GEOMETRY_CACHE_SIZE)
+def _wall_corners(room: Room | None, walls: tuple[Wall, ...]) -> _WallCorners:
+    """The corner analysis of the room and the free walls alone (:func:`_merge_vertices`).
+
+    It does not depend on the boxes and cylinders, so scenarios that differ only in those (an
+    env that draws new obstacles every episode) share it: built once per room and walls.
+    """
+    starts, ends, _ = _room_and_wall_segments(room, walls)
+    index = _SegmentIndex(
+        np.array(starts, dtype=np.float64).reshape(-1, 2),
+        np.array(ends, dtype=np.float64).reshape(-1, 2),
+    )
+    vertices, arms = _merge_vertices(index)
+    for array in (index.starts, index.ends, index.spans, index.lengths, vertices, arms):
+        array.setflags(write=False)
+    return _WallCorners(index, vertices, arms)
 
 
 class _SegmentIndex:

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
+from sonar_gym import geometry as geometry_module
 from sonar_gym.geometry import build_static_geometry, static_geometry
 from sonar_gym.random_room import random_scenario
-from sonar_gym.scenario import Scenario, builtin_names, load_scenario, scenario_from_dict
+from sonar_gym.scenario import Box, Scenario, builtin_names, load_scenario, scenario_from_dict
 
 ROOM = {"room": {"min": [0.0, 0.0], "max": [4.0, 3.0]}}
 
@@ -269,3 +271,33 @@ def test_equal_scenarios_share_one_read_only_geometry() -> None:
     assert static_geometry(cluttered_walls(4, 20)) is not first
     with pytest.raises(ValueError, match="read-only"):
         first.vertices[0, 0] = 1.0
+
+
+def test_scenarios_differing_in_boxes_share_the_walls_analysis_and_build_as_the_reference() -> None:
+    """An env that draws new boxes every episode reuses the room's and walls' corner analysis;
+    each geometry is still the pairwise reference's, and the bits of a fresh build."""
+    base = cluttered_walls(5, 40)
+    rng = np.random.default_rng(9)
+    first_walls = None
+    for _ in range(6):
+        boxes = tuple(
+            Box(
+                center=(float(rng.uniform(-2.5, 2.5)), float(rng.choice([-1.7, 1.7]))),
+                size=(float(rng.uniform(0.2, 0.8)), 0.6),  # flush with a long wall at 0 deg
+                angle_deg=float(rng.choice([0.0, 90.0])),
+            )
+            for _ in range(3)
+        )
+        scenario = dataclasses.replace(base, boxes=boxes)
+        geometry = build_static_geometry(scenario)
+        walls = geometry_module._wall_corners(scenario.room, scenario.walls)
+        first_walls = first_walls or walls
+        assert walls is first_walls
+        vertices, arms = reference_corner_analysis(scenario)
+        np.testing.assert_array_equal(geometry.vertices, vertices)
+        np.testing.assert_array_equal(geometry.vertex_arms, arms)
+        geometry_module._wall_corners.cache_clear()
+        fresh = build_static_geometry(scenario)
+        for name, array in vars(geometry).items():
+            assert array.tobytes() == getattr(fresh, name).tobytes(), name
+        first_walls = geometry_module._wall_corners(scenario.room, scenario.walls)
