@@ -237,8 +237,8 @@ def drive_commands(
         free = first + _free_commands(
             world, ground[first:], ground_turn[first:], true_poses[first:]
         )
-        if free > first:
-            world.set_robot_pose(Pose(*true_poses[free - 1]))
+        if free > first:  # the path to it was shown clear of every static shape
+            world.place_robot_on_clear_path(Pose(*true_poses[free - 1]))
         if free == count:
             break
         draws.rewind(rng, free)
