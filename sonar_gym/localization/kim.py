@@ -375,29 +375,26 @@ class _Readings:
 
 def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Readings:
     """The readings of every sweep with an echo, as :func:`sweep_end_points` of each sweep at
-    its odometry, concatenated (the same arithmetic, element by element, in one pass)."""
+    its odometry, concatenated (the same arithmetic, element by element, in one pass: compiled
+    loops around numpy's ``cos`` and ``sin`` of the beams)."""
     angles = np.concatenate([sweep.angles for sweep in sweeps])
     ranges = np.concatenate([sweep.ranges for sweep in sweeps])
-    counts = [sweep.ranges.size for sweep in sweeps]
-    per_sweep = []  # heading and sensor position of each sweep, in the first sweep's frame
-    for sweep in sweeps:
+    counts = np.array([sweep.ranges.size for sweep in sweeps], dtype=np.int64)
+    # heading and sensor position of each sweep, in the first sweep's frame
+    headings, sensor_x, sensor_y = np.empty((3, len(sweeps)))
+    for index, sweep in enumerate(sweeps):
         pose = sweep.odometry
         offset_x, offset_y = sweep.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
-        per_sweep.append(
-            (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
-        )
-    valid = np.isfinite(ranges)
-    if max_range_m is not None:
-        valid &= ranges < max_range_m
-    keep = np.flatnonzero(valid)
-    ranges = ranges.take(keep)
-    theta, from_x, from_y = np.repeat(np.array(per_sweep).T, counts, axis=1).take(keep, axis=1)
-    beam = theta + angles.take(keep)
-    end_x = from_x + ranges * np.cos(beam)
-    end_y = from_y + ranges * np.sin(beam)
-    run_x, run_y = end_x - from_x, end_y - from_y
-    length = np.sqrt(run_x * run_x + run_y * run_y)
+        headings[index] = pose.theta
+        sensor_x[index] = pose.x + c * offset_x - s * offset_y
+        sensor_y[index] = pose.y + s * offset_x + c * offset_y
+    beam, ranges, sweep_of = kim_kernels.echo_beams(
+        angles, ranges, counts, headings, math.inf if max_range_m is None else float(max_range_m)
+    )
+    end_x, end_y, length = kim_kernels.end_points(
+        ranges, sweep_of, sensor_x, sensor_y, np.cos(beam), np.sin(beam)
+    )
     return _Readings(end_x, end_y, beam, length)
 
 
@@ -405,8 +402,9 @@ def _direction_index(
     headings: FloatArray, readings: _Readings, direction_bins: int
 ) -> npt.NDArray[np.intp]:
     """``(h, J)`` quantised world beam direction of every reading under every heading."""
-    turns = (headings[:, None] + readings.beam_rad[None, :]) * (direction_bins / (2.0 * np.pi))
-    return np.rint(turns).astype(np.intp) % direction_bins
+    return kim_kernels.direction_indices(  # type: ignore[no-any-return]
+        headings, readings.beam_rad, direction_bins, direction_bins / (2.0 * np.pi)
+    )
 
 
 def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:

@@ -1,11 +1,13 @@
-"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the (reading, anchor) pairs that
-can vote inside the search circle, the vote volume, and the votes of one heading in a window.
+"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the readings with an echo and
+their end points, the quantised beam directions, the (reading, anchor) pairs that can vote
+inside the search circle, the vote volume, and the votes of one heading in a window.
 
 They do the arithmetic of the array forms they replace element by element, in the same order
-(kept as references in ``tests/localization/test_kim_fast_paths.py``), so votes, counts and
-positions are the same bits; the array forms paid numpy's per-call cost on a few hundred pairs
-and a few thousand votes per fix. The trigonometry stays in numpy (its ``cos`` and ``sin`` of
-arrays round differently from libm's): callers pass cosines and sines in.
+(kept as references in ``tests/localization/test_kim_fast_paths.py`` and
+``test_kim_reading_kernels.py``), so readings, votes, counts and positions are the same bits;
+the array forms paid numpy's per-call cost on a few dozen readings, a few hundred pairs and a
+few thousand votes per fix. The trigonometry stays in numpy (its ``cos`` and ``sin`` of arrays
+round differently from libm's): callers pass cosines and sines in.
 
 Frames: readings' end points are in the first sweep's robot frame (metres); anchors, search
 centre, grid origin and vote positions ``t = a - R(heading) e`` in the map frame {W} (metres).
@@ -20,6 +22,119 @@ from numba import types
 
 from sonar_gym.compiled import INDEX_TABLE, INDICES, NUMBERS, TABLE, compiled
 from sonar_gym.pose import FloatArray
+
+_BEAMS = types.Tuple(
+    (
+        types.Array(types.float64, 1, "C"),
+        types.Array(types.float64, 1, "C"),
+        types.Array(types.int64, 1, "C"),
+    )
+)
+
+
+@compiled(  # type: ignore[misc]
+    _BEAMS,
+    NUMBERS,  # angles
+    NUMBERS,  # ranges
+    INDICES,  # counts
+    NUMBERS,  # sweep_headings
+    types.float64,  # max_range
+)
+def echo_beams(
+    angles: FloatArray,
+    ranges: FloatArray,
+    counts: np.ndarray,
+    sweep_headings: FloatArray,
+    max_range: float,
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """``(beam, range, sweep)`` of the readings with an echo: a finite range below
+    ``max_range``, in reading order.
+
+    Args:
+        angles, ranges: every sweep's beam angles (rad, its own robot frame) and ranges
+            (metres), concatenated; ``counts[i]`` readings belong to sweep ``i``.
+        sweep_headings: heading of each sweep in the first sweep's robot frame (rad).
+        max_range: readings at or beyond it count as no echo (metres; inf: none).
+
+    Returns:
+        beam: ``sweep heading + angle`` (rad, the first sweep's robot frame), the array
+            form's one addition; range: the reading's range (metres); sweep: its sweep.
+    """
+    beam = np.empty(ranges.size)
+    kept_range = np.empty(ranges.size)
+    sweep_of = np.empty(ranges.size, dtype=np.int64)
+    count = 0
+    reading = 0
+    for sweep in range(counts.size):
+        for _ in range(counts[sweep]):
+            value = ranges[reading]
+            if np.isfinite(value) and value < max_range:
+                beam[count] = sweep_headings[sweep] + angles[reading]
+                kept_range[count] = value
+                sweep_of[count] = sweep
+                count += 1
+            reading += 1
+    return beam[:count].copy(), kept_range[:count].copy(), sweep_of[:count].copy()
+
+
+_END_POINTS = types.UniTuple(types.Array(types.float64, 1, "C"), 3)
+
+
+@compiled(  # type: ignore[misc]
+    _END_POINTS,
+    NUMBERS,  # ranges
+    INDICES,  # sweep_of
+    NUMBERS,  # sensor_x
+    NUMBERS,  # sensor_y
+    NUMBERS,  # beam_cos
+    NUMBERS,  # beam_sin
+)
+def end_points(
+    ranges: FloatArray,
+    sweep_of: np.ndarray,
+    sensor_x: FloatArray,
+    sensor_y: FloatArray,
+    beam_cos: FloatArray,
+    beam_sin: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(end x, end y, length)`` of each reading (metres, the first sweep's robot frame):
+    ``end = sensor + range (cos, sin)`` and ``length = sqrt(dx^2 + dy^2)`` of ``end - sensor``,
+    the array form's steps in its order (``beam_cos``, ``beam_sin``: numpy's of the beams;
+    ``sensor_x[i]``, ``sensor_y[i]``: the sensor of sweep ``i``)."""
+    end_x = np.empty(ranges.size)
+    end_y = np.empty(ranges.size)
+    length = np.empty(ranges.size)
+    for reading in range(ranges.size):
+        from_x, from_y = sensor_x[sweep_of[reading]], sensor_y[sweep_of[reading]]
+        to_x = from_x + ranges[reading] * beam_cos[reading]
+        to_y = from_y + ranges[reading] * beam_sin[reading]
+        run_x, run_y = to_x - from_x, to_y - from_y
+        end_x[reading] = to_x
+        end_y[reading] = to_y
+        length[reading] = math.sqrt(run_x * run_x + run_y * run_y)
+    return end_x, end_y, length
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.int64, 2, "C"),
+    NUMBERS,  # headings
+    NUMBERS,  # beams
+    types.int64,  # direction_bins
+    types.float64,  # bins_per_radian
+)
+def direction_indices(
+    headings: FloatArray, beams: FloatArray, direction_bins: int, bins_per_radian: float
+) -> np.ndarray:
+    """``(h, J)`` quantised world beam directions ``rint((heading + beam) bins_per_radian)``
+    modulo ``direction_bins`` (rad in; ``rint`` rounds half to even, as numpy's; the modulo is
+    the floor modulo of numpy's integer ``%``)."""
+    indices = np.empty((headings.size, beams.size), dtype=np.int64)
+    for heading in range(headings.size):
+        for reading in range(beams.size):
+            turns = (headings[heading] + beams[reading]) * bins_per_radian
+            indices[heading, reading] = int(np.rint(turns)) % direction_bins
+    return indices
+
 
 _PAIRS = types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.int64, 1, "C")))
 
