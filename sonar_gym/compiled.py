@@ -118,3 +118,80 @@ def _wrap_angle(angle_rad: float) -> float:
 
 wrap_angle = compiled(types.float64, types.float64, inline=True)(_wrap_angle)
 """:func:`sonar_gym.pose.wrap_angle` of a finite angle (radians) inside a compiled loop."""
+
+
+def _floor_remainder(x: float, y: float) -> float:
+    """``np.remainder(x, y)`` of floats, ``y != 0``: numpy's ``npy_divmod`` (``fmod``, exact,
+    moved to the sign of ``y``; a zero takes the sign of ``y``)."""
+    mod = np.fmod(x, y)
+    if mod != 0.0:
+        if (y < 0.0) != (mod < 0.0):
+            mod += y
+    else:
+        mod = math.copysign(0.0, y)
+    return mod  # type: ignore[no-any-return]
+
+
+floor_remainder = compiled(types.float64, types.float64, types.float64, inline=True)(
+    _floor_remainder
+)
+"""``np.remainder`` of two floats (divisor not zero) inside a compiled loop."""
+
+
+def _wrap_to_pi(angle_rad: float) -> float:
+    wrapped = floor_remainder(angle_rad + np.pi, 2.0 * np.pi) - np.pi
+    return np.pi if wrapped <= -np.pi else wrapped
+
+
+wrap_to_pi = compiled(types.float64, types.float64, inline=True)(_wrap_to_pi)
+""":func:`sonar_gym.pose.wrap_angles` of one finite angle (radians) inside a compiled loop: its
+``np.remainder(angle + pi, 2 pi) - pi``, then ``pi`` for ``-pi``."""
+
+_PAIRWISE_BLOCK = 128
+"""numpy's ``PW_BLOCKSIZE``: the longest run its pairwise sum adds with eight accumulators."""
+
+
+@compiled(types.float64, NUMBERS, types.int64, types.int64)  # type: ignore[misc]
+def _pairwise(values: Any, start: int, count: int) -> float:
+    """numpy's ``pairwise_sum`` of ``values[start : start + count]``."""
+    if count < 8:
+        total = -0.0
+        for index in range(start, start + count):
+            total += values[index]
+        return total  # type: ignore[no-any-return]
+    if count <= _PAIRWISE_BLOCK:
+        r0, r1, r2, r3 = values[start], values[start + 1], values[start + 2], values[start + 3]
+        r4, r5, r6, r7 = values[start + 4], values[start + 5], values[start + 6], values[start + 7]
+        index = start + 8
+        stop = start + count - count % 8
+        while index < stop:
+            r0 += values[index]
+            r1 += values[index + 1]
+            r2 += values[index + 2]
+            r3 += values[index + 3]
+            r4 += values[index + 4]
+            r5 += values[index + 5]
+            r6 += values[index + 6]
+            r7 += values[index + 7]
+            index += 8
+        total = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+        while index < start + count:
+            total += values[index]
+            index += 1
+        return total  # type: ignore[no-any-return]
+    half = count // 2
+    half -= half % 8
+    return _pairwise(values, start, half) + _pairwise(  # type: ignore[no-any-return]
+        values, start + half, count - half
+    )
+
+
+def _pairwise_sum(values: Any) -> float:
+    return 0.0 + _pairwise(values, 0, values.size)  # type: ignore[no-any-return]
+
+
+pairwise_sum = compiled(types.float64, NUMBERS)(_pairwise_sum)
+"""``values.sum()`` of a 1-d float64 array inside a compiled loop, bit for bit: numpy's pairwise
+summation (eight accumulators over runs of up to 128, halves above) of the whole array (a
+float64 array needs no cast, so numpy's reduction does not buffer it), added to the identity
+``0.0``."""

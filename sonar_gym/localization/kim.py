@@ -198,7 +198,9 @@ def heading_candidates_around(
         raise ValueError(f"heading_window_rad must be a finite angle >= 0 rad, got {window_rad!r}")
     count = math.floor(window_rad / step_rad + 1e-9)
     count = min(count, math.ceil(math.pi / step_rad))
-    return wrap_angles(prior_heading_rad + step_rad * np.arange(-count, count + 1))
+    return kim_kernels.heading_grid(  # type: ignore[no-any-return]
+        float(prior_heading_rad), float(step_rad), count
+    )
 
 
 # -- the unobstructed-ray table ---------------------------------------------------------------
@@ -415,8 +417,7 @@ def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:
     if headings.size == 0:
         return None
     middle = float(headings[headings.size // 2])
-    spread = float(np.abs(np.remainder(headings - middle + np.pi, 2.0 * np.pi) - np.pi).max())
-    spread += 1e-6
+    spread = kim_kernels.heading_offset(headings) + 1e-6
     return None if spread >= np.pi else (middle, spread)
 
 
@@ -638,12 +639,11 @@ def vote_localize(
         *vote_layout,
     )
     low_x, low_y = window.low
-    if not volume.any():
+    choice = _choose(grid, volume, selection, window)
+    if choice is None:
         return _failure(
             NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
         )
-
-    choice = _choose(grid, volume, selection, window)
     heading = float(headings[choice.heading_index])
     vote_map = window.full(grid, volume[choice.heading_index]) if return_vote_map else None
     votes = int(volume[choice.heading_index, choice.cell[0] - low_x, choice.cell[1] - low_y])
@@ -663,11 +663,10 @@ def vote_localize(
                 vote_map=vote_map,
             )
 
-    if refine == "cell_center":
-        position = choice.centre
-    else:  # the mean of the chosen heading's votes in the chosen window of cells
+    x, y = float(choice.centre[0]), float(choice.centre[1])
+    if refine == "vote_mean":  # the mean of the chosen heading's votes in the chosen cells
         chosen = choice.heading_index
-        votes_x, votes_y = kim_kernels.votes_in_cells(
+        count, mean_x, mean_y = kim_kernels.vote_mean(
             *pairs,
             direction_index[chosen],
             table,
@@ -680,11 +679,9 @@ def vote_localize(
             *vote_layout,
             (*choice.window_low, *choice.window_high),
         )
-        # sum / count is np.mean's own arithmetic (one pairwise sum, one division)
-        count = votes_x.size
-        mean = np.array([votes_x.sum() / count, votes_y.sum() / count]) if count else None
-        position = choice.centre if mean is None else mean
-    pose = Pose(float(position[0]), float(position[1]), heading)
+        if count:  # sum / count: np.mean's own arithmetic (one pairwise sum, one division)
+            x, y = mean_x, mean_y
+    pose = Pose.unchecked(x, y, heading)
     return VoteLocalization(
         status=OK,
         pose=pose,
@@ -722,8 +719,9 @@ def _choose(
     volume: npt.NDArray[np.int64],
     selection: str,
     window: _VoteWindow,
-) -> _Choice:
-    """Pick the heading and cell from the vote volume ``(heading, ix, iy)`` of ``window``.
+) -> _Choice | None:
+    """Pick the heading and cell from the vote volume ``(heading, ix, iy)`` of ``window``, or
+    None when it holds no vote.
 
     ``"smoothed"``: maximum of the 3x3 binomial smoothing, window = the chosen cell +- 1.
     ``"max"``: raw maximum; ties go to the heading with most tied cells, then to the tied cell
@@ -733,6 +731,8 @@ def _choose(
     nx, ny = grid.shape
     offset = np.array(window.low)
     if selection == "max":
+        if not volume.any():
+            return None
         tied = np.argwhere(volume == volume.max())
         heading_index = int(np.argmax(np.bincount(tied[:, 0], minlength=volume.shape[0])))
         cells = tied[tied[:, 0] == heading_index, 1:] + offset
@@ -743,9 +743,10 @@ def _choose(
         low = (max(cell[0] - 1, 0), max(cell[1] - 1, 0))
         high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
         return _Choice(heading_index, cell, low, high, centroid, volume)
-    score = kim_kernels.binomial_smooth(volume)
-    heading_index, rest = divmod(int(np.argmax(score)), score.shape[1] * score.shape[2])
-    local_x, local_y = divmod(rest, score.shape[2])
+    # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
+    score, heading_index, local_x, local_y = kim_kernels.smoothed_peak(volume)
+    if score[heading_index, local_x, local_y] == 0:
+        return None
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
     cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))

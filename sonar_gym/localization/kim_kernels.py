@@ -20,7 +20,16 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import INDEX_TABLE, INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.compiled import (
+    INDEX_TABLE,
+    INDICES,
+    NUMBERS,
+    TABLE,
+    compiled,
+    floor_remainder,
+    pairwise_sum,
+    wrap_to_pi,
+)
 from sonar_gym.pose import FloatArray
 
 _BEAMS = types.Tuple(
@@ -395,3 +404,93 @@ def binomial_smooth(volume: np.ndarray) -> np.ndarray:
                     total += along_x[ix, iy + 1]
                 smoothed[layer, ix, iy] = total
     return smoothed
+
+
+_PEAK = types.Tuple((types.Array(types.int64, 3, "C"), types.int64, types.int64, types.int64))
+
+
+@compiled(_PEAK, types.Array(types.int64, 3, "A", readonly=True))  # type: ignore[misc]
+def smoothed_peak(volume: np.ndarray) -> tuple[np.ndarray, int, int, int]:
+    """``(score, heading, x, y)``: the :func:`binomial_smooth` score of ``(h, nx, ny)`` votes and
+    the first of its maxima in C order (``np.argmax``'s tie rule); ``(0, 0, 0)`` for an empty
+    volume."""
+    score = binomial_smooth(volume)
+    _, nx, ny = score.shape
+    flat = score.ravel()
+    best = 0
+    for index in range(1, flat.size):
+        if flat[index] > flat[best]:
+            best = index
+    heading, rest = divmod(best, nx * ny) if flat.size else (0, 0)
+    x, y = divmod(rest, ny) if flat.size else (0, 0)
+    return score, heading, x, y
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.int64, types.float64, types.float64)),
+    INDICES,  # pair_j
+    INDICES,  # pair_k
+    INDICES,  # direction_index (of this heading, per reading)
+    TABLE,  # free_distance
+    NUMBERS,  # range_m
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    TABLE,  # anchors
+    types.float64,  # cos_heading
+    types.float64,  # sin_heading
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+    _CELLS,  # cells
+)
+def vote_mean(
+    pair_j: np.ndarray,
+    pair_k: np.ndarray,
+    direction_index: np.ndarray,
+    free_distance: FloatArray,
+    range_m: FloatArray,
+    end_x: FloatArray,
+    end_y: FloatArray,
+    anchors: FloatArray,
+    cos_heading: float,
+    sin_heading: float,
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+    cells: tuple[int, int, int, int],
+) -> tuple[int, float, float]:
+    """``(count, mean x, mean y)`` of the :func:`votes_in_cells` positions ({W}, metres; the
+    means 0 without a vote): numpy's ``sum() / count`` of each coordinate, its pairwise sum
+    (:data:`~sonar_gym.compiled.pairwise_sum`) and one division."""
+    votes_x, votes_y = votes_in_cells(
+        pair_j, pair_k, direction_index, free_distance, range_m, end_x, end_y, anchors,
+        cos_heading, sin_heading, circle, grid_frame, window, cells,
+    )  # fmt: skip
+    count = votes_x.size
+    if count == 0:
+        return 0, 0.0, 0.0
+    return count, pairwise_sum(votes_x) / count, pairwise_sum(votes_y) / count
+
+
+@compiled(types.float64, NUMBERS)  # type: ignore[misc]
+def heading_offset(headings: FloatArray) -> float:
+    """The largest angle (rad) from the middle candidate ``headings[size // 2]`` to another:
+    ``max |np.remainder(h - middle + pi, 2 pi) - pi|``, numpy's steps in its order (0 for no
+    heading)."""
+    if headings.size == 0:
+        return 0.0
+    middle = headings[headings.size // 2]
+    largest = 0.0
+    for heading in headings:
+        largest = max(largest, abs(floor_remainder(heading - middle + np.pi, 2.0 * np.pi) - np.pi))
+    return largest
+
+
+@compiled(types.Array(types.float64, 1, "C"), types.float64, types.float64, types.int64)  # type: ignore[misc]
+def heading_grid(prior_rad: float, step_rad: float, count: int) -> FloatArray:
+    """``wrap_angles(prior + step k)`` for ``k = -count .. count`` (rad): numpy's product of the
+    step and the integer, the sum, then :data:`~sonar_gym.compiled.wrap_to_pi`."""
+    headings = np.empty(2 * count + 1)
+    for index in range(2 * count + 1):
+        headings[index] = wrap_to_pi(prior_rad + step_rad * float(index - count))
+    return headings
