@@ -210,20 +210,26 @@ def candidate_pairs(
     needed_radius = slack * slack
     pair_j = np.empty(n_readings * n_anchors, dtype=np.int64)
     pair_k = np.empty(n_readings * n_anchors, dtype=np.int64)
+    near = np.empty(n_anchors, dtype=np.bool_)
     count = 0
     for j in range(n_readings):
         ex, ey = end_x[j], end_y[j]
         reach = np.hypot(ex, ey)
         squared_e = ex * ex + ey * ey
+        for k in range(n_anchors):  # without branches: compiled to vector instructions
+            near[k] = abs(anchor_distance[k] - reach) <= slack
         for k in range(n_anchors):
-            if not abs(anchor_distance[k] - reach) <= slack:
+            if not near[k]:
                 continue
             if by_heading:
                 dot = back_x[k] * ex + back_y[k] * ey
                 cross = abs(back_x[k] * ey - back_y[k] * ex)
                 needed = 0.5 * (squared_d[k] + squared_e - needed_radius) - 1e-12
-                within_spread = dot >= spread_cos * math.sqrt(squared_d[k] * squared_e) - 1e-12
-                if not (within_spread or dot * spread_cos + cross * spread_sin >= needed):
+                reachable = dot * spread_cos + cross * spread_sin >= needed
+                # "or" short-circuits: the square root only when the first test fails
+                if not (
+                    reachable or dot >= spread_cos * math.sqrt(squared_d[k] * squared_e) - 1e-12
+                ):
                     continue
             pair_j[count] = j
             pair_k[count] = k
@@ -309,20 +315,45 @@ def vote_volume(
     counts when ``t`` lies inside the search ``circle`` and its cell inside ``window``.
     """
     low_x, low_y, high_x, high_y = window
+    center_x, center_y, radius = circle
+    squared_radius = radius * radius
+    origin_x, origin_y, cell_size = grid_frame
     volume = np.zeros((cos_h.size, high_x - low_x + 1, high_y - low_y + 1), dtype=np.int64)
-    for pair in range(pair_j.size):  # integer counts: any order gives the same volume
-        j, k = pair_j[pair], pair_k[pair]
+    # Integer counts: any order gives the same volume. Pairs of one reading come in a run
+    # (reading-major): each heading's table row and turned end point are found once per run.
+    # Headings stay the inner loop: along them a vote moves little, so its tests branch alike.
+    n_headings = cos_h.size
+    rows = np.empty(n_headings, dtype=np.int64)
+    turned_x = np.empty(n_headings)
+    turned_y = np.empty(n_headings)
+    first = 0
+    while first < pair_j.size:
+        j = pair_j[first]
+        stop = first + 1
+        while stop < pair_j.size and pair_j[stop] == j:
+            stop += 1
         reading_range, e_x, e_y = range_m[j], end_x[j], end_y[j]
-        a_x, a_y = anchors[k, 0], anchors[k, 1]
-        for heading in range(cos_h.size):
-            if not free_distance[direction_index[heading, j], k] > reading_range:
-                continue
+        for heading in range(n_headings):
+            rows[heading] = direction_index[heading, j]
             c, s = cos_h[heading], sin_h[heading]
-            t_x = a_x - (c * e_x - s * e_y)
-            t_y = a_y - (s * e_x + c * e_y)
-            counts, cell_x, cell_y = _vote_cell_compiled(t_x, t_y, circle, grid_frame, window)
-            if counts:
-                volume[heading, cell_x - low_x, cell_y - low_y] += 1
+            turned_x[heading] = c * e_x - s * e_y
+            turned_y[heading] = s * e_x + c * e_y
+        for pair in range(first, stop):
+            k = pair_k[pair]
+            a_x, a_y = anchors[k, 0], anchors[k, 1]
+            for heading in range(n_headings):
+                if not free_distance[rows[heading], k] > reading_range:
+                    continue
+                t_x = a_x - turned_x[heading]
+                t_y = a_y - turned_y[heading]
+                off_x, off_y = t_x - center_x, t_y - center_y
+                if not off_x * off_x + off_y * off_y <= squared_radius:
+                    continue
+                cell_x = int(math.floor((t_x - origin_x) / cell_size))
+                cell_y = int(math.floor((t_y - origin_y) / cell_size))
+                if low_x <= cell_x <= high_x and low_y <= cell_y <= high_y:
+                    volume[heading, cell_x - low_x, cell_y - low_y] += 1
+        first = stop
     return volume
 
 
@@ -403,6 +434,28 @@ def binomial_smooth(volume: np.ndarray) -> np.ndarray:
                 if iy < ny - 1:
                     total += along_x[ix, iy + 1]
                 smoothed[layer, ix, iy] = total
+    return smoothed
+    # Row by row, the borders outside the inner loops: these then have no branch.
+    for layer in range(n_layers):
+        for ix in range(nx):
+            for iy in range(ny):
+                along_x[ix, iy] = 2 * volume[layer, ix, iy]
+            if ix > 0:
+                for iy in range(ny):
+                    along_x[ix, iy] += volume[layer, ix - 1, iy]
+            if ix < nx - 1:
+                for iy in range(ny):
+                    along_x[ix, iy] += volume[layer, ix + 1, iy]
+        for ix in range(nx):
+            if ny == 1:
+                smoothed[layer, ix, 0] = 2 * along_x[ix, 0]
+                continue
+            smoothed[layer, ix, 0] = 2 * along_x[ix, 0] + along_x[ix, 1]
+            for iy in range(1, ny - 1):
+                smoothed[layer, ix, iy] = (
+                    along_x[ix, iy - 1] + 2 * along_x[ix, iy] + along_x[ix, iy + 1]
+                )
+            smoothed[layer, ix, ny - 1] = along_x[ix, ny - 2] + 2 * along_x[ix, ny - 1]
     return smoothed
 
 

@@ -243,3 +243,15 @@ def test_a_pair_at_the_padded_circle_test_bound_is_kept() -> None:
     )
     assert pair_j.tolist() == [0]
     assert pair_k.tolist() == [0]
+
+
+def test_a_ray_free_exactly_to_its_range_is_obstructed() -> None:
+    """``free_distance > range`` votes; a free distance equal to the range does not."""
+    for free, expected in ((0.5, 0), (math.nextafter(0.5, 1.0), 1)):
+        volume = kim_kernels.vote_volume(
+            np.array([0, 0]), np.array([0, 1]), np.zeros((1, 1), dtype=np.int64),
+            np.array([[free, 0.0]]), np.array([0.5]), np.array([0.5]), np.array([0.0]),
+            np.array([[1.0, 1.0], [1.2, 1.0]]), np.array([1.0]), np.array([0.0]),
+            (0.25, 1.0, math.inf), (0.0, 0.0, 0.1), (0, 0, 20, 20),
+        )  # fmt: skip
+        assert volume.sum() == volume[0, 5, 10] == expected
