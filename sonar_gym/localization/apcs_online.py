@@ -38,7 +38,7 @@ from sonar_gym.localization.apcs import (
     correct_with_checked_wall,
 )
 from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
-from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
+from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_rows
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
@@ -251,21 +251,12 @@ class WallStream:
             positions = np.vstack([previous_xy, positions])
             directions = np.concatenate([[previous_direction], directions])
             ranges = np.concatenate([[previous_range], ranges])
-            offset = 0
+            skipped = 1
         else:
-            offset = 1
-        n = len(headings)
-        points = np.zeros((n, 2))
-        phis = np.zeros(n)
-        valid = np.zeros(n, dtype=bool)
-        erp_points, erp_directions, reading_indices = newest_reflection_points(
-            positions, directions, ranges, self.params.sensing_range_m
+            skipped = 0
+        return newest_reflection_rows(
+            positions, directions, ranges, self.params.sensing_range_m, skipped
         )
-        rows = reading_indices - 1 + offset  # the newer reading of each pair
-        points[rows] = erp_points
-        phis[rows] = erp_directions
-        valid[rows] = True
-        return points, phis, valid
 
     def accept(
         self,

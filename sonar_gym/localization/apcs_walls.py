@@ -26,6 +26,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.localization import apcs_kernels
 from sonar_gym.pose import FloatArray, wrap_angle, wrap_angles
 
 IntArray = npt.NDArray[np.int64]
@@ -475,10 +476,55 @@ def newest_reflection_points(
     """
     if len(positions) < 2:
         return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
+    phi, pairs = _chosen_roots(positions, directions, ranges, valid_range_m)
+    return apcs_kernels.newest_points(positions, ranges, phi, pairs, np.cos(phi), np.sin(phi))
+
+
+def newest_reflection_rows(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    valid_range_m: tuple[float, float],
+    skipped: int,
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    """:func:`newest_reflection_points` as one row per reading from reading ``skipped`` on.
+
+    Inputs as :func:`newest_reflection_points` takes them (any ``N``), ``skipped`` 0 or 1.
+
+    Returns:
+        ``(points, reflection_directions_rad, valid)``: ``(N - skipped, 2)`` ERPs (metres in
+        {W}), ``(N - skipped,)`` their directions (radians) and whether the reading gives an
+        ERP (the pair it closes gives one); rows without an ERP are zero.
+    """
+    if len(positions) < 2:
+        rows = len(positions) - skipped
+        return np.zeros((rows, 2)), np.zeros(rows), np.zeros(rows, dtype=bool)
+    phi, pairs = _chosen_roots(positions, directions, ranges, valid_range_m)
+    return apcs_kernels.newest_rows(
+        positions, ranges, phi, pairs, np.cos(phi), np.sin(phi), skipped
+    )
+
+
+def _chosen_roots(
+    positions: FloatArray,
+    directions: FloatArray,
+    ranges: FloatArray,
+    valid_range_m: tuple[float, float],
+) -> tuple[FloatArray, IntArray]:
+    """``(phi, pairs)`` of ``_newest_points`` on checked inputs (``N >= 2``), with the ranges
+    outside ``valid_range_m`` taken as dropouts: the loops of
+    :mod:`~sonar_gym.localization.apcs_kernels` with numpy's trigonometry between them."""
     low, high = valid_range_m
-    ranges = np.where((ranges >= low) & (ranges <= high), ranges, np.nan)
-    points, phi, pairs = _newest_points(positions, directions, ranges)
-    return points, wrap_angles(phi), pairs + 1
+    first, second = directions[:-1], directions[1:]
+    sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x = apcs_kernels.pair_geometry(
+        positions, ranges, low, high, np.sin(first), np.sin(second), np.cos(first), np.cos(second)
+    )
+    return apcs_kernels.chosen_roots(  # type: ignore[no-any-return]
+        np.arctan2(sin_alpha, cos_alpha),  # alpha of eqs (5)-(6)
+        np.arccos(cosine),  # the offset of the roots of eq. (4)
+        np.arctan2(beam_y, beam_x),  # the pair's mean beam axis
+        solvable,
+    )
 
 
 def _newest_points(

@@ -1,0 +1,238 @@
+"""Compiled inner loops of APCS's estimated reflection points (Yamamoto et al., eqs 1-6).
+
+:func:`sonar_gym.localization.apcs_walls.newest_reflection_points` runs on the few dozen
+readings a side sonar takes over a motion command, where numpy's per-call cost of the array
+form (:func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` and
+``_newest_points``, about 35 calls) is most of the time. These loops do that form's elementwise
+arithmetic element by element, in the same order, so they return the same bits (see
+:mod:`sonar_gym.sonar.kernels` for why elementwise steps agree). The trigonometry stays in
+numpy, between the loops (its ``sin``, ``cos``, ``arctan2`` and ``arccos`` of arrays round
+differently from libm's): callers pass it in.
+
+The three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
+
+1. :func:`pair_geometry`: the eq. (4) inputs per pair (``sin alpha``, ``cos alpha`` of
+   eqs (5)-(6), the cosine of the root's offset, whether a root exists) and the summed beam
+   axes whose ``arctan2`` is the mean beam axis;
+2. :func:`chosen_roots`: the two roots of eq. (4), the one nearer the beam axis, for the pairs
+   that have one;
+3. :func:`newest_points` / :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of
+   eqs (2)-(3), as a list of ERPs or one row per reading.
+
+Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import types
+
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.pose import FloatArray
+
+_VECTOR_OUT = types.Array(types.float64, 1, "C")
+_TABLE_OUT = types.Array(types.float64, 2, "C")
+_FLAGS_OUT = types.Array(types.boolean, 1, "C")
+_INDICES_OUT = types.Array(types.int64, 1, "C")
+
+# Below this, the sensor did not move between two readings (metres):
+# apcs_walls.ZERO_LENGTH_M, repeated here so that the loops do not import the wall module.
+_ZERO_LENGTH_M = 1e-9
+
+
+@compiled(types.float64, types.float64, inline=True)  # type: ignore[misc]
+def wrapped_angle(angle_rad: float) -> float:
+    """:func:`sonar_gym.pose.wrap_angles` of one angle (radians, to (-pi, pi]).
+
+    That form is ``np.remainder(angle + pi, 2 pi) - pi``, with ``np.remainder`` numpy's
+    ``fmod`` moved to the divisor's sign (``+0.0`` for an exact multiple), not
+    :func:`sonar_gym.pose.wrap_angle`'s IEEE remainder: the two differ in the last bits.
+    """
+    period = 2.0 * math.pi
+    remainder = np.fmod(angle_rad + math.pi, period)
+    if remainder != 0.0:
+        if remainder < 0.0:
+            remainder += period
+    else:
+        remainder = 0.0
+    wrapped = remainder - math.pi
+    return math.pi if wrapped <= -math.pi else wrapped
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_VECTOR_OUT, _VECTOR_OUT, _VECTOR_OUT, _FLAGS_OUT, _VECTOR_OUT, _VECTOR_OUT)),
+    TABLE,  # positions
+    NUMBERS,  # ranges
+    types.float64,  # low
+    types.float64,  # high
+    NUMBERS,  # first_sin
+    NUMBERS,  # second_sin
+    NUMBERS,  # first_cos
+    NUMBERS,  # second_cos
+)
+def pair_geometry(
+    positions: FloatArray,
+    ranges: FloatArray,
+    low: float,
+    high: float,
+    first_sin: FloatArray,
+    second_sin: FloatArray,
+    first_cos: FloatArray,
+    second_cos: FloatArray,
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray, FloatArray, FloatArray]:
+    """Per pair of consecutive readings: ``(sin alpha, cos alpha, cosine, solvable, beam y,
+    beam x)``, each ``(N - 1,)``.
+
+    ``alpha`` is that of eqs (5)-(6) (``arctan2(sin alpha, cos alpha)``); ``cosine`` is
+    ``-(r2 - r1) / |P1P2|``, whose ``arccos`` is the offset of the roots of eq. (4), 0 where
+    ``solvable`` is False (a dropout, a range outside ``[low, high]``, no motion or
+    ``|r2 - r1| > |P1P2|``); ``arctan2(beam y, beam x)`` is the mean beam axis of the pair.
+    As :func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` on the ranges
+    with those outside ``[low, high]`` made NaN.
+
+    Args:
+        positions: ``(N, 2)`` sensor positions, metres in {W}.
+        ranges: ``(N,)`` ranges, metres (NaN or inf for a dropout).
+        low, high: the valid ranges, metres.
+        first_sin, second_sin, first_cos, second_cos: ``(N - 1,)`` numpy's ``sin`` and ``cos``
+            of the beam-axis directions of the first and the second reading of each pair.
+    """
+    count = positions.shape[0] - 1
+    sin_alpha = np.empty(count)
+    cos_alpha = np.empty(count)
+    cosine = np.empty(count)
+    solvable = np.empty(count, dtype=np.bool_)
+    beam_y = np.empty(count)
+    beam_x = np.empty(count)
+    for i in range(count):
+        dx = positions[i + 1, 0] - positions[i, 0]
+        dy = positions[i + 1, 1] - positions[i, 1]
+        baseline = math.sqrt(dy * dy + dx * dx)  # |P1P2|, the corrected root of eq. (4)
+        moved = baseline > _ZERO_LENGTH_M
+        safe_baseline = baseline if moved else 1.0
+        sin_alpha[i] = dx / safe_baseline  # eq. (5)
+        cos_alpha[i] = dy / safe_baseline  # eq. (6)
+        first, second = ranges[i], ranges[i + 1]
+        ranged = (
+            low <= first <= high
+            and low <= second <= high
+            and math.isfinite(first)
+            and math.isfinite(second)
+        )
+        range_step = (second if ranged else 0.0) - (first if ranged else 0.0)
+        value = -range_step / safe_baseline
+        solvable[i] = ranged and moved and abs(value) <= 1.0
+        cosine[i] = value if solvable[i] else 0.0
+        beam_y[i] = first_sin[i] + second_sin[i]
+        beam_x[i] = first_cos[i] + second_cos[i]
+    return sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_VECTOR_OUT, _INDICES_OUT)),
+    NUMBERS,  # alpha
+    NUMBERS,  # offset
+    NUMBERS,  # beam_axis
+    FLAGS,  # solvable
+)
+def chosen_roots(
+    alpha: FloatArray, offset: FloatArray, beam_axis: FloatArray, solvable: np.ndarray
+) -> tuple[FloatArray, np.ndarray]:
+    """``(phi, pairs)``: of the roots ``pi/2 - alpha +- offset`` of eq. (4) (wrapped to
+    (-pi, pi]), the one nearer ``beam_axis`` (``+`` on a tie), for each pair that has one,
+    and the indices of those pairs. Radians; inputs ``(N - 1,)``."""
+    count = 0
+    for i in range(solvable.shape[0]):
+        if solvable[i]:
+            count += 1
+    phi = np.empty(count)
+    pairs = np.empty(count, dtype=np.int64)
+    k = 0
+    for i in range(solvable.shape[0]):
+        if not solvable[i]:
+            continue
+        phi_plus = wrapped_angle(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
+        phi_minus = wrapped_angle(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
+        off_axis_plus = abs(wrapped_angle(phi_plus - beam_axis[i]))
+        off_axis_minus = abs(wrapped_angle(phi_minus - beam_axis[i]))
+        phi[k] = phi_plus if off_axis_plus <= off_axis_minus else phi_minus
+        pairs[k] = i
+        k += 1
+    return phi, pairs
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _INDICES_OUT)),
+    TABLE,  # positions
+    NUMBERS,  # ranges
+    NUMBERS,  # phi
+    INDICES,  # pairs
+    NUMBERS,  # cos_phi
+    NUMBERS,  # sin_phi
+)
+def newest_points(
+    positions: FloatArray,
+    ranges: FloatArray,
+    phi: FloatArray,
+    pairs: np.ndarray,
+    cos_phi: FloatArray,
+    sin_phi: FloatArray,
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """``(points (K, 2), directions (K,), reading indices (K,))`` of the ERPs ``R2`` of the
+    ``K`` pairs, eqs (2)-(3), with ``phi`` wrapped by ``wrap_angles`` once more, as
+    :class:`~sonar_gym.localization.apcs_walls.EstimatedReflectionPoints` stores them.
+
+    Args:
+        positions: ``(N, 2)`` sensor positions, metres in {W}; ``ranges`` ``(N,)`` metres.
+        phi, pairs: :func:`chosen_roots`' output.
+        cos_phi, sin_phi: numpy's ``cos`` and ``sin`` of ``phi``.
+    """
+    count = pairs.shape[0]
+    points = np.empty((count, 2))
+    directions = np.empty(count)
+    readings = np.empty(count, dtype=np.int64)
+    for k in range(count):
+        second = pairs[k] + 1
+        points[k, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
+        points[k, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
+        directions[k] = wrapped_angle(phi[k])
+        readings[k] = second
+    return points, directions, readings
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _FLAGS_OUT)),
+    TABLE,  # positions
+    NUMBERS,  # ranges
+    NUMBERS,  # phi
+    INDICES,  # pairs
+    NUMBERS,  # cos_phi
+    NUMBERS,  # sin_phi
+    types.int64,  # skipped
+)
+def newest_rows(
+    positions: FloatArray,
+    ranges: FloatArray,
+    phi: FloatArray,
+    pairs: np.ndarray,
+    cos_phi: FloatArray,
+    sin_phi: FloatArray,
+    skipped: int,
+) -> tuple[FloatArray, FloatArray, np.ndarray]:
+    """:func:`newest_points` as one row per reading from reading ``skipped`` on:
+    ``(points (N - skipped, 2), directions (N - skipped,), valid (N - skipped,))``, zero where
+    the reading gives no ERP."""
+    rows = positions.shape[0] - skipped
+    points = np.zeros((rows, 2))
+    directions = np.zeros(rows)
+    valid = np.zeros(rows, dtype=np.bool_)
+    for k in range(pairs.shape[0]):
+        second = pairs[k] + 1
+        row = second - skipped
+        points[row, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
+        points[row, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
+        directions[row] = wrapped_angle(phi[k])
+        valid[row] = True
+    return points, directions, valid
