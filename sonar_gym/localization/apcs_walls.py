@@ -602,16 +602,18 @@ class DetectedWall:
     residual_variance_m2: float
 
     def __post_init__(self) -> None:
-        segment = WallVector(self.start, self.end)
+        segment = WallVector(self.start, self.end, name="detected")
         object.__setattr__(self, "start", segment.start)
         object.__setattr__(self, "end", segment.end)
         object.__setattr__(self, "erp_indices", tuple(int(i) for i in self.erp_indices))
         object.__setattr__(self, "residual_variance_m2", float(self.residual_variance_m2))
+        # Not a field: the segment, made once for the matching (sec. 4.3) and the observation.
+        object.__setattr__(self, "_vector", segment)
 
     @property
     def vector(self) -> WallVector:
         """The detected segment ``T_s -> T_e`` as a wall vector named ``"detected"``."""
-        return WallVector(self.start, self.end, name="detected")
+        return self._vector  # type: ignore[attr-defined, no-any-return]
 
     @property
     def point_count(self) -> int:
@@ -943,6 +945,48 @@ def check_wall(
     )
 
 
+def _check_walls(
+    detected: WallVector, walls: Sequence[WallVector], params: APCSParameters
+) -> tuple[WallCheck, ...]:
+    """:func:`check_wall` of every map wall in turn, its arithmetic in the same order.
+
+    The detected vector's numbers and the thresholds are read once for all the map's walls.
+    """
+    detected_angle = detected._angle  # type: ignore[attr-defined]
+    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
+    tolerance = params.orientation_tolerance_rad
+    threshold = params.endpoint_distance_squared_m2
+    slack = 1e-12
+    low, high = -slack, 1.0 + slack
+    checks = []
+    for index, wall in enumerate(walls):
+        orientation_error = wrap_angle(detected_angle - wall._angle)  # type: ignore[attr-defined]
+        wall_x, wall_y = wall.start
+        ux, uy = wall._unit  # type: ignore[attr-defined]
+        a, b, c = uy, -ux, wall._offset  # type: ignore[attr-defined]
+        length = wall._length  # type: ignore[attr-defined]
+        start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
+        end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
+        d1 = a * start_x + b * start_y + c
+        d2 = a * end_x + b * end_y + c
+        distance_squared = d1 * d1 + d2 * d2
+        inside = low <= start_parameter <= high and low <= end_parameter <= high
+        checks.append(
+            WallCheck(
+                index,
+                wall,
+                orientation_error,
+                start_parameter,
+                end_parameter,
+                distance_squared,
+                abs(orientation_error) <= tolerance,
+                inside,
+                distance_squared < threshold,
+            )
+        )
+    return tuple(checks)
+
+
 def match_wall(
     detected: DetectedWall | WallVector,
     wall_map: Sequence[WallVector],
@@ -969,7 +1013,7 @@ def match_wall(
     for index, wall in enumerate(walls):
         if not isinstance(wall, WallVector):
             raise ValueError(f"wall_map[{index}] must be a WallVector, got {type(wall).__name__}")
-    checks = tuple(check_wall(vector, wall, index, params) for index, wall in enumerate(walls))
+    checks = _check_walls(vector, walls, params)
     candidates = [check for check in checks if check.matched]
     if len(candidates) == 1:
         return MatchResult(MATCHED, vector, checks, candidates[0].wall, candidates[0].map_index)

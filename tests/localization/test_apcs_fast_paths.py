@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -16,10 +18,12 @@ from sonar_gym.localization.apcs import (
     DetectedWall,
     EstimatedReflectionPoints,
     WallVector,
+    check_wall,
     correct_with_checked_wall,
     correct_with_detected_wall,
     estimated_reflection_points,
     fit_wall_group,
+    match_wall,
     validated_covariance,
 )
 from sonar_gym.localization.apcs_online import APCSTracker, WallStream
@@ -128,3 +132,73 @@ def test_a_tracker_refuses_a_covariance_that_is_not_positive_definite() -> None:
             range_variance_m2=1e-4,
             bearing_variance_rad2=1e-4,
         )
+
+
+def _map_around(rng: np.random.Generator, count: int) -> tuple[WallVector, ...]:
+    """Walls of every orientation, a few of them along the detected walls of the tests."""
+    walls = []
+    for _ in range(count):
+        start = rng.uniform(-3.0, 3.0, 2)
+        end = start + rng.uniform(0.5, 4.0) * np.array(
+            [math.cos(angle := rng.uniform(-np.pi, np.pi)), math.sin(angle)]
+        )
+        walls.append(WallVector(tuple(start.tolist()), tuple(end.tolist())))
+    walls += [
+        WallVector((-1.0, 1.0), (10.0, 1.0)),
+        WallVector((0.0, 1.0), (2.0, 1.0)),  # starts at a detected wall's first end
+        WallVector((1.2, 1.1), (1.0, 1.1)),  # against its direction
+        WallVector((-1.0, 0.9), (1.2, 0.9)),  # ends at its last end: on the inclusion slack
+    ]
+    return tuple(walls)
+
+
+def test_matching_checks_every_map_wall_as_check_wall_does() -> None:
+    rng = np.random.default_rng(8)
+    wall_map = _map_around(rng, 12)
+    tolerance = DEFAULT_PARAMETERS.orientation_tolerance_rad
+    detected = [
+        # numpy floats, as a fit gives them
+        *(
+            DetectedWall(
+                tuple(np.array([0.0, 1.0]) + rng.normal(0.0, 0.05, 2)),
+                tuple(np.array([1.2, 1.0]) + rng.normal(0.0, 0.05, 2)),
+                (0, 1, 2, 3),
+                1e-6,
+            )
+            for _ in range(30)
+        ),
+        DetectedWall((0.0, 1.0), (1.2, 1.0), (0, 1, 2, 3), 0.0),  # on three map walls
+        DetectedWall((0.0, 1.0), (1.2, 1.0 + 1.2 * math.tan(tolerance)), (0, 1, 2, 3), 0.0),
+        DetectedWall((1.2, 1.0), (0.0, 1.0), (0, 1, 2, 3), 0.0),  # the other way round
+        # past the ends of the wall along y = 0.9, inside and outside the inclusion's slack
+        DetectedWall((-1.0 - 1e-12, 1.0), (1.2 + 1e-12, 1.0), (0, 1, 2, 3), 0.0),
+        DetectedWall((-1.0 - 3e-12, 1.0), (1.2 + 3e-12, 1.0), (0, 1, 2, 3), 0.0),
+    ]
+    seen = set()
+    for wall in detected:
+        for vector in (wall, wall.vector):
+            match = match_wall(vector, wall_map)
+            expected = tuple(
+                check_wall(wall.vector, map_wall, index) for index, map_wall in enumerate(wall_map)
+            )
+            assert match.checks == expected
+            for check, reference in zip(match.checks, expected, strict=True):
+                assert [type(value) for value in vars(check).values()] == [
+                    type(value) for value in vars(reference).values()
+                ]
+            seen.add(match.status)
+            seen.update(check.reason for check in match.checks)
+            seen.update(
+                ("slack", check.inclusion_ok)
+                for check in match.checks
+                if 1.0 < max(check.start_parameter, check.end_parameter) < 1.0 + 1e-11
+            )
+    assert seen >= {MATCHED, AMBIGUOUS, NO_MATCH, "orientation", "inclusion", "distance", None}
+    assert seen >= {("slack", True), ("slack", False)}
+
+
+def test_a_detected_wall_keeps_its_vector() -> None:
+    wall = DetectedWall((np.float64(0.5), 1.0), (1.5, np.float64(1.25)), (0, 1, 2, 3), 1e-6)
+    assert wall.vector == WallVector(wall.start, wall.end, name="detected")
+    assert wall.vector is wall.vector
+    assert (wall.length, wall.direction_angle) == (wall.vector.length, wall.vector.direction_angle)
