@@ -538,8 +538,11 @@ class APCSTracker:
                 )
                 if groups:
                     command = sample_list[m]
-                    self.estimate = Pose(*poses[command + 1])
-                    self.covariance = covariances[command + 1]
+                    # Only a verified wall reads the estimate (most closed groups are dropped);
+                    # the end of the run sets it in any case.
+                    if any(group.fit.wall is not None for group in groups):
+                        self.estimate = Pose(*poses[command + 1])
+                        self.covariance = covariances[command + 1]
                     corrected = self.handle_groups(side, groups, command, result)
             if corrected:
                 command = sample_list[events[event - 1][0]]

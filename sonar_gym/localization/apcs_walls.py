@@ -743,7 +743,7 @@ def fit_group_points(
             for plain points.
         indices: the group's positions in the ERP sequence (kept in the verdict).
     """
-    centroid = members.mean(axis=0)
+    centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
     eigenvalues, eigenvectors = np.linalg.eigh(scatter)

@@ -28,7 +28,7 @@ from sonar_gym.localization.apcs import (
 )
 from sonar_gym.localization.apcs_online import APCSTracker, WallStream
 from sonar_gym.pose import Pose
-from sonar_gym.localization.apcs_walls import newest_reflection_points
+from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
 
 
 def _readings(seed: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -202,3 +202,44 @@ def test_a_detected_wall_keeps_its_vector() -> None:
     assert wall.vector == WallVector(wall.start, wall.end, name="detected")
     assert wall.vector is wall.vector
     assert (wall.length, wall.direction_angle) == (wall.vector.length, wall.vector.direction_angle)
+
+
+def _reference_wall_ends(
+    members: np.ndarray, directions: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """``T_s``, ``T_e`` and the residual variance as ``fit_group_points`` of commit 074d50b
+    computed them (members and directions of a flat group)."""
+    centroid = members.mean(axis=0)
+    centred = members - centroid
+    scatter = centred.T @ centred / len(members)
+    eigenvalues, eigenvectors = np.linalg.eigh(scatter)
+    along = eigenvectors[:, 1]
+    occupied_side = np.array([-along[1], along[0]])
+    towards_wall = np.array([np.cos(directions).sum(), np.sin(directions).sum()])
+    if float(occupied_side @ towards_wall) < 0.0:
+        along = -along
+    positions_along = centred @ along
+    start = centroid + float(positions_along.min()) * along
+    end = centroid + float(positions_along.max()) * along
+    return start, end, float(max(eigenvalues[0], 0.0))
+
+
+def test_a_group_is_fitted_as_before() -> None:
+    rng = np.random.default_rng(11)
+    for _ in range(400):
+        count = int(rng.integers(DEFAULT_PARAMETERS.min_group_size, 9))
+        angle = rng.uniform(-np.pi, np.pi)
+        offset = rng.uniform(-1e3, 1e3, 2) * rng.choice([0.0, 1e-3, 1.0])
+        along = np.arange(count) * rng.choice([0.03, 1e-7, 3.0]) + rng.normal(0.0, 0.01, count)
+        across = rng.normal(0.0, 0.005, count)
+        members = offset + np.column_stack(
+            [along * math.cos(angle) - across * math.sin(angle), along * math.sin(angle)]
+        )
+        directions = np.full(count, angle + rng.choice([-1.0, 1.0]) * np.pi / 2.0)
+        fit = fit_group_points(members, directions, tuple(range(count)))
+        if fit.wall is None:
+            continue
+        start, end, variance = _reference_wall_ends(members, directions)
+        assert np.array(fit.wall.start).tobytes() == start.tobytes()
+        assert np.array(fit.wall.end).tobytes() == end.tobytes()
+        assert fit.residual_variance_m2 == variance
