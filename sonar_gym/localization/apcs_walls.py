@@ -916,11 +916,46 @@ def check_wall(
     ``d1 = |T_s V_s|`` and ``d2 = |T_e V_e|`` are the distances of the detected end points
     from that line.
     """
+    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
+    return _wall_check(
+        detected._angle,  # type: ignore[attr-defined]
+        start_x,
+        start_y,
+        end_x,
+        end_y,
+        map_wall,
+        map_index,
+        params,
+    )
+
+
+def _check_walls(
+    detected: WallVector, walls: Sequence[WallVector], params: APCSParameters
+) -> tuple[WallCheck, ...]:
+    """:func:`check_wall` of every map wall in turn, the detected vector's numbers read once."""
+    angle = detected._angle  # type: ignore[attr-defined]
+    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
+    return tuple(
+        _wall_check(angle, start_x, start_y, end_x, end_y, wall, index, params)
+        for index, wall in enumerate(walls)
+    )
+
+
+def _wall_check(
+    detected_angle: float,
+    start_x: float,
+    start_y: float,
+    end_x: float,
+    end_y: float,
+    map_wall: WallVector,
+    map_index: int,
+    params: APCSParameters,
+) -> WallCheck:
+    """:func:`check_wall` on the detected vector's direction angle and end points."""
     # angle_difference of the direction angles, and WallVector.projection_parameter and
     # signed_distance (with line_coefficients (a, b, c) = (uy, -ux, offset)) on the validated
     # float end points, inlined: this runs for every map wall against every detected wall.
-    orientation_error = wrap_angle(detected._angle - map_wall._angle)  # type: ignore[attr-defined]
-    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
+    orientation_error = wrap_angle(detected_angle - map_wall._angle)  # type: ignore[attr-defined]
     wall_x, wall_y = map_wall.start
     ux, uy = map_wall._unit  # type: ignore[attr-defined]
     a, b, c = uy, -ux, map_wall._offset  # type: ignore[attr-defined]
@@ -933,58 +968,16 @@ def check_wall(
     slack = 1e-12
     inside = -slack <= start_parameter <= 1.0 + slack and -slack <= end_parameter <= 1.0 + slack
     return WallCheck(
-        map_index=map_index,
-        wall=map_wall,
-        orientation_error_rad=orientation_error,
-        start_parameter=start_parameter,
-        end_parameter=end_parameter,
-        endpoint_distance_squared_m2=distance_squared,
-        orientation_ok=abs(orientation_error) <= params.orientation_tolerance_rad,
-        inclusion_ok=inside,
-        distance_ok=distance_squared < params.endpoint_distance_squared_m2,
+        map_index,
+        map_wall,
+        orientation_error,
+        start_parameter,
+        end_parameter,
+        distance_squared,
+        abs(orientation_error) <= params.orientation_tolerance_rad,
+        inside,
+        distance_squared < params.endpoint_distance_squared_m2,
     )
-
-
-def _check_walls(
-    detected: WallVector, walls: Sequence[WallVector], params: APCSParameters
-) -> tuple[WallCheck, ...]:
-    """:func:`check_wall` of every map wall in turn, its arithmetic in the same order.
-
-    The detected vector's numbers and the thresholds are read once for all the map's walls.
-    """
-    detected_angle = detected._angle  # type: ignore[attr-defined]
-    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
-    tolerance = params.orientation_tolerance_rad
-    threshold = params.endpoint_distance_squared_m2
-    slack = 1e-12
-    low, high = -slack, 1.0 + slack
-    checks = []
-    for index, wall in enumerate(walls):
-        orientation_error = wrap_angle(detected_angle - wall._angle)  # type: ignore[attr-defined]
-        wall_x, wall_y = wall.start
-        ux, uy = wall._unit  # type: ignore[attr-defined]
-        a, b, c = uy, -ux, wall._offset  # type: ignore[attr-defined]
-        length = wall._length  # type: ignore[attr-defined]
-        start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
-        end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
-        d1 = a * start_x + b * start_y + c
-        d2 = a * end_x + b * end_y + c
-        distance_squared = d1 * d1 + d2 * d2
-        inside = low <= start_parameter <= high and low <= end_parameter <= high
-        checks.append(
-            WallCheck(
-                index,
-                wall,
-                orientation_error,
-                start_parameter,
-                end_parameter,
-                distance_squared,
-                abs(orientation_error) <= tolerance,
-                inside,
-                distance_squared < threshold,
-            )
-        )
-    return tuple(checks)
 
 
 def match_wall(
