@@ -41,6 +41,24 @@ def test_wrap_to_pi_of_multiples_of_pi_and_signed_zeros(multiple: int) -> None:
         assert _bits(floor_remainder(value, divisor)) == _bits(np.remainder(value, divisor))
 
 
+def test_wrap_to_pi_is_wrap_angles_of_extreme_and_non_finite_angles() -> None:
+    rng = np.random.default_rng(0)
+    angles = np.concatenate(
+        [
+            rng.uniform(-20.0, 20.0, 20_000),
+            rng.normal(0.0, 1e3, 2_000),
+            np.pi * np.arange(-12, 13),  # exact multiples of pi and their neighbours
+            np.nextafter(np.pi * np.arange(-12, 13), np.inf),
+            np.nextafter(np.pi * np.arange(-12, 13), -np.inf),
+            [0.0, -0.0, 5e-324, -5e-324, 1e300, -1e300, np.nan, np.inf, -np.inf],
+        ]
+    )
+    with np.errstate(invalid="ignore"):  # the remainder of inf
+        expected = wrap_angles(angles)
+    actual = np.array([wrap_to_pi(float(angle)) for angle in angles])
+    assert actual.tobytes() == expected.tobytes()
+
+
 def _sums_agree(values: FloatArray) -> bool:
     return _bits(pairwise_sum(values)) == _bits(values.sum())
 

@@ -29,7 +29,7 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled
+from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, wrap_to_pi
 from sonar_gym.pose import FloatArray
 
 _VECTOR_OUT = types.Array(types.float64, 1, "C")
@@ -40,25 +40,6 @@ _INDICES_OUT = types.Array(types.int64, 1, "C")
 # Below this, the sensor did not move between two readings (metres):
 # apcs_walls.ZERO_LENGTH_M, repeated here so that the loops do not import the wall module.
 _ZERO_LENGTH_M = 1e-9
-
-
-@compiled(types.float64, types.float64, inline=True)  # type: ignore[misc]
-def wrapped_angle(angle_rad: float) -> float:
-    """:func:`sonar_gym.pose.wrap_angles` of one angle (radians, to (-pi, pi]).
-
-    That form is ``np.remainder(angle + pi, 2 pi) - pi``, with ``np.remainder`` numpy's
-    ``fmod`` moved to the divisor's sign (``+0.0`` for an exact multiple), not
-    :func:`sonar_gym.pose.wrap_angle`'s IEEE remainder: the two differ in the last bits.
-    """
-    period = 2.0 * math.pi
-    remainder = np.fmod(angle_rad + math.pi, period)
-    if remainder != 0.0:
-        if remainder < 0.0:
-            remainder += period
-    else:
-        remainder = 0.0
-    wrapped = remainder - math.pi
-    return math.pi if wrapped <= -math.pi else wrapped
 
 
 @compiled(  # type: ignore[misc]
@@ -153,10 +134,10 @@ def chosen_roots(
     for i in range(solvable.shape[0]):
         if not solvable[i]:
             continue
-        phi_plus = wrapped_angle(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
-        phi_minus = wrapped_angle(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
-        off_axis_plus = abs(wrapped_angle(phi_plus - beam_axis[i]))
-        off_axis_minus = abs(wrapped_angle(phi_minus - beam_axis[i]))
+        phi_plus = wrap_to_pi(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
+        phi_minus = wrap_to_pi(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
+        off_axis_plus = abs(wrap_to_pi(phi_plus - beam_axis[i]))
+        off_axis_minus = abs(wrap_to_pi(phi_minus - beam_axis[i]))
         phi[k] = phi_plus if off_axis_plus <= off_axis_minus else phi_minus
         pairs[k] = i
         k += 1
@@ -197,7 +178,7 @@ def newest_points(
         second = pairs[k] + 1
         points[k, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
         points[k, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
-        directions[k] = wrapped_angle(phi[k])
+        directions[k] = wrap_to_pi(phi[k])
         readings[k] = second
     return points, directions, readings
 
@@ -233,6 +214,6 @@ def newest_rows(
         row = second - skipped
         points[row, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
         points[row, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
-        directions[row] = wrapped_angle(phi[k])
+        directions[row] = wrap_to_pi(phi[k])
         valid[row] = True
     return points, directions, valid

@@ -12,11 +12,8 @@ import math
 import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
-from numba import types
 
-from sonar_gym.compiled import compiled
 from sonar_gym.localization import apcs_kernels
-from sonar_gym.localization.apcs_kernels import wrapped_angle
 from sonar_gym.localization.apcs_walls import (
     DEFAULT_PARAMETERS,
     _newest_points,
@@ -27,8 +24,6 @@ from sonar_gym.pose import wrap_angles
 from tests.fuzzing import fuzz_settings
 
 SENSING_RANGE_M = DEFAULT_PARAMETERS.sensing_range_m
-
-_wrapped_angle = compiled(types.float64, types.float64)(wrapped_angle.py_func)
 
 
 def reference_newest(
@@ -108,24 +103,6 @@ def drive(seed: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
     side = rng.choice([-1.0, 1.0])
     return positions, headings + side * np.pi / 2.0 + 6.0 * np.pi * rng.integers(-2, 3), ranges
-
-
-def test_wrapped_angle_is_wrap_angles_of_one_angle() -> None:
-    rng = np.random.default_rng(0)
-    angles = np.concatenate(
-        [
-            rng.uniform(-20.0, 20.0, 20_000),
-            rng.normal(0.0, 1e3, 2_000),
-            np.pi * np.arange(-12, 13),  # exact multiples of pi and their neighbours
-            np.nextafter(np.pi * np.arange(-12, 13), np.inf),
-            np.nextafter(np.pi * np.arange(-12, 13), -np.inf),
-            [0.0, -0.0, 5e-324, -5e-324, 1e300, -1e300, np.nan, np.inf, -np.inf],
-        ]
-    )
-    with np.errstate(invalid="ignore"):  # the remainder of inf
-        expected = wrap_angles(angles)
-    actual = np.array([_wrapped_angle(float(angle)) for angle in angles])
-    assert actual.tobytes() == expected.tobytes()
 
 
 def test_reflection_points_of_driven_paths() -> None:
