@@ -16,8 +16,8 @@ The three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
    axes whose ``arctan2`` is the mean beam axis;
 2. :func:`chosen_roots`: the two roots of eq. (4), the one nearer the beam axis, for the pairs
    that have one;
-3. :func:`newest_points` / :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of
-   eqs (2)-(3), as a list of ERPs or one row per reading.
+3. :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
+   reading.
 
 Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
 """
@@ -145,45 +145,6 @@ def chosen_roots(
 
 
 @compiled(  # type: ignore[misc]
-    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _INDICES_OUT)),
-    TABLE,  # positions
-    NUMBERS,  # ranges
-    NUMBERS,  # phi
-    INDICES,  # pairs
-    NUMBERS,  # cos_phi
-    NUMBERS,  # sin_phi
-)
-def newest_points(
-    positions: FloatArray,
-    ranges: FloatArray,
-    phi: FloatArray,
-    pairs: np.ndarray,
-    cos_phi: FloatArray,
-    sin_phi: FloatArray,
-) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """``(points (K, 2), directions (K,), reading indices (K,))`` of the ERPs ``R2`` of the
-    ``K`` pairs, eqs (2)-(3), with ``phi`` wrapped by ``wrap_angles`` once more, as
-    :class:`~sonar_gym.localization.apcs_walls.EstimatedReflectionPoints` stores them.
-
-    Args:
-        positions: ``(N, 2)`` sensor positions, metres in {W}; ``ranges`` ``(N,)`` metres.
-        phi, pairs: :func:`chosen_roots`' output.
-        cos_phi, sin_phi: numpy's ``cos`` and ``sin`` of ``phi``.
-    """
-    count = pairs.shape[0]
-    points = np.empty((count, 2))
-    directions = np.empty(count)
-    readings = np.empty(count, dtype=np.int64)
-    for k in range(count):
-        second = pairs[k] + 1
-        points[k, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
-        points[k, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
-        directions[k] = wrap_to_pi(phi[k])
-        readings[k] = second
-    return points, directions, readings
-
-
-@compiled(  # type: ignore[misc]
     types.Tuple((_TABLE_OUT, _VECTOR_OUT, _FLAGS_OUT)),
     TABLE,  # positions
     NUMBERS,  # ranges
@@ -202,9 +163,18 @@ def newest_rows(
     sin_phi: FloatArray,
     skipped: int,
 ) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """:func:`newest_points` as one row per reading from reading ``skipped`` on:
-    ``(points (N - skipped, 2), directions (N - skipped,), valid (N - skipped,))``, zero where
-    the reading gives no ERP."""
+    """The ERPs ``R2`` of the ``K`` pairs, eqs (2)-(3), as one row per reading from reading
+    ``skipped`` on: ``(points (N - skipped, 2), directions (N - skipped,), valid
+    (N - skipped,))``, zero where the reading gives no ERP; ``phi`` wrapped by ``wrap_angles``
+    once more, as :class:`~sonar_gym.localization.apcs_walls.EstimatedReflectionPoints` stores
+    it.
+
+    Args:
+        positions: ``(N, 2)`` sensor positions, metres in {W}; ``ranges`` ``(N,)`` metres.
+        phi, pairs: :func:`chosen_roots`' output.
+        cos_phi, sin_phi: numpy's ``cos`` and ``sin`` of ``phi``.
+        skipped: 0 or 1, the readings before the first row.
+    """
     rows = positions.shape[0] - skipped
     points = np.zeros((rows, 2))
     directions = np.zeros(rows)

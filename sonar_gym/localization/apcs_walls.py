@@ -476,8 +476,11 @@ def newest_reflection_points(
     """
     if len(positions) < 2:
         return np.zeros((0, 2)), np.zeros(0), np.zeros(0, dtype=np.int64)
-    phi, pairs = _chosen_roots(positions, directions, ranges, valid_range_m)
-    return apcs_kernels.newest_points(positions, ranges, phi, pairs, np.cos(phi), np.sin(phi))
+    points, reflection_directions, valid = newest_reflection_rows(
+        positions, directions, ranges, valid_range_m, 1
+    )
+    rows = np.flatnonzero(valid)  # row i holds the pair (i, i + 1): ascending, as the pairs
+    return points[rows], reflection_directions[rows], rows + 1
 
 
 def newest_reflection_rows(
