@@ -244,6 +244,25 @@ _GRID_FRAME = types.UniTuple(types.float64, 3)
 _CELLS = types.UniTuple(types.int64, 4)
 """``(low x, low y, high x, high y)``: a block of grid cells, inclusive."""
 
+_VOTES_OF_ONE_HEADING = (
+    INDICES,  # pair_j
+    INDICES,  # pair_k
+    INDICES,  # direction_index (of this heading, per reading)
+    TABLE,  # free_distance
+    NUMBERS,  # range_m
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    TABLE,  # anchors
+    types.float64,  # cos_heading
+    types.float64,  # sin_heading
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+    _CELLS,  # cells
+)
+"""The arguments of the loops over one heading's votes (:func:`votes_in_cells`,
+:func:`vote_mean`)."""
+
 
 def _vote_cell(
     t_x: float,
@@ -359,20 +378,7 @@ def vote_volume(
 
 @compiled(  # type: ignore[misc]
     types.Tuple((types.Array(types.float64, 1, "C"), types.Array(types.float64, 1, "C"))),
-    INDICES,  # pair_j
-    INDICES,  # pair_k
-    INDICES,  # direction_index (of this heading, per reading)
-    TABLE,  # free_distance
-    NUMBERS,  # range_m
-    NUMBERS,  # end_x
-    NUMBERS,  # end_y
-    TABLE,  # anchors
-    types.float64,  # cos_heading
-    types.float64,  # sin_heading
-    _CIRCLE,
-    _GRID_FRAME,
-    _CELLS,  # window
-    _CELLS,  # cells
+    *_VOTES_OF_ONE_HEADING,
 )
 def votes_in_cells(
     pair_j: np.ndarray,
@@ -481,20 +487,7 @@ def smoothed_peak(volume: np.ndarray) -> tuple[np.ndarray, int, int, int]:
 
 @compiled(  # type: ignore[misc]
     types.Tuple((types.int64, types.float64, types.float64)),
-    INDICES,  # pair_j
-    INDICES,  # pair_k
-    INDICES,  # direction_index (of this heading, per reading)
-    TABLE,  # free_distance
-    NUMBERS,  # range_m
-    NUMBERS,  # end_x
-    NUMBERS,  # end_y
-    TABLE,  # anchors
-    types.float64,  # cos_heading
-    types.float64,  # sin_heading
-    _CIRCLE,
-    _GRID_FRAME,
-    _CELLS,  # window
-    _CELLS,  # cells
+    *_VOTES_OF_ONE_HEADING,
 )
 def vote_mean(
     pair_j: np.ndarray,
