@@ -23,6 +23,7 @@ pytestmark = pytest.mark.slow
 # step costs from about 1 ms (BeaconScan) to about 70 ms (BlockExpansion).
 TIMESTEPS = {
     "SonarGym/BeaconScan-v0": 20_000,
+    "SonarGym/ActiveBeaconScan-v0": 40_000,  # the shipped policy's recipe
     "SonarGym/SweepLocalization-v0": 8_192,
     "SonarGym/Trilateration-v0": 8_192,
     "SonarGym/BlockExpansion-v0": 2_048,
