@@ -54,6 +54,7 @@ __all__ = [
     "INTEGRATIONS",
     "Integration",
     "ekf_update",
+    "ekf_update_unchecked",
     "jacobian_state",
     "jacobian_wheels",
     "motion_model",
@@ -338,6 +339,24 @@ def ekf_update(
         )
     rows = noise_array.shape[0]
     noise = _covariance(noise_array, rows, "measurement_covariance")
+    return ekf_update_unchecked(pose, prior, measured_pose, noise, joseph_form)
+
+
+def ekf_update_unchecked(
+    pose: Pose,
+    covariance: FloatArray,
+    measured_pose: Pose,
+    measurement_covariance: FloatArray,
+    joseph_form: bool = False,
+) -> tuple[Pose, FloatArray]:
+    """:func:`ekf_update` without its argument checks, for a filter's own state.
+
+    ``covariance`` must be a finite symmetric 3x3 float64 array and ``measurement_covariance``
+    a finite symmetric 3x3 or 2x2 one with a non-negative diagonal (as the filter's
+    predictions and a checked fix covariance are); the checks cost a third of the update.
+    """
+    prior, noise = covariance, measurement_covariance
+    rows = noise.shape[0]
     observation = np.eye(3)[:rows]
     innovation = np.array(
         [

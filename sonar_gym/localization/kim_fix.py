@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from sonar_gym.localization.ekf import ekf_update
+from sonar_gym.localization.ekf import ekf_update_unchecked
 from sonar_gym.localization.kim import Anchor, Sweep, VoteLocalization, vote_localize
 from sonar_gym.localization.kim_grid import OccupancyGrid
 from sonar_gym.pose import FloatArray, Pose, angle_difference
@@ -111,10 +111,15 @@ def gated_ekf_update(
     gate: float | None,
 ) -> tuple[Pose, FloatArray] | None:
     """The EKF correction of sec. 3.2 with ``fix``, or None if :func:`innovation_accepted`
-    rejects it."""
+    rejects it.
+
+    ``estimate`` and ``covariance`` are the filter's own state and ``measurement_covariance``
+    a checked fix covariance (:func:`fix_covariance`), so the update skips
+    :func:`~sonar_gym.localization.ekf.ekf_update`'s argument checks.
+    """
     if not innovation_accepted(estimate, covariance, fix, measurement_covariance, gate):
         return None
-    return ekf_update(estimate, covariance, fix, measurement_covariance)
+    return ekf_update_unchecked(estimate, covariance, fix, measurement_covariance)
 
 
 __all__ = [

@@ -25,6 +25,7 @@ from sonar_gym.localization.kim import (
     proportional_encoder_noise,
     vote_localize,
 )
+from sonar_gym.localization.kim_fix import fix_covariance, gated_ekf_update
 from sonar_gym.pose import Pose, angle_difference, wrap_angle
 
 CELL = 0.05
@@ -387,6 +388,34 @@ def test_ekf_update_rejects_a_bad_measurement_covariance() -> None:
         ekf_update(Pose(0, 0, 0), np.eye(3), Pose(0, 0, 0), np.eye(4))
     with pytest.raises(ValueError, match="measurement_covariance"):
         ekf_update(Pose(0, 0, 0), np.eye(3), Pose(0, 0, 0), -np.eye(3))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
+    st.lists(st.floats(1e-4, 0.05), min_size=3, max_size=3),
+    st.floats(-0.5, 0.5),
+)
+def test_gated_update_is_the_ekf_update_inside_the_gate_and_none_outside(
+    offset: list[float], variances: list[float], correlation: float
+) -> None:
+    """The env's gated update skips ekf_update's checks, not its arithmetic: the same bits
+    when the innovation passes the gate, no update when it does not."""
+    estimate = Pose(1.0, -0.5, 3.0)
+    root = np.diag(np.sqrt(variances))
+    root[1, 0] = correlation * root[0, 0]
+    prior = root @ root.T
+    noise = fix_covariance(0.05, 0.02)
+    fix = Pose(estimate.x + offset[0], estimate.y + offset[1], estimate.theta + offset[2])
+    expected_pose, expected_covariance = ekf_update(estimate, prior, fix, noise)
+    ungated = gated_ekf_update(estimate, prior, fix, noise, None)
+    assert ungated is not None
+    assert ungated[0].as_array().tobytes() == expected_pose.as_array().tobytes()
+    assert ungated[1].tobytes() == expected_covariance.tobytes()
+    innovation = np.array([offset[0], offset[1], angle_difference(fix.theta, estimate.theta)])
+    distance = float(innovation @ np.linalg.inv(prior + noise) @ innovation)
+    gated = gated_ekf_update(estimate, prior, fix, noise, 9.0)
+    assert (gated is not None) == (distance <= 9.0) or abs(distance - 9.0) < 1e-9
 
 
 # -- grid (sec. 2.2) ---------------------------------------------------------------------------
