@@ -39,11 +39,40 @@ from sonar_gym.compiled import (
 from sonar_gym.pose import FloatArray
 
 
+def _main_lobe_cos_limit(
+    level: float,
+    rising: FloatArray,
+    main_lobe_cells: FloatArray,
+    inverse_steps: float,
+    smallest_cosine: float,
+) -> float:
+    """:meth:`~sonar_gym.sonar.acoustics.PistonBeam.main_lobe_cos_limits` of one level, in its
+    order: the cosine a candidate needs to be heard when ``level`` is the threshold over its
+    on-axis amplitude (2 for a level above 1; ``rising``, ``main_lobe_cells``: the beam's
+    tables; ``inverse_steps``: ``1 / TABLE_STEPS_PER_UNIT``)."""
+    clipped = min(level, 1.0)
+    index = np.searchsorted(rising, clipped)
+    number, value, slope = (
+        main_lobe_cells[index, 0],
+        main_lobe_cells[index, 1],
+        main_lobe_cells[index, 2],
+    )
+    s_limit = (number + (clipped - value) / slope) * inverse_steps
+    limit = max(1.0 - s_limit * s_limit, smallest_cosine)
+    return 2.0 if level > 1.0 else limit
+
+
+main_lobe_cos_limit = compiled(
+    types.float64, types.float64, NUMBERS, TABLE, types.float64, types.float64, inline=True
+)(_main_lobe_cos_limit)
+
+
 @compiled(  # type: ignore[misc]
     types.Array(types.float64, 2, "C"),  # readings
     TABLE,  # directions
     TABLE,  # in_frame
-    NUMBERS,  # limits
+    NUMBERS,  # rising
+    TABLE,  # main_lobe_cells
     NUMBERS,  # amplitudes
     NUMBERS,  # path_lengths
     TABLE,  # cells
@@ -53,7 +82,8 @@ from sonar_gym.pose import FloatArray
 def main_lobe_readings(
     directions: FloatArray,
     in_frame: FloatArray,
-    limits: FloatArray,
+    rising: FloatArray,
+    main_lobe_cells: FloatArray,
     amplitudes: FloatArray,
     path_lengths: FloatArray,
     cells: FloatArray,
@@ -62,26 +92,40 @@ def main_lobe_readings(
 ) -> FloatArray:
     """``(2, pings)`` rows of ranges (m, NaN for a dropout) and amplitudes (1/m, 0 for one).
 
-    The loop of :func:`sonar_gym.sonar.pulse_echo._main_lobe_readings`: per ping the first
-    candidate whose cosine reaches its limit, the beam's table at that cosine, then steps 1-5
-    of the readout.
+    The loop of :func:`sonar_gym.sonar.pulse_echo._main_lobe_readings`: the cosine each
+    candidate needs to be detected (:func:`main_lobe_cos_limit` of the threshold over its
+    amplitude), then per ping the first candidate whose cosine reaches its limit, the beam's
+    table at that cosine, then steps 1-5 of the readout.
 
     Args:
         directions: ``(pings, 2)`` beam directions in the robot frame {R} (unit vectors).
         in_frame: ``(2, candidates)`` candidate directions in {R}.
-        limits: ``(candidates,)`` the cosine each candidate needs to be detected.
+        rising, main_lobe_cells: the beam's main-lobe tables
+            (:class:`~sonar_gym.sonar.acoustics.PistonBeam`).
         amplitudes, path_lengths: ``(candidates,)`` on-axis amplitudes (1/m), one-way paths (m).
         cells: the beam's ``(value, slope)`` table, :class:`~sonar_gym.sonar.acoustics.PistonBeam`.
         normals: ``(pings,)`` standard normals of the jitter, or empty without jitter.
         constants: table steps per unit of ``s``; seconds of flight per metre of path (``2 /
             c_true``); the crossing-delay numerator (``rise time x threshold``, 0 without the
             delay); jitter in seconds per normal; ``1 / T0`` and ``T0`` (0 without a counter);
-            metres per second of flight (``c_assumed / 2``); the maximum range (m).
+            metres per second of flight (``c_assumed / 2``); the maximum range (m); the
+            detection threshold (1/m); ``1 / TABLE_STEPS_PER_UNIT``; the smallest positive
+            cosine.
     """
     steps, tof_per_m, delay_numerator = constants[0], constants[1], constants[2]
     jitter_s, inverse_period, period = constants[3], constants[4], constants[5]
-    metres_per_s, max_range = constants[6], constants[7]
+    metres_per_s, max_range, threshold = constants[6], constants[7], constants[8]
+    inverse_steps, smallest_cosine = constants[9], constants[10]
     n_pings, n_candidates = directions.shape[0], path_lengths.shape[0]
+    limits = np.empty(n_candidates)
+    for candidate in range(n_candidates):
+        limits[candidate] = main_lobe_cos_limit(
+            threshold / amplitudes[candidate],
+            rising,
+            main_lobe_cells,
+            inverse_steps,
+            smallest_cosine,
+        )
     readings = np.empty((2, n_pings))
     for ping in range(n_pings):
         bx, by = directions[ping, 0], directions[ping, 1]

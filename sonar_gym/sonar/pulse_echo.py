@@ -38,6 +38,7 @@ from sonar_gym.scenario import Scenario
 from sonar_gym.sonar import kernels
 from sonar_gym.sonar.acoustics import (
     REFERENCE_TEMPERATURE_C,
+    SMALLEST_COSINE,
     TABLE_STEPS_PER_UNIT,
     PistonBeam,
     speed_of_sound_mps,
@@ -430,9 +431,6 @@ def _main_lobe_readings(
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     # np.dot: the products first_echoes takes with @, through one call layer less.
     in_frame = np.dot(np.array(((c, s), (-s, c))), candidates.directions.T)  # (2, candidates)
-    limits = beam.main_lobe_cos_limits(
-        threshold / amplitudes, reachable=candidates.threshold >= threshold
-    )
     jitter = readout.range_noise and transducer.range_noise_std_m > 0.0
     normals = _NO_NORMALS  # one standard normal per ping, drawn alike on both paths
     if jitter:
@@ -452,11 +450,15 @@ def _main_lobe_readings(
             period,
             assumed_speed_mps / 2.0,
             transducer.max_range_m,
+            threshold,
+            1.0 / TABLE_STEPS_PER_UNIT,
+            SMALLEST_COSINE,
         )
         compiled = kernels.main_lobe_readings(
             beam_directions,
             in_frame,
-            limits,
+            beam.main_lobe_rising,
+            beam.main_lobe_cells,
             amplitudes,
             path_lengths,
             beam.cells,
@@ -464,6 +466,9 @@ def _main_lobe_readings(
             np.array(constants),
         )
         return compiled[0], compiled[1]
+    limits = beam.main_lobe_cos_limits(
+        threshold / amplitudes, reachable=candidates.threshold >= threshold
+    )
     cosines = np.dot(beam_directions, in_frame)  # (pings, candidates)
     detected = cosines >= limits
     first = detected.argmax(axis=1)  # candidates are sorted nearest first

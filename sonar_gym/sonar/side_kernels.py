@@ -25,6 +25,7 @@ from numba import types
 
 from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, nan_max
 from sonar_gym.pose import FloatArray
+from sonar_gym.sonar.kernels import main_lobe_cos_limit
 
 _TABLE_OUT = types.Array(types.float64, 2, "C")
 _FLAGS_OUT = types.Array(types.boolean, 2, "C")
@@ -244,16 +245,9 @@ def side_heard(
                 pattern = _two_way_from_cos(cosine, cells, steps, reaches_back)
                 heard[sensor, candidate] = pattern * amplitude >= threshold
             elif cosine >= widest_cos:
-                level = threshold / amplitude
-                clipped = min(level, 1.0)
-                index = np.searchsorted(rising, clipped)
-                s_limit = (
-                    main_lobe_cells[index, 0]
-                    + (clipped - main_lobe_cells[index, 1]) / main_lobe_cells[index, 2]
-                ) * inverse_steps
-                limit = max(1.0 - s_limit * s_limit, smallest_cosine)
-                if level > 1.0:
-                    limit = 2.0
+                limit = main_lobe_cos_limit(
+                    threshold / amplitude, rising, main_lobe_cells, inverse_steps, smallest_cosine
+                )
                 heard[sensor, candidate] = cosine >= limit
     return heard, cosines, facing
 

@@ -24,7 +24,12 @@ from sonar_gym.scenario import load_scenario
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar import kernels
 from sonar_gym.sonar import pulse_echo
-from sonar_gym.sonar.acoustics import PistonBeam, speed_of_sound_mps
+from sonar_gym.sonar.acoustics import (
+    SMALLEST_COSINE,
+    TABLE_STEPS_PER_UNIT,
+    PistonBeam,
+    speed_of_sound_mps,
+)
 from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, EchoTables, echo_tables
 from sonar_gym.sonar.echoes import EchoKind
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, Readout
@@ -321,6 +326,35 @@ def test_pattern_in_front_and_reachable_limits_equal_the_checked_forms(leakage: 
     np.testing.assert_array_equal(
         beam.main_lobe_cos_limits(levels, reachable=True), beam.main_lobe_cos_limits(levels)
     )
+
+
+@pytest.mark.parametrize("ka", [4.0, 17.6, 40.0])
+@pytest.mark.parametrize("leakage", [0.0, 0.07])
+def test_compiled_main_lobe_limit_is_the_beams_limit_bit_for_bit(ka: float, leakage: float) -> None:
+    """The limit the compiled readouts compute per candidate, against the beam's array form,
+    over reachable levels, levels above 1 (never heard) and the table's own values."""
+    beam = PistonBeam.for_ka(ka, False, leakage)
+    rng = np.random.default_rng(3)
+    levels = np.concatenate(
+        [
+            10.0 ** rng.uniform(-9.0, 0.5, 4000),
+            beam.main_lobe_rising,
+            [1.0, np.nextafter(1.0, 2.0), 3.0, 1e-300, SMALLEST_COSINE],
+        ]
+    )
+    expected = beam.main_lobe_cos_limits(levels)
+    compiled = [
+        kernels.main_lobe_cos_limit(
+            level,
+            beam.main_lobe_rising,
+            beam.main_lobe_cells,
+            1.0 / TABLE_STEPS_PER_UNIT,
+            SMALLEST_COSINE,
+        )
+        for level in levels.tolist()
+    ]
+    assert np.array(compiled).tobytes() == expected.tobytes()
+    assert (expected == 2.0).sum() == (levels > 1.0).sum() > 0
 
 
 @pytest.mark.parametrize("side_lobes", [False, True])
