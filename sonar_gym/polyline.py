@@ -56,19 +56,27 @@ class Route:
 
     def point_at(self, s_m: float) -> np.ndarray:
         """The point at route length ``s_m`` (clipped to the route)."""
+        return np.array(self._point_at(s_m))
+
+    def _point_at(self, s_m: float) -> tuple[float, float]:
         cumulative, vertices = self._as_floats
-        s = min(max(s_m, 0.0), self.length_m)
+        s = min(max(s_m, 0.0), cumulative[-1])
         index = bisect.bisect_right(cumulative, s) - 1  # np.searchsorted(..., side="right")
         index = min(max(index, 0), len(vertices) - 2)
         span = cumulative[index + 1] - cumulative[index]
         fraction = 0.0 if span <= 0.0 else (s - cumulative[index]) / span
         (x0, y0), (x1, y1) = vertices[index], vertices[index + 1]
-        return np.array([x0 + fraction * (x1 - x0), y0 + fraction * (y1 - y0)])
+        return x0 + fraction * (x1 - x0), y0 + fraction * (y1 - y0)
 
-    def targets_between(self, start_m: float, stop_m: float) -> list[np.ndarray]:
-        """The vertices strictly between ``start_m`` and ``stop_m``, then the point there."""
-        between = (self.cumulative_m > start_m) & (self.cumulative_m < stop_m)
-        return [*self.vertices[between], self.point_at(stop_m)]
+    def targets_between(self, start_m: float, stop_m: float) -> list[tuple[float, float]]:
+        """The vertices strictly between ``start_m`` and ``stop_m`` metres along the route,
+        then the point at ``stop_m`` ({W}, metres)."""
+        cumulative, vertices = self._as_floats
+        # cumulative ascends: the vertices with start < s < stop are one run
+        first = bisect.bisect_right(cumulative, start_m)
+        stop = bisect.bisect_left(cumulative, stop_m)
+        between = [(x, y) for x, y in vertices[first:stop]]
+        return [*between, self._point_at(stop_m)]
 
     def heading_at_start(self) -> float:
         delta = self.vertices[1] - self.vertices[0]
@@ -242,7 +250,7 @@ def follow_route(
     wheel_base = robot.wheel_base_for(world)
     rolled: list[float] = []
     for target in route.targets_between(*span_m):
-        plan = robot.plan_move(world, (float(target[0]), float(target[1])), from_pose=estimate)
+        plan = robot.plan_move(world, target, from_pose=estimate)
         increments = robot.drive_commands(world, plan, rng).encoder_m
         estimate, covariance, _ = predict_over_motion(
             estimate, covariance, increments, wheel_base, variance_per_m

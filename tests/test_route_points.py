@@ -32,6 +32,27 @@ def test_point_at_matches_the_numpy_interpolation(points: np.ndarray) -> None:
         assert np.array_equal(point, _reference_point(route, float(s)))
 
 
+@pytest.mark.parametrize(
+    "points",
+    [TABLE_1_TRUE_POSITIONS_M, np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [1.3, -0.7]])],
+    ids=["table1", "repeated_vertex"],
+)
+def test_targets_between_are_the_vertices_strictly_inside_then_the_stop(
+    points: np.ndarray,
+) -> None:
+    route = Route.through(points)
+    stations = [*np.linspace(-0.5, route.length_m + 0.5, 41).tolist(), *route.cumulative_m]
+    inside = 0
+    for start in stations:
+        for stop in stations:
+            between = (route.cumulative_m > start) & (route.cumulative_m < stop)
+            expected = [*route.vertices[between], _reference_point(route, float(stop))]
+            targets = route.targets_between(float(start), float(stop))
+            assert np.array(targets).tobytes() == np.array(expected).tobytes()
+            inside += len(targets) - 1
+    assert inside > 0
+
+
 class _RecordingWorld:
     """A world whose every point is free; it records the points a leg check asks about."""
 
