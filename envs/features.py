@@ -16,7 +16,6 @@ covered). :data:`FEATURE_TYPES` lists them by name.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
@@ -25,6 +24,10 @@ from typing import ClassVar
 import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
+from numba import types
+
+from sonar_gym.compiled import NUMBERS, compiled
+from sonar_gym.pose import FloatArray
 
 OBSERVATION_LOW, OBSERVATION_HIGH = -1.0, 1.0
 """The bounds of every observation vector (each feature's range lies inside them)."""
@@ -90,10 +93,13 @@ class ScaledPosition(Feature):
         Args:
             position, low, high: ``(size,)`` in the same frame and unit (metres in {W}).
         """
-        position = np.asarray(position, dtype=np.float64)
-        low = np.asarray(low, dtype=np.float64)
-        high = np.asarray(high, dtype=np.float64)
-        return np.clip(2.0 * (position - low) / (high - low) - 1.0, -1.0, 1.0)
+        # On Python floats: numpy's six calls on two coordinates cost more than the arithmetic,
+        # which rounds the same, step by step; min and max clip as np.clip does (NaN stays).
+        scaled = [
+            min(max(2.0 * (p - lo) / (hi - lo) - 1.0, -1.0), 1.0)
+            for p, lo, hi in zip(_floats(position), _floats(low), _floats(high), strict=True)
+        ]
+        return np.array(scaled, dtype=np.float64)
 
     @staticmethod
     def centred_values(
@@ -135,23 +141,29 @@ class RangeBins(Feature):
         fractions = np.asarray(range_fractions, dtype=np.float64)
         if fractions.size == 0:
             return np.ones(self.size)
-        values = np.where(np.isfinite(fractions), np.clip(fractions, 0.0, 1.0), 1.0)
-        if values.size % self.size == 0:
-            return np.minimum.reduce(values.reshape(self.size, -1), axis=1)
-        if values.size > self.size:  # every bin holds a run of consecutive pings
-            return np.minimum.reduceat(values, _bin_starts(values.size, self.size))
-        bins = np.ones(self.size)
-        np.minimum.at(bins, (np.arange(values.size) * self.size) // values.size, values)
-        return bins
+        return _nearest_per_bin(fractions.reshape(-1), self.size)  # type: ignore[no-any-return]
 
 
-@functools.lru_cache(maxsize=64)
-def _bin_starts(pings: int, bins: int) -> np.ndarray:
-    """The first ping of each of ``bins`` bins of ``pings`` consecutive pings (ping ``i`` in bin
-    ``i * bins // pings``; ``pings > bins``, so no bin is empty). Read-only."""
-    starts = np.searchsorted((np.arange(pings) * bins) // pings, np.arange(bins))
-    starts.flags.writeable = False
-    return starts
+def _floats(values: npt.ArrayLike) -> Sequence[float]:
+    """``values`` as a flat sequence of Python floats (a tuple of floats as it is)."""
+    if type(values) is tuple and all(type(value) is float for value in values):
+        return values
+    return np.asarray(values, dtype=np.float64).reshape(-1).tolist()  # type: ignore[no-any-return]
+
+
+@compiled(types.Array(types.float64, 1, "C"), NUMBERS, types.int64)  # type: ignore[misc]
+def _nearest_per_bin(fractions: FloatArray, bins: int) -> FloatArray:
+    """:meth:`RangeBins.values` of ``fractions``: each clipped to [0, 1] (1 where not finite),
+    the smallest per bin (ping ``i`` of ``m`` in bin ``i * bins // m``), 1 in an empty bin."""
+    nearest = np.ones(bins)
+    pings = fractions.shape[0]
+    for ping in range(pings):
+        fraction = fractions[ping]
+        value = min(max(fraction, 0.0), 1.0) if math.isfinite(fraction) else 1.0
+        slot = ping * bins // pings
+        if value < nearest[slot]:
+            nearest[slot] = value
+    return nearest
 
 
 @dataclass(frozen=True)

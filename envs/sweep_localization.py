@@ -585,7 +585,7 @@ class SweepLocalizationEnv(SonarEnv):
         observation["last_sweep_ranges"] = self._sweep_bins.values(episode.last_ranges)
         observation["last_sweep_sector"] = Heading.values(SECTOR_CENTRES_RAD[episode.last_sector])
         observation["last_fix_ok"] = float(episode.last_fix_ok)
-        station_x, station_y = self._next_station_point(episode).tolist()
+        station_x, station_y = self._next_station_point(episode)
         ahead_x, ahead_y = station_x - estimate.x, station_y - estimate.y
         bearing = (
             wrap_angle(math.atan2(ahead_y, ahead_x) - estimate.theta)
@@ -597,13 +597,13 @@ class SweepLocalizationEnv(SonarEnv):
         observation["steps_remaining"] = remaining / len(episode.decision_stations_m)
         return np.clip(observation.vector, -1.0, 1.0)
 
-    def _next_station_point(self, episode: _Episode) -> np.ndarray:
+    def _next_station_point(self, episode: _Episode) -> tuple[float, float]:
         stations = episode.decision_stations_m
         following = episode.decisions + 1
         station = (
             float(stations[following]) if following < len(stations) else episode.route.length_m
         )
-        return episode.route.point_at(station)
+        return episode.route.xy_at(station)
 
     def _info(self, status: str, truth: Pose | None = None) -> dict[str, Any]:
         """The info dict; ``truth`` is the robot's true pose if the caller has just read it."""

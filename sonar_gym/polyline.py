@@ -56,9 +56,10 @@ class Route:
 
     def point_at(self, s_m: float) -> np.ndarray:
         """The point at route length ``s_m`` (clipped to the route)."""
-        return np.array(self._point_at(s_m))
+        return np.array(self.xy_at(s_m))
 
-    def _point_at(self, s_m: float) -> tuple[float, float]:
+    def xy_at(self, s_m: float) -> tuple[float, float]:
+        """:meth:`point_at` as Python floats ``(x, y)``."""
         cumulative, vertices = self._as_floats
         s = min(max(s_m, 0.0), cumulative[-1])
         index = bisect.bisect_right(cumulative, s) - 1  # np.searchsorted(..., side="right")
@@ -76,7 +77,7 @@ class Route:
         first = bisect.bisect_right(cumulative, start_m)
         stop = bisect.bisect_left(cumulative, stop_m)
         between = [(x, y) for x, y in vertices[first:stop]]
-        return [*between, self._point_at(stop_m)]
+        return [*between, self.xy_at(stop_m)]
 
     def heading_at_start(self) -> float:
         delta = self.vertices[1] - self.vertices[0]

@@ -98,6 +98,24 @@ def test_a_scaled_position_stays_in_minus_one_one(corner, size, position) -> Non
     np.testing.assert_allclose(ScaledPosition.values((low + high) / 2, low, high), 0, atol=1e-12)
 
 
+@settings(max_examples=200, deadline=None)
+@given(
+    st.tuples(room_coordinate, room_coordinate),
+    st.tuples(st.floats(0.01, 40), st.floats(0.01, 40)),
+    st.tuples(st.floats(-1e6, 1e6) | st.just(math.nan), st.integers(-100, 100)),
+    st.sampled_from(["tuple", "array", "list"]),
+)
+def test_a_scaled_position_is_the_array_formula_bit_for_bit(corner, size, position, form) -> None:
+    low = np.array(corner)
+    high = low + np.array(size)
+    expected = np.clip(
+        2.0 * (np.asarray(position, dtype=np.float64) - low) / (high - low) - 1.0, -1.0, 1.0
+    )
+    given_position = {"tuple": tuple(position), "array": np.array(position), "list": list(position)}
+    values = ScaledPosition.values(given_position[form], tuple(low.tolist()), high)
+    assert values.dtype == np.float64 and values.tobytes() == expected.tobytes()
+
+
 @settings(max_examples=100, deadline=None)
 @given(st.floats(-1e6, 1e6))
 def test_a_heading_is_a_unit_vector(angle: float) -> None:
