@@ -111,6 +111,12 @@ class BeaconScanConfig:
                     "argument 'sector_widths_deg' must hold widths <= 360 deg that every "
                     f"increment in {self.increments_deg} divides; got {self.sector_widths_deg}"
                 )
+            if width % 2:  # a pan spans centre +- width / 2: its ends must be whole degrees
+                raise ValueError(
+                    "argument 'sector_widths_deg' must hold even widths (a pan spans its centre "
+                    "+- half the width, on the scan memory's 1 deg grid); got "
+                    f"{self.sector_widths_deg}"
+                )
         number_field(self, "n_sector_centres", low=1, high=360, integer=True)
         if 360 % self.n_sector_centres or any(
             (360 // self.n_sector_centres) % inc for inc in self.increments_deg
@@ -281,7 +287,7 @@ class BeaconScanEnv(SonarEnv):
     | failure_penalty | 20 | reward lost on failure; also caps a bad estimate's loss |
     | prior_position_std_m / prior_heading_std_deg | 0.1 / 5 | odometry prior noise |
     | increments_deg | (1, 2, 5) | pan increments offered |
-    | sector_widths_deg | (30, 60, 90, 180, 360) | sector widths offered |
+    | sector_widths_deg | (30, 60, 90, 180, 360) | sector widths offered (even, deg) |
     | n_sector_centres | 36 | sector centres, evenly spaced |
     | n_range_bins | 72 | angular bins of the observation (``n_bins`` in the formulas above) |
     | max_steps | 12 | decisions before truncation |

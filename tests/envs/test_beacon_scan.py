@@ -41,6 +41,33 @@ def test_bad_argument_is_named_in_the_error(argument: str, value: object) -> Non
         gym.make(ENV_ID, **{argument: value})
 
 
+@pytest.mark.parametrize("env_id", [ENV_ID, "SonarGym/ActiveBeaconScan-v0"])
+def test_an_odd_sector_width_is_refused_by_name(env_id: str) -> None:
+    """A pan spans its centre +- half the width on the scan memory's 1 deg grid."""
+    with pytest.raises(ValueError, match="sector_widths_deg.*even"):
+        gym.make(env_id, sector_widths_deg=(45, 90), increments_deg=(1,))
+
+
+@pytest.mark.parametrize("env_id", [ENV_ID, "SonarGym/ActiveBeaconScan-v0"])
+def test_every_offered_width_and_increment_pans_from_every_centre(env_id: str) -> None:
+    env = gym.make(env_id, sector_widths_deg=(2, 6, 30, 358, 360), increments_deg=(1, 2))
+    env.reset(seed=3)
+    unwrapped = env.unwrapped
+    centres = range(0, 360, 360 // unwrapped.config.n_sector_centres)
+    steps = 0
+    for centre in list(centres)[::7]:
+        for width in unwrapped.config.sector_widths_deg:
+            for increment in unwrapped.config.increments_deg:
+                _, reward, terminated, truncated, _ = env.step(
+                    unwrapped.encode_action("pan", centre, width, increment)
+                )
+                assert np.isfinite(reward)
+                steps += 1
+                if terminated or truncated:
+                    env.reset(seed=steps)
+    assert steps >= 10
+
+
 def test_scenario_without_beacons_is_rejected() -> None:
     with pytest.raises(ValueError, match="small_beacon"):
         gym.make(ENV_ID, scenario="kim_arena")
