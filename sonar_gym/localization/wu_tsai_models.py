@@ -28,6 +28,8 @@ from sonar_gym.scenario import Scenario
 from sonar_gym.sonar.ranging import WU_TSAI_RECEIVERS_XY
 
 _TRANSMITTER_FRAME_TOLERANCE = 1e-6
+_SPREAD_OF_THE_LIMIT = 4.0
+"""Jitter, in counter quanta, from which :func:`quantised_range_error` takes its limit form."""
 
 
 @dataclass(frozen=True)
@@ -81,13 +83,19 @@ def quantised_range_error(
         raise ValueError(f"argument 'quantum_m' must be >= 0 metres; got {quantum_m!r}")
     if quantum_m == 0.0:
         return RangeErrorModel(noise_std_m**2, 0.0)
+    spread = noise_std_m / quantum_m
+    if spread >= _SPREAD_OF_THE_LIMIT:
+        # floor(f + z) - f = z - frac(f + z), and frac(f + z) is uniform and independent of z
+        # when f is: variance noise^2 + q^2 / 12, none of it persistent. The average below
+        # agrees to 1e-14 there (its persistent part is rounding, under 1e-28 q^2), and its
+        # table of 16 spread columns would grow without bound.
+        return RangeErrorModel((spread * spread + 1.0 / 12.0) * (quantum_m * quantum_m), 0.0)
     phases = (np.arange(n_phases) + 0.5) / n_phases
     if noise_std_m == 0.0:
         steps = np.zeros((n_phases, 1))
         weights = np.ones((n_phases, 1))
         offsets = np.zeros(1)
     else:
-        spread = noise_std_m / quantum_m
         reach = math.ceil(8.0 * spread) + 1
         offsets = np.arange(-reach, reach + 1, dtype=np.float64)
         # P(floor(f + z) = k) = Phi((k + 1 - f) / s) - Phi((k - f) / s), z ~ N(0, s^2). A
