@@ -9,7 +9,8 @@ and every receiver on the robot:
 1. the 3D distance ``d`` from the emitter to the receiver, the receiver at ``(x, y)`` in {R}
    and ``height_m`` above the floor;
 2. ``TOF = d / c_true`` (``c_true`` from the world's temperature), plus Gaussian jitter of
-   standard deviation ``sigma / c_true``;
+   standard deviation ``sigma / c_true``, and at least 0 (the counter cannot stop before the
+   emitter fires; only a jitter of the order of the distance reaches that);
 3. the counter: ``floor(TOF / T0) T0``;
 4. ``distance = c_assumed * TOF``.
 
@@ -495,7 +496,7 @@ def _rounds_loop(
     """``(n_rounds, R, E)`` measured distances (metres, NaN = dropout) and timestamps (s).
 
     Steps 2-4 of the module docstring for every measurement: ``TOF = d / c_true`` plus the
-    jitter, the counter ``floor(TOF / T0) T0``, ``c_assumed TOF``; emitter ``k`` fires at
+    jitter (at least 0), the counter ``floor(TOF / T0) T0``, ``c_assumed TOF``; emitter ``k`` fires at
     ``k`` intervals and its measurement completes a TOF later (a dropout: an interval later).
     Elementwise IEEE arithmetic in numpy's order, so numpy's bits.
 
@@ -519,8 +520,8 @@ def _rounds_loop(
         for j in range(n_receivers):
             for k in range(n_emitters):
                 tof = distance[source, j, k] / true_speed
-                if noisy:
-                    tof = tof + normals[i, j, k] * jitter
+                if noisy:  # the counter cannot stop before the emitter fires
+                    tof = max(tof + normals[i, j, k] * jitter, 0.0)
                 if period > 0.0:
                     tof = np.floor(tof / period) * period
                 start = interval * k

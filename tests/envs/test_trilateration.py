@@ -278,6 +278,19 @@ def test_range_error_without_counter_is_the_jitter_and_averages_as_one_over_n() 
     assert model.averaging_factor(10) == pytest.approx(0.1, rel=1e-12)
 
 
+@pytest.mark.parametrize("quantum", [0.00694, 3.43e-7])
+def test_the_limit_form_continues_the_average_where_it_takes_over(quantum: float) -> None:
+    """From 4 quanta of jitter on, the model is the closed form noise^2 + q^2 / 12: it meets
+    the phase average there, and it needs no table (a 1 GHz counter under 0.5 m of jitter
+    would have asked for 512 x 23 million floats)."""
+    below = quantised_range_error(np.nextafter(4.0 * quantum, 0.0), quantum)
+    limit = quantised_range_error(4.0 * quantum, quantum)
+    assert limit.total_variance_m2 == pytest.approx(below.total_variance_m2, rel=1e-12)
+    assert limit.persistent_variance_m2 == 0.0 and below.persistent_variance_m2 < 1e-20
+    huge = quantised_range_error(0.5, quantum)
+    assert huge.total_variance_m2 == pytest.approx(0.25 + quantum**2 / 12.0, rel=1e-15)
+
+
 def test_range_error_with_large_jitter_is_jitter_plus_uniform_quantisation() -> None:
     model = quantised_range_error(0.02, 0.00694)
     assert model.total_variance_m2 == pytest.approx(0.02**2 + 0.00694**2 / 12.0, rel=1e-3)
@@ -519,3 +532,16 @@ def test_transmitter_frame_changes_keep_the_pose_checks_on_overflow() -> None:
         frame.to_world(Pose(1.5e308, 1.5e308, 0.0))
     with pytest.raises(ValueError, match=r"Pose\.[xy] must be finite"):
         frame.to_transmitter(Pose(1.7e308, 1.7e308, 0.0))
+
+
+def test_the_largest_jitter_and_finest_counter_allowed_run_episodes() -> None:
+    """``range_noise_std_m=0.5`` against ranges of a metre or two (the counter cannot read a
+    negative time of flight) and a 1 GHz counter under it (the error model's closed form)."""
+    for kwargs in ({"fix_counts": [200]}, {"counter_rate_hz": 1e9}):
+        env = gym.make("SonarGym/Trilateration-v0", range_noise_std_m=0.5, **kwargs)
+        env.reset(seed=8)
+        for _ in range(16):
+            observation, reward, terminated, truncated, _ = env.step(0)
+            assert np.isfinite(observation).all() and math.isfinite(reward)
+            if terminated or truncated:
+                break

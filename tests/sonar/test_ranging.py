@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -351,7 +352,7 @@ def test_the_compiled_rounds_give_the_bits_of_the_array_form(
     tof = geometry.true_distances / true_speed
     if noise:
         normals = np.random.default_rng(9).standard_normal(tof.shape)
-        tof = tof + normals * (ranger.range_noise_std_m / true_speed)
+        tof = np.maximum(tof + normals * (ranger.range_noise_std_m / true_speed), 0.0)
     if quantisation:
         tof = np.floor(tof / ranger.timer_period_s) * ranger.timer_period_s
     start = ranger.firing_interval_s * np.arange(3, dtype=np.float64)
@@ -360,6 +361,21 @@ def test_the_compiled_rounds_give_the_bits_of_the_array_form(
     timestamps = np.where(heard, start + tof, start + ranger.firing_interval_s)
     assert measured.distances.tobytes() == distances.tobytes()
     assert measured.timestamps_s.tobytes() == timestamps.tobytes()
+
+
+@pytest.mark.parametrize("quantisation", [True, False])
+def test_a_jitter_as_large_as_the_distance_never_reads_below_zero(quantisation: bool) -> None:
+    """The counter starts when the emitter fires: a time of flight cannot come out negative."""
+    room = ceiling_room()
+    ranger = dataclasses.replace(
+        BeaconRanger.wu_tsai(quantisation=quantisation), range_noise_std_m=2.0
+    )
+    rounds = ranger.measure_repeated(room, Pose(0.0, 0.0, 0.0), 400, np.random.default_rng(1))
+    distances = rounds.distances[np.isfinite(rounds.distances)]
+    assert distances.size > 1000
+    assert distances.min() == 0.0 and (distances > 0.0).mean() > 0.3
+    starts = ranger.firing_interval_s * np.arange(rounds.distances.shape[-1])
+    assert (rounds.timestamps_s >= starts).all()
 
 
 def test_emitter_names_may_be_any_iterable_of_names_once() -> None:
