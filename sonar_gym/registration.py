@@ -5,9 +5,10 @@ environment is made.
 
 Episode limits (``gym.spec(id).max_episode_steps``, enforced by Gymnasium's ``TimeLimit``):
 every env ends its episodes itself, after a number of decisions fixed by its arguments. The
-registered limit is the longest episode any valid arguments allow, so the ``TimeLimit`` never
-cuts an episode the env would have finished and behaviour is the same with the wrapper as
-without it, at default arguments and at any others. :data:`DEFAULT_EPISODE_STEPS` gives the
+registered limit is one step past the longest episode any valid arguments allow (``TimeLimit``
+marks the step that reaches its limit truncated even when the env terminates on it), so the
+wrapper never cuts or relabels an episode and behaviour is the same with it as without it, at
+default arguments and at any others. :data:`DEFAULT_EPISODE_STEPS` gives the
 length at default arguments (the horizon a learner sees out of the box).
 """
 
@@ -24,8 +25,9 @@ class Registration:
 
     Attributes:
         entry_point: ``"module:Class"``.
-        max_episode_steps: the registered step limit (see the module docstring).
-        limit_reason: which argument and validation bound the limit follows from.
+        max_episode_steps: the registered step limit, one past the longest episode (see the
+            module docstring).
+        limit_reason: which argument and validation bound the longest episode follows from.
         default_episode_steps: the episode length at default arguments (most steps, for envs
             whose agent may end early).
     """
@@ -39,21 +41,21 @@ class Registration:
 REGISTRATIONS: dict[str, Registration] = {
     "SonarGym/BeaconScan-v0": Registration(
         "sonar_gym.envs.beacon_scan:BeaconScanEnv",
-        max_episode_steps=1000,
+        max_episode_steps=1001,
         limit_reason="the env truncates itself after max_steps decisions (default 12, at most "
         "1000); the agent may localize earlier",
         default_episode_steps=12,
     ),
     "SonarGym/ActiveBeaconScan-v0": Registration(
         "sonar_gym.envs.active_beacon_scan:ActiveBeaconScanEnv",
-        max_episode_steps=1000,
+        max_episode_steps=1001,
         limit_reason="the env truncates itself after max_steps decisions (default 24, at most "
         "1000); the agent may commit earlier",
         default_episode_steps=24,
     ),
     "SonarGym/SweepLocalization-v0": Registration(
         "sonar_gym.envs.sweep_localization:SweepLocalizationEnv",
-        max_episode_steps=1000,
+        max_episode_steps=1001,
         limit_reason="one decision every decision_spacing_m along the route: ceil(route length "
         "/ spacing), at most ceil(50 m / 0.05 m) = 1000 (default 3.2 m / 0.4 m -> 8 stations "
         "plus the route's end)",
@@ -61,20 +63,20 @@ REGISTRATIONS: dict[str, Registration] = {
     ),
     "SonarGym/Trilateration-v0": Registration(
         "sonar_gym.envs.trilateration:TrilaterationEnv",
-        max_episode_steps=200,
+        max_episode_steps=201,
         limit_reason="one decision per decision point: n_decision_points (default 16, at most 200)",
         default_episode_steps=16,
     ),
     "SonarGym/BlockExpansion-v0": Registration(
         "sonar_gym.envs.block_expansion:BlockExpansionEnv",
-        max_episode_steps=2,
+        max_episode_steps=3,
         limit_reason="one decision per area boundary with decisions='per_boundary': n_areas - 1 "
         "(default 2 areas -> 1 step, at most 3 areas -> 2 steps); one step with 'all_at_once'",
         default_episode_steps=1,
     ),
     "SonarGym/WallCorrection-v0": Registration(
         "sonar_gym.envs.wall_correction:WallCorrectionEnv",
-        max_episode_steps=100,
+        max_episode_steps=101,
         limit_reason="one decision per route leg: n_legs (default 6, at most 100)",
         default_episode_steps=6,
     ),

@@ -197,11 +197,34 @@ def test_every_id_has_a_limit_argument_table_entry() -> None:
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_registered_limit_is_the_longest_episode_valid_arguments_allow(env_id: str) -> None:
-    assert gym.spec(env_id).max_episode_steps == LONGEST_EPISODE[env_id]
+    assert gym.spec(env_id).max_episode_steps == LONGEST_EPISODE[env_id] + 1
     largest, beyond = LIMIT_ARGUMENTS[env_id]
     gym.make(env_id, **largest).close()  # the bound itself is valid
     with pytest.raises(ValueError):
         gym.make(env_id, **beyond)
+
+
+@pytest.mark.parametrize(
+    "env_id",
+    [
+        "SonarGym/Trilateration-v0",
+        "SonarGym/BlockExpansion-v0",
+        "SonarGym/WallCorrection-v0",
+        "SonarGym/SweepLocalization-v0",
+    ],
+)
+def test_the_longest_episode_ends_terminated_and_not_truncated(env_id: str) -> None:
+    """At the largest arguments the env's last step terminates, and TimeLimit leaves it so."""
+    largest, _ = LIMIT_ARGUMENTS[env_id]
+    env = gym.make(env_id, **largest)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    steps, terminated, truncated = 0, False, False
+    while not (terminated or truncated):
+        _, _, terminated, truncated, _ = env.step(env.action_space.sample())
+        steps += 1
+    assert (terminated, truncated) == (True, False)
+    assert steps <= LONGEST_EPISODE[env_id]
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
