@@ -13,7 +13,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from sonar_gym.beacon_visibility import BEACON_ROLES, beacons_visible, sample_start_pose
+from sonar_gym.beacon_visibility import (
+    BEACON_ROLES,
+    START_POSE_TRIES,
+    beacons_visible,
+    sample_start_pose,
+)
 from sonar_gym.envs.action_types import DiscreteChoices, make_action_type
 from sonar_gym.envs.base import INFO_KEYS, SonarEnv, StepOutcome
 from sonar_gym.envs.features import (
@@ -375,6 +380,8 @@ class BeaconScanEnv(SonarEnv):
         self._progress_start = self.observation_spec.layout["sensing_time"].start
         self._episode: _Episode | None = None
         self._room: _Room | None = None
+        if self._fixed_scenario is not None and config.start_pose == "beacons_visible":
+            self._check_start_poses(self._fixed_scenario)
         # bin_ranges and bin_scanned before the first pan: no echo, nothing scanned
         self._unscanned_features = np.concatenate([np.ones(n), np.zeros(n)]).astype(np.float32)
         self._unscanned_features.setflags(write=False)
@@ -461,6 +468,25 @@ class BeaconScanEnv(SonarEnv):
             ),
         )
         return self._info("sensing")
+
+    def _check_start_poses(self, scenario: Scenario) -> None:
+        """Refuse a scenario with no free pose that sees both beacons, before any episode.
+
+        Builds the room the first episode reuses (the temperature only sets the speed of
+        sound, which :func:`beacons_visible` does not read)."""
+        temperatures = self.config.temperature_range_c
+        temperature_c = self.config.temperature_c
+        room = self._room_for(
+            scenario, temperatures[0] if temperature_c is None else float(temperature_c)
+        )
+        try:
+            sample_start_pose(room.world, room.sonar, np.random.default_rng(0))
+        except RuntimeError:
+            raise ValueError(
+                f"argument 'scenario': {scenario.name!r} has no free pose from which both "
+                f"beacons are in the sonar's range and in sight ({START_POSE_TRIES} free poses "
+                "drawn); use start_pose='any' or move the beacons"
+            ) from None
 
     def _room_for(self, scenario: Scenario, temperature_c: float) -> _Room:
         """The static part of an episode, built once per scenario and reused while it lasts."""

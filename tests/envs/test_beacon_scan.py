@@ -68,6 +68,39 @@ def test_every_offered_width_and_increment_pans_from_every_centre(env_id: str) -
     assert steps >= 10
 
 
+HIDDEN_BEACONS = """
+[room]
+min = [-3, -3]
+max = [3, 3]
+[[walls]]
+a = [0, -3]
+b = [0, 3]
+[[cylinders]]
+center = [1.5, 0]
+radius = 0.02
+role = "small_beacon"
+[[cylinders]]
+center = [-1.5, 0]
+radius = 0.05
+role = "large_beacon"
+"""
+
+
+@pytest.mark.parametrize("env_id", [ENV_ID, "SonarGym/ActiveBeaconScan-v0"])
+def test_beacons_no_free_pose_sees_together_are_refused_at_make(
+    env_id: str, tmp_path: Path
+) -> None:
+    """A wall between the beacons: the default start pose cannot exist, and gym.make says so
+    (start_pose='any' still runs there)."""
+    path = tmp_path / "hidden.toml"
+    path.write_text(HIDDEN_BEACONS)
+    with pytest.raises(ValueError, match="argument 'scenario'.*start_pose='any'"):
+        gym.make(env_id, scenario=str(path))
+    env = gym.make(env_id, scenario=str(path), start_pose="any")
+    observation, _ = env.reset(seed=0)
+    assert np.isfinite(observation).all()
+
+
 def test_scenario_without_beacons_is_rejected() -> None:
     with pytest.raises(ValueError, match="small_beacon"):
         gym.make(ENV_ID, scenario="kim_arena")
