@@ -35,7 +35,11 @@ from sonar_gym.envs.config import (
     scenario_field,
 )
 from sonar_gym.localization.kim_fix import fix_covariance, gated_ekf_update, vote_around_estimate
-from sonar_gym.localization.kim_grid import occupancy_grid_of, sweep_end_points
+from sonar_gym.localization.kim_grid import (
+    PAPER_CELL_SIZE_M,
+    occupancy_grid_of,
+    sweep_end_points,
+)
 from sonar_gym.localization.kim import (
     TABLE_1_TRUE_POSITIONS_M,
     Sweep,
@@ -66,6 +70,8 @@ HEADING_STD_SCALE_RAD = math.radians(15.0)
 """Covariance feature: ``sqrt(P_thth) / 15 deg`` (clipped to 1)."""
 DISTANCE_SCALE_M = 2.0
 """Feature: distance driven since the last accepted fix / 2 m (clipped to 1)."""
+MAX_MAP_CELLS = 4_000_000
+"""Largest voting map the env builds: cells of the scenario's bounds (100 m x 100 m of 5 cm)."""
 _RUNNING = "running"
 
 
@@ -327,6 +333,16 @@ class SweepLocalizationEnv(SonarEnv):
             self._scenario: Scenario = load_scenario(config.scenario)
         except (OSError, ValueError) as error:
             raise ValueError(f"argument 'scenario': {error}") from error
+        (x_min, y_min), (x_max, y_max) = self._scenario.bounds
+        cells = ((x_max - x_min) / PAPER_CELL_SIZE_M) * ((y_max - y_min) / PAPER_CELL_SIZE_M)
+        if cells > MAX_MAP_CELLS:
+            raise ValueError(
+                f"argument 'scenario': {self._scenario.name!r} spans "
+                f"{x_max - x_min:g} m x {y_max - y_min:g} m, {cells:.3g} cells of "
+                f"{PAPER_CELL_SIZE_M * 100:g} cm in the voting map; at most {MAX_MAP_CELLS:,} "
+                "(e.g. 100 m x 100 m) are allowed, as the map and its free-distance table "
+                "grow with the area"
+            )
         self.grid = occupancy_grid_of(self._scenario)
         self._bounds = self._scenario.bounds  # (min, max) corners; the scenario never changes
         self._fix_covariance = fix_covariance(

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import pickle
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -365,3 +366,18 @@ def test_covariance_heuristic_beats_the_paper_procedure() -> None:
     paper = [_episode_return(env, PaperAgent(env), seed) for seed in seeds]
     heuristic = [_episode_return(env, CovarianceAgent(env), seed) for seed in seeds]
     assert np.mean(heuristic) > np.mean(paper) + 1.0
+
+
+def test_a_room_too_large_for_the_voting_map_is_refused_by_name(tmp_path: Path) -> None:
+    """The 5 cm voting map and its free-distance table grow with the area: past 100 m x 100 m
+    gym.make names the scenario instead of running the machine out of memory."""
+    path = tmp_path / "hall.toml"
+    path.write_text(
+        """
+[room]
+min = [-50.05, -50]
+max = [50.05, 50]
+"""
+    )
+    with pytest.raises(ValueError, match=r"argument 'scenario'.*100\.1 m x 100 m.*4,000,000"):
+        gym.make(ENV_ID, scenario=str(path))
