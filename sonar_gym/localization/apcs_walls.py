@@ -770,7 +770,7 @@ def fit_group_points(
         return WallFit(GROUP_ZERO_LENGTH, indices, residual_variance)
     start = centroid + extent_start * along  # T_s, foot of the perpendicular from R_s
     end = centroid + extent_end * along  # T_e, foot of the perpendicular from R_e
-    wall = DetectedWall(tuple(start), tuple(end), indices, residual_variance)
+    wall = DetectedWall(tuple(start.tolist()), tuple(end.tolist()), indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)
 
 
