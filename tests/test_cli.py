@@ -603,6 +603,40 @@ def test_evaluate_without_arguments_runs_every_beacon_scan_agent(tmp_path, capsy
     assert "paper" in out and "sector" in out and str(folder / "evaluate.json") in out
 
 
+@pytest.mark.parametrize(
+    "env_id, agent, env_arg, fragment",
+    [
+        (BEACON_SCAN, "paper", "increments_deg=[5]", "'increments_deg' to include 1"),
+        (BEACON_SCAN, "sector", "sector_widths_deg=[60]", "'sector_widths_deg' to include 360"),
+        (
+            "SonarGym/ActiveBeaconScan-v0",
+            "retry",
+            "turn_angles_deg=[30,-30]",
+            "'turn_angles_deg' to include 90",
+        ),
+    ],
+)
+def test_evaluate_refuses_a_built_in_agent_the_env_args_leave_without_its_choices(
+    tmp_path, capsys, env_id, agent, env_arg, fragment
+):
+    code, out, err = run_cli(
+        capsys,
+        "evaluate",
+        "--env",
+        env_id,
+        "--agent",
+        agent,
+        "--env-arg",
+        env_arg,
+        "--out",
+        str(tmp_path / "e"),
+    )
+    assert code == 2
+    assert f"agent {agent!r} cannot act in {env_id}" in err and fragment in err
+    assert "Traceback" not in err + out
+    assert not (tmp_path / "e").exists()
+
+
 def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):
     from sonar_gym.agents.base import make_agent
     from sonar_gym.agents.learned import PolicyAgent
