@@ -229,8 +229,8 @@ class FlatDiscreteActions(_DiscreteActionType):
 
 class BoxActions(ActionType):
     """``Box(-1, 1, (n,), float32)`` over :class:`ContinuousRange`: ``-1`` is ``low``, ``1``
-    is ``high``; a decoded value is clipped into the range first (a no-op for the elements of
-    the space, which :meth:`check` asks for)."""
+    is ``high``; a decoded value is clipped into the range first (for an action :meth:`check`
+    accepts, that moves only a value float32 rounds to -1 or 1)."""
 
     name = "box"
     space: gym.spaces.Box
