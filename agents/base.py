@@ -69,26 +69,6 @@ class ScriptedAgent(ABC, Generic[EnvT]):
         self._env: EnvT = cast(EnvT, unwrap_sonar_env(env))
         self._episode_seen: int | None = None
 
-    def _cannot_act(self, reason: str) -> AgentEnvMismatchError:
-        """The error refusing this agent's env, ``reason`` saying which argument falls short."""
-        spec = self._env.spec
-        env_name = spec.id if spec is not None else type(self._env).__name__
-        return AgentEnvMismatchError(f"agent {self.name!r} cannot act in {env_name}: {reason}")
-
-    def _require_offered(
-        self, purpose: str, argument: str, needed: int, offered: Sequence[int]
-    ) -> None:
-        """Refuse the env unless its argument ``argument`` offers ``needed``.
-
-        Raises:
-            AgentEnvMismatchError: ``needed`` is not in ``offered``.
-        """
-        if needed not in offered:
-            raise self._cannot_act(
-                f"{purpose} needs the env argument {argument!r} to include {needed}; "
-                f"the env has {argument}={list(offered)}"
-            )
-
     def reset(self, seed: int | None = None) -> None:
         """Start a new episode (scripted agents draw nothing, so ``seed`` is unused)."""
         self._episode_seen = None  # adopt the next episode without starting it twice
