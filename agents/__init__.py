@@ -4,6 +4,20 @@
 saved stable-baselines3 model from a path. Scripted agents derive from :class:`ScriptedAgent`.
 """
 
-from sonar_gym.agents.base import Agent, ScriptedAgent, agent_names, make_agent, register_agent
+from sonar_gym.agents.base import (
+    Agent,
+    AgentEnvMismatchError,
+    ScriptedAgent,
+    agent_names,
+    make_agent,
+    register_agent,
+)
 
-__all__ = ["Agent", "ScriptedAgent", "agent_names", "make_agent", "register_agent"]
+__all__ = [
+    "Agent",
+    "AgentEnvMismatchError",
+    "ScriptedAgent",
+    "agent_names",
+    "make_agent",
+    "register_agent",
+]

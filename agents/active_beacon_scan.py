@@ -15,7 +15,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.agents.base import ScriptedAgent, require_offered
+from sonar_gym.agents.beacon_scan import require_full_pan
 from sonar_gym.envs.active_beacon_scan import ActiveBeaconScanEnv
 
 
@@ -25,6 +26,10 @@ class RetryAgent(ScriptedAgent[ActiveBeaconScanEnv]):
     Args:
         max_retries: new poses to try after a failed fix (0: Beom & Cho's procedure).
         turn_deg: the turn before each move, degrees CCW (one of the env's ``turn_angles_deg``).
+
+    Raises:
+        AgentEnvMismatchError: the env offers no 360 deg sector or no 1 deg increment, or
+            (with retries) not the turn ``turn_deg``.
     """
 
     name = "retry"
@@ -33,6 +38,16 @@ class RetryAgent(ScriptedAgent[ActiveBeaconScanEnv]):
         super().__init__(env)
         self.max_retries = max_retries
         self.turn_deg = turn_deg
+        require_full_pan(self.name, self._env)
+        if max_retries > 0:
+            require_offered(
+                self.name,
+                self._env,
+                f"its turn of {turn_deg} deg before each new pose",
+                "turn_angles_deg",
+                turn_deg,
+                self._env.config.turn_angles_deg,
+            )
         self._retries = 0
         self._queue: deque[Any] = deque()
 

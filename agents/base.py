@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import importlib
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, Generic, Protocol, TypeVar, cast, runtime_checkable
 
@@ -41,6 +41,11 @@ class Agent(Protocol):
 EnvT = TypeVar("EnvT", bound=SonarEnv)
 
 
+class AgentEnvMismatchError(ValueError):
+    """An agent cannot act in an env: the env's arguments leave out a choice the agent's
+    procedure needs (the message names the agent, the env argument and what the env offers)."""
+
+
 class ScriptedAgent(ABC, Generic[EnvT]):
     """Base of the scripted agents: a fixed procedure over one sonar_gym environment.
 
@@ -55,6 +60,7 @@ class ScriptedAgent(ABC, Generic[EnvT]):
 
     Raises:
         ValueError: ``env`` is not a sonar_gym environment.
+        AgentEnvMismatchError: the env's arguments leave out a choice the procedure needs.
     """
 
     name: str = "scripted"
@@ -84,6 +90,31 @@ class ScriptedAgent(ABC, Generic[EnvT]):
     @abstractmethod
     def decide(self, observation: Any) -> Any:
         """The procedure's action for ``observation`` within the current episode."""
+
+
+def env_mismatch(agent: str, env: SonarEnv, reason: str) -> AgentEnvMismatchError:
+    """The error refusing ``env`` to agent ``agent``, ``reason`` naming the argument that
+    falls short and what the env has."""
+    env_name = env.spec.id if env.spec is not None else type(env).__name__
+    return AgentEnvMismatchError(f"agent {agent!r} cannot act in {env_name}: {reason}")
+
+
+def require_offered(
+    agent: str, env: SonarEnv, purpose: str, argument: str, needed: int, offered: Sequence[int]
+) -> None:
+    """Refuse ``env`` to agent ``agent`` unless its argument ``argument`` (with the value
+    ``offered``) offers ``needed``, which the agent's ``purpose`` needs.
+
+    Raises:
+        AgentEnvMismatchError: ``needed`` is not in ``offered``.
+    """
+    if needed not in offered:
+        raise env_mismatch(
+            agent,
+            env,
+            f"{purpose} needs the env argument {argument!r} to include {needed}; "
+            f"the env has {argument}={list(offered)}",
+        )
 
 
 AgentFactory = Callable[..., Agent]
@@ -144,6 +175,8 @@ def make_agent(name: str, env: gym.Env[Any, Any], **options: Any) -> Agent:
     Raises:
         ValueError: the name is neither a registered agent for this env nor an existing
             model file; the message lists what is allowed.
+        AgentEnvMismatchError: (a ``ValueError``) a built-in agent whose procedure the env's
+            arguments do not allow (e.g. the paper's 1 deg pan where the env offers only 5 deg).
     """
     env_id = env.spec.id if env.spec is not None else ""
     factory = _REGISTRY.get(env_id, {}).get(name) or _REGISTRY.get(GENERIC, {}).get(name)

@@ -22,7 +22,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from sonar_gym.agents.base import ScriptedAgent
+from sonar_gym.agents.base import ScriptedAgent, env_mismatch, require_offered
 from sonar_gym.envs.beacon_scan import BeaconScanEnv
 
 
@@ -61,9 +61,17 @@ class _ScriptedBeaconAgent(ScriptedAgent[BeaconScanEnv]):
 
 
 class PaperAgent(_ScriptedBeaconAgent):
-    """Beom & Cho: full pan at 1 deg, calibrate (if allowed), localize."""
+    """Beom & Cho: full pan at 1 deg, calibrate (if allowed), localize.
+
+    Raises:
+        AgentEnvMismatchError: the env offers no 360 deg sector or no 1 deg increment.
+    """
 
     name = "paper"
+
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        super().__init__(env)
+        require_full_pan(self.name, self._env)
 
     def _make_plan(self, observation: np.ndarray) -> list[Any]:
         pan = self._env.encode_action("pan", centre_deg=0, width_deg=360, increment_deg=1)
@@ -75,6 +83,10 @@ class SectorAgent(_ScriptedBeaconAgent):
 
     Args:
         margin_deg: bearing uncertainty to cover on each side of an RCD, degrees.
+
+    Raises:
+        AgentEnvMismatchError: the env offers neither a 360 deg sector nor one wide enough
+            for an RCD and both margins wherever the centre snaps to.
     """
 
     name = "sector"
@@ -83,6 +95,20 @@ class SectorAgent(_ScriptedBeaconAgent):
     def __init__(self, env: gym.Env[Any, Any], margin_deg: float = 20.0) -> None:
         super().__init__(env)
         self.margin_deg = margin_deg
+        config = self._env.config
+        # a sector snapped to the nearest centre is off the bearing by up to half a step
+        widest_needed = 2.0 * (self.rcd_half_width_deg + margin_deg) + 360 / config.n_sector_centres
+        widths = config.sector_widths_deg
+        if 360 not in widths and not any(w >= widest_needed for w in widths):
+            raise env_mismatch(
+                self.name,
+                self._env,
+                f"its sectors need the env argument 'sector_widths_deg' to include 360 or a "
+                f"width of at least {widest_needed:g} deg (an RCD of "
+                f"{2 * self.rcd_half_width_deg:g} deg, a margin of {margin_deg:g} deg on each "
+                f"side and half a centre step on each side); the env has "
+                f"sector_widths_deg={list(widths)}",
+            )
 
     def _make_plan(self, observation: np.ndarray) -> list[Any]:
         layout = self._env.observation_layout
@@ -110,6 +136,18 @@ class SectorAgent(_ScriptedBeaconAgent):
             plan.append(self._env.encode_action("pan", centre, sector, increment))
             covered.append((centre, sector))
         return [*plan, *self._finish(observation)]
+
+
+def require_full_pan(agent: str, env: BeaconScanEnv) -> None:
+    """Refuse an env that cannot pan 360 deg at 1 deg (Beom & Cho's scan, Table I).
+
+    Raises:
+        AgentEnvMismatchError: 360 is not in ``sector_widths_deg`` or 1 not in
+            ``increments_deg``.
+    """
+    purpose = "its full pan (360 deg at 1 deg, Beom & Cho's Table I)"
+    require_offered(agent, env, purpose, "sector_widths_deg", 360, env.config.sector_widths_deg)
+    require_offered(agent, env, purpose, "increments_deg", 1, env.config.increments_deg)
 
 
 def _signed_angle(angle_deg: float) -> float:

@@ -29,6 +29,8 @@ import gymnasium as gym
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.validation import shown
+
 
 @dataclass(frozen=True)
 class DiscreteChoices:
@@ -110,7 +112,32 @@ class ActionType(ABC):
 
     @abstractmethod
     def decode(self, action: Any) -> Any:
-        """The choice an element of ``space`` stands for."""
+        """The choice an element of ``space`` stands for (``action`` unchecked: see
+        :meth:`check`)."""
+
+    @abstractmethod
+    def allowed(self) -> str:
+        """What the elements of ``space`` are, in words, for error messages."""
+
+    def check(self, action: Any) -> None:
+        """Refuse an ``action`` outside ``space`` (what an env's ``decode_action`` calls before
+        :meth:`decode`; ``step`` checks with its own fast path).
+
+        Raises:
+            ValueError: ``action`` is not an element of ``space``; the message names it and
+                what is allowed.
+        """
+        if not self._contains(action):
+            raise ValueError(
+                f"argument 'action' must be an element of the action space {self.space}: "
+                f"{self.allowed()}; got {shown(action)}"
+            )
+
+    def _contains(self, action: Any) -> bool:
+        try:
+            return bool(self.space.contains(action))
+        except (TypeError, ValueError):  # e.g. a ragged nested list
+            return False
 
 
 class _DiscreteActionType(ActionType):
@@ -146,6 +173,10 @@ class MultiDiscreteActions(_DiscreteActionType):
     def encode(self, choice: Sequence[int]) -> np.ndarray:
         return np.array(choice, dtype=np.int64)
 
+    def allowed(self) -> str:
+        ranges = ", ".join(f"[0, {size - 1}]" for size in self.choices.sizes)
+        return f"{len(self.choices.sizes)} integers, in {ranges}"
+
     def decode(self, action: Any) -> tuple[int, ...]:
         if type(action) is np.ndarray and action.dtype.kind in "iu":
             return tuple(action.tolist())
@@ -179,6 +210,9 @@ class FlatDiscreteActions(_DiscreteActionType):
         block = self._kinds_with_parameters.index(kind)
         return len(self._parameterless) + block * self._block + code
 
+    def allowed(self) -> str:
+        return f"an integer in [0, {self.space.n - 1}]"
+
     def decode(self, action: Any) -> tuple[int, ...]:
         code = int(action)
         n_parameterless = len(self._parameterless)
@@ -195,7 +229,8 @@ class FlatDiscreteActions(_DiscreteActionType):
 
 class BoxActions(ActionType):
     """``Box(-1, 1, (n,), float32)`` over :class:`ContinuousRange`: ``-1`` is ``low``, ``1``
-    is ``high``; a decoded value is clipped into the range first."""
+    is ``high``; a decoded value is clipped into the range first (for an action :meth:`check`
+    accepts, that moves only a value float32 rounds to -1 or 1)."""
 
     name = "box"
     space: gym.spaces.Box
@@ -214,6 +249,22 @@ class BoxActions(ActionType):
         """The action for values in the range (float32, in ``[-1, 1]`` for values inside it)."""
         values = np.asarray(choice, dtype=np.float64)
         return (2.0 * ((values - self._low) / self._span) - 1.0).astype(np.float32)
+
+    def allowed(self) -> str:
+        return f"{self.space.shape[0]} finite numbers in [-1, 1]"
+
+    def _contains(self, action: Any) -> bool:
+        """Finite values of the space's shape that lie in ``[-1, 1]`` once in float32, as
+        ``step`` takes them (any float dtype: a helper need not insist on float32)."""
+        try:
+            values = np.asarray(action, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            return False
+        if values.shape != self.space.shape or not np.isfinite(values).all():
+            return False
+        with np.errstate(over="ignore"):  # past float32's range: inf, outside the bounds
+            as_space = values.astype(self.space.dtype)
+        return bool(np.all(as_space >= self.space.low) and np.all(as_space <= self.space.high))
 
     def decode(self, action: npt.ArrayLike) -> np.ndarray:
         """The values (float64) an action stands for."""

@@ -245,7 +245,16 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
         return self.action_type.encode((ACTION_KINDS.index(kind), *pan, turn))
 
     def decode_action(self, action: Any) -> ActiveCommand:  # type: ignore[override]
-        """The command an action stands for."""
+        """The command an action stands for.
+
+        Raises:
+            ValueError: ``action`` is not in the action space (the message says what is).
+        """
+        self.action_type.check(action)
+        return self._command(action)
+
+    def _command(self, action: Any) -> ActiveCommand:
+        """:meth:`decode_action` of an action already checked (``step`` checks it)."""
         config = self.config
         kind, centre_index, width_index, increment_index, turn_index = self.action_type.decode(
             action
@@ -271,7 +280,7 @@ class ActiveBeaconScanEnv(BeaconScanEnv):
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
         config = self.config
-        command = self.decode_action(action)
+        command = self._command(action)
         episode.steps += 1
         duration_s = 0.0
         status = "sensing"

@@ -409,10 +409,11 @@ class BeaconScanEnv(SonarEnv):
     ) -> tuple[int, int, int]:
         """The (centre, width, increment) indices of a pan; the centre snaps to the nearest."""
         config = self.config
+        centre = check_number("centre_deg", centre_deg)
         check_choice("width_deg", width_deg, config.sector_widths_deg)
         check_choice("increment_deg", increment_deg, config.increments_deg)
         step = 360 / config.n_sector_centres
-        centre_index = int(round((centre_deg % 360) / step)) % config.n_sector_centres
+        centre_index = int(round((centre % 360) / step)) % config.n_sector_centres
         return (
             centre_index,
             config.sector_widths_deg.index(width_deg),
@@ -420,7 +421,16 @@ class BeaconScanEnv(SonarEnv):
         )
 
     def decode_action(self, action: Any) -> PanCommand:
-        """The command an action stands for."""
+        """The command an action stands for.
+
+        Raises:
+            ValueError: ``action`` is not in the action space (the message says what is).
+        """
+        self.action_type.check(action)
+        return self._command(action)
+
+    def _command(self, action: Any) -> PanCommand:
+        """:meth:`decode_action` of an action already checked (``step`` checks it)."""
         kind, centre_index, width_index, increment_index = self.action_type.decode(action)
         if kind != PAN:
             return PanCommand(ACTION_KINDS[kind])
@@ -505,7 +515,7 @@ class BeaconScanEnv(SonarEnv):
 
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
-        command = self.decode_action(action)
+        command = self._command(action)
         episode.steps += 1
         duration_s = 0.0
         if command.kind == "pan":

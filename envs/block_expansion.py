@@ -413,7 +413,17 @@ class BlockExpansionEnv(SonarEnv):
 
     # --- actions ---------------------------------------------------------------------------
     def decode_action(self, action: npt.ArrayLike) -> tuple[tuple[float, float, float], ...]:
-        """The (d1, d2, d3) triples, metres, an action stands for (one per boundary it covers)."""
+        """The (d1, d2, d3) triples, metres, an action stands for (one per boundary it covers).
+
+        Raises:
+            ValueError: ``action`` is not in the action space: not finite, the wrong shape, or
+                outside ``[-1, 1]`` (the message says what is allowed).
+        """
+        self.action_type.check(action)
+        return self._distances(action)
+
+    def _distances(self, action: npt.ArrayLike) -> tuple[tuple[float, float, float], ...]:
+        """:meth:`decode_action` of an action already checked (``step`` checks it)."""
         fractions = self.action_type.decode(action)
         return fractions_to_distances(fractions, self.config.distance_range_m, self.config.ordering)
 
@@ -510,7 +520,7 @@ class BlockExpansionEnv(SonarEnv):
     def _apply_action(self, action: Any) -> StepOutcome:
         episode = self._require_episode()
         config = self.config
-        episode.chosen.extend(self.decode_action(action))
+        episode.chosen.extend(self._distances(action))
         with self._timed("localization"):
             result = BlockExpansion(
                 self._runner_config(episode.beacons_m, tuple(episode.chosen))

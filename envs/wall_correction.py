@@ -439,7 +439,16 @@ class WallCorrectionEnv(SonarEnv):
         return self.action_type.encode((SIDES.index(side), spacing_index, standoff_index))
 
     def decode_action(self, action: Any) -> LegCommand:
-        """The command an action stands for."""
+        """The command an action stands for.
+
+        Raises:
+            ValueError: ``action`` is not in the action space (the message says what is).
+        """
+        self.action_type.check(action)
+        return self._command(action)
+
+    def _command(self, action: Any) -> LegCommand:
+        """:meth:`decode_action` of an action already checked (``step`` checks it)."""
         config = self.config
         side_index, spacing_index, standoff_index = self.action_type.decode(action)
         return LegCommand(
@@ -504,7 +513,7 @@ class WallCorrectionEnv(SonarEnv):
     def _apply_action(self, action: Any) -> StepOutcome:
         route = self._require_episode()
         config = self.config
-        command = self.decode_action(action)
+        command = self._command(action)
         summary = LegSummary()
         for side in SIDE_NAMES:
             if side not in command.active_sides:

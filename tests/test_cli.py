@@ -86,6 +86,86 @@ def test_malformed_command_lines_exit_with_status_2(argv, capsys):
     assert "usage:" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["evaluate", "--seed", "-1"],
+        ["train", "--env", DISCRETE_ID, "--algo", "ppo", "--timesteps", "10", "--seed", "-5"],
+    ],
+)
+def test_a_negative_seed_is_a_usage_error_naming_the_option(argv, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        cli.main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert f"argument --seed: must be zero or more, got {argv[-1]}" in err
+
+
+def unusable_output_command_lines(tmp_path: Path) -> list[tuple[list[str], str]]:
+    """Command lines whose output path is in the way of a file or a folder, with the part of
+    the error that names the option and its value."""
+    a_file = tmp_path / "a_file"
+    a_file.write_text("")
+    a_dir = tmp_path / "a_dir"
+    a_dir.mkdir()
+    evaluate = ["evaluate", "--env", DISCRETE_ID, "--episodes", "2", "--out", str(tmp_path / "e")]
+    train = ["train", "--env", DISCRETE_ID, "--algo", "ppo", "--timesteps", "64", "--no-progress"]
+    return [
+        (["evaluate", "--env", DISCRETE_ID, "--out", f"{a_file}/sub"], f"--out {a_file}/sub"),
+        (["evaluate", "--env", DISCRETE_ID, "--out", str(a_file)], f"--out {a_file}: is a file"),
+        ([*evaluate, "--json", f"{a_file}/x.json"], f"--json {a_file}/x.json"),
+        ([*evaluate, "--csv", str(a_dir)], f"--csv {a_dir}: is a directory"),
+        ([*evaluate, "--plot", str(tmp_path / "x.txt")], "cannot write '.txt' files"),
+        (["reproduce", "--out", str(a_file), "roh"], f"--out {a_file}/roh"),
+        ([*train, "--out", f"{a_file}/r6"], f"--out {a_file}/r6"),
+        (
+            ["benchmark", "--env", DISCRETE_ID, "--seconds", "0.1", "--json", str(a_dir)],
+            f"--json {a_dir}: is a directory",
+        ),
+    ]
+
+
+@pytest.mark.parametrize("case", range(8))
+def test_an_unusable_output_path_is_a_usage_error_before_anything_runs(
+    case, tmp_path, capsys, monkeypatch
+):
+    argv, fragment = unusable_output_command_lines(tmp_path)[case]
+    from sonar_gym.train import evaluation, training
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the work started before the output path was checked")
+
+    monkeypatch.setattr(evaluation, "evaluate_agents", must_not_run)
+    monkeypatch.setattr(training, "_build_model", must_not_run)
+    monkeypatch.setattr("sonar_gym.train.reproduce.roh.run", must_not_run)
+    monkeypatch.setattr("sonar_gym.train.benchmark.run_benchmark", must_not_run)
+    code, out, err = run_cli(capsys, *argv)
+    assert code == 2, err
+    assert fragment in err
+    assert "Traceback" not in err + out
+    assert not (tmp_path / "e").exists()
+
+
+def test_missing_parents_of_the_outputs_are_made(tmp_path, capsys):
+    code, _, err = run_cli(
+        capsys,
+        "evaluate",
+        "--env",
+        DISCRETE_ID,
+        "--episodes",
+        "1",
+        "--out",
+        str(tmp_path / "a" / "b"),
+        "--csv",
+        str(tmp_path / "c" / "d" / "e.csv"),
+        "--plot",
+        str(tmp_path / "f" / "p.svg"),
+    )
+    assert code == 0, err
+    assert (tmp_path / "a" / "b" / "evaluate.json").is_file()
+    assert (tmp_path / "c" / "d" / "e.csv").is_file() and (tmp_path / "f" / "p.svg").is_file()
+
+
 # --------------------------------------------------------------------------------------------
 # evaluate
 
@@ -601,6 +681,40 @@ def test_evaluate_without_arguments_runs_every_beacon_scan_agent(tmp_path, capsy
         assert all(isinstance(e["position_error_m"], float) for e in result["episodes"])
     assert (tmp_path / folder / "evaluate.png").is_file()
     assert "paper" in out and "sector" in out and str(folder / "evaluate.json") in out
+
+
+@pytest.mark.parametrize(
+    "env_id, agent, env_arg, fragment",
+    [
+        (BEACON_SCAN, "paper", "increments_deg=[5]", "'increments_deg' to include 1"),
+        (BEACON_SCAN, "sector", "sector_widths_deg=[60]", "'sector_widths_deg' to include 360"),
+        (
+            "SonarGym/ActiveBeaconScan-v0",
+            "retry",
+            "turn_angles_deg=[30,-30]",
+            "'turn_angles_deg' to include 90",
+        ),
+    ],
+)
+def test_evaluate_refuses_a_built_in_agent_the_env_args_leave_without_its_choices(
+    tmp_path, capsys, env_id, agent, env_arg, fragment
+):
+    code, out, err = run_cli(
+        capsys,
+        "evaluate",
+        "--env",
+        env_id,
+        "--agent",
+        agent,
+        "--env-arg",
+        env_arg,
+        "--out",
+        str(tmp_path / "e"),
+    )
+    assert code == 2
+    assert f"agent {agent!r} cannot act in {env_id}" in err and fragment in err
+    assert "Traceback" not in err + out
+    assert not (tmp_path / "e").exists()
 
 
 def test_train_on_beacon_scan_then_evaluate_the_policy(tmp_path, capsys):

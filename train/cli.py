@@ -4,9 +4,9 @@
 Parsing only; the work happens in :mod:`sonar_gym.train.evaluation`,
 :mod:`sonar_gym.train.training`, :mod:`sonar_gym.train.benchmark`,
 :mod:`sonar_gym.train.baselines` and :mod:`sonar_gym.train.report`. A request the user can
-fix (unknown env or agent, bad ``--env-arg``, an algorithm the action space does not allow)
-prints one line naming the allowed values and exits with status 2. ``python -m sonar_gym``
-runs the same command line.
+fix (unknown env or agent, bad ``--env-arg``, an algorithm the action space does not allow, an
+output path a file or folder is in the way of) prints one line naming the allowed values and
+exits with status 2, before any work runs. ``python -m sonar_gym`` runs the same command line.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from typing import Any
 
 from rich.console import Console
 
-from sonar_gym.train import UsageError
+from sonar_gym.train import UsageError, output_paths
 
 PROGRAM = "sonar-gym"
 DEFAULT_EPISODES = 50
@@ -75,7 +75,11 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"episodes per agent and env (default {DEFAULT_EPISODES})",
     )
     evaluate.add_argument(
-        "--seed", type=int, default=0, metavar="S", help="episode i uses seed S + i (default 0)"
+        "--seed",
+        type=_non_negative_int,
+        default=0,
+        metavar="S",
+        help="episode i uses seed S + i (default 0)",
     )
     evaluate.add_argument(
         "--out",
@@ -137,7 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="run directory (default runs/<env-short>-<algo>-<seed>)",
     )
-    train.add_argument("--seed", type=int, default=0, metavar="S", help="default 0")
+    train.add_argument("--seed", type=_non_negative_int, default=0, metavar="S", help="default 0")
     train.add_argument(
         "--n-envs",
         type=_positive_int,
@@ -408,9 +412,18 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
     from sonar_gym.train.progress import episode_progress
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    out_dir = evaluate_output_dir(arguments, env_kwargs)
+    json_path = arguments.json or out_dir / "evaluate.json"
+    plot_path = arguments.plot or out_dir / "evaluate.png"
+    # report mistakes before anything runs
+    output_paths.check_output_dir("--out", out_dir)
+    output_paths.check_output_file("--json" if arguments.json else "--out", json_path)
+    if arguments.csv is not None:
+        output_paths.check_output_file("--csv", arguments.csv)
+    output_paths.check_plot_file("--plot" if arguments.plot else "--out", plot_path)
     env_ids = evaluation.resolve_env_ids(arguments.env or [evaluation.DEFAULT_ENV_ID])
     plan = evaluation.resolve_agent_names(env_ids, arguments.agent)
-    evaluation.validate_plan(plan, env_kwargs)  # report mistakes before anything runs
+    evaluation.validate_plan(plan, env_kwargs)
     total = evaluation.count_episodes(plan, arguments.episodes)
     last_seed = arguments.seed + arguments.episodes - 1
     console.print(
@@ -418,9 +431,6 @@ def _evaluate(arguments: argparse.Namespace, console: Console) -> None:
         f"on {', '.join(env_ids)}",
         markup=False,
     )
-    out_dir = evaluate_output_dir(arguments, env_kwargs)
-    json_path = arguments.json or out_dir / "evaluate.json"
-    plot_path = arguments.plot or out_dir / "evaluate.png"
     started = time.perf_counter()
     with episode_progress(console, total) as advance:
         results = evaluation.evaluate_agents(
@@ -477,6 +487,8 @@ def _train(arguments: argparse.Namespace, console: Console) -> None:
     from sonar_gym.train.training import evaluate_command, train
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
+    if arguments.out is not None:
+        output_paths.check_output_dir("--out", arguments.out)
     if arguments.backend == "rllib":
         _train_rllib(arguments, env_kwargs, console)
         return
@@ -568,6 +580,10 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
 
     env_kwargs = evaluation.parse_env_args(arguments.env_arg)
     env_ids = evaluation.resolve_env_ids(arguments.env)
+    json_path = arguments.json or DEFAULT_BENCHMARK_ROOT / benchmark_file_name(
+        arguments.env, arguments.seconds, env_kwargs
+    )
+    output_paths.check_output_file("--json", json_path)
     started = time.perf_counter()
     with console.status("benchmark") as status:
         results = benchmark.run_benchmark(
@@ -595,9 +611,6 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
         "versions": evaluation.software_versions(),
         "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
     }
-    json_path = arguments.json or DEFAULT_BENCHMARK_ROOT / benchmark_file_name(
-        arguments.env, arguments.seconds, env_kwargs
-    )
     json_path.parent.mkdir(parents=True, exist_ok=True)
     json_path.write_text(json.dumps(results.to_dict(meta), indent=2) + "\n")
     console.print(f"Benchmark took {elapsed_s:.0f} s. Wrote {json_path}", markup=False)
@@ -625,6 +638,7 @@ def _baselines(arguments: argparse.Namespace, console: Console) -> None:
     out_dir = arguments.out or DEFAULT_BASELINES_DIR / baselines.output_folder_name(
         arguments.env, arguments.episodes, arguments.pretrained
     )
+    output_paths.check_output_dir("--out", out_dir)
     if arguments.update_readme:  # a missing marker should stop the run before it starts
         baselines.check_readme_markers(arguments.readme)
     if arguments.pretrained:
@@ -715,6 +729,8 @@ def _reproduce(arguments: argparse.Namespace, console: Console) -> None:
         raise UsageError(
             f"no reproduction is available yet; the papers are {list(REPRODUCIBLE_PAPERS)}"
         )
+    for name in dict.fromkeys(requested):  # every paper's folder, before the first one runs
+        output_paths.check_output_dir("--out", arguments.out / name.replace("-", "_"))
     from sonar_gym.train.report import CompactConsole
 
     for name in dict.fromkeys(requested):

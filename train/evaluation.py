@@ -371,10 +371,14 @@ def make_env(env_id: str, env_kwargs: Mapping[str, Any] | None = None) -> gym.En
 
 def make_named_agent(name: str, env: gym.Env) -> agent_registry.Agent:
     """:func:`sonar_gym.agents.base.make_agent`, with a saved model that does not fit ``env``
-    (or is not a model at all) reported as a :class:`train.UsageError`."""
+    (or is not a model at all), and a built-in agent whose procedure the env's arguments do not
+    allow, reported as a :class:`train.UsageError`."""
     env_id = env.spec.id if env.spec is not None else ""
     if name in agent_registry.agent_names(env_id) and not agent_registry.is_conditional(name):
-        return agent_registry.make_agent(name, env)
+        try:
+            return agent_registry.make_agent(name, env)
+        except agent_registry.AgentEnvMismatchError as error:
+            raise UsageError(str(error)) from error
     try:
         return agent_registry.make_agent(name, env)
     except ValueError as error:
@@ -383,7 +387,8 @@ def make_named_agent(name: str, env: gym.Env) -> agent_registry.Agent:
 
 def validate_plan(plan: Mapping[str, Sequence[str]], env_kwargs: Mapping[str, Any]) -> None:
     """Check, before anything runs, that every env of ``plan`` accepts ``env_kwargs`` and that
-    every saved model of ``plan`` loads for its env.
+    every agent of ``plan`` can be made for its env (saved models load and fit, built-in agents
+    find the choices their procedures need).
 
     Raises:
         UsageError: the first problem found.
@@ -392,10 +397,7 @@ def validate_plan(plan: Mapping[str, Sequence[str]], env_kwargs: Mapping[str, An
         env = make_env(env_id, env_kwargs)
         try:
             for name in names:
-                if name not in agent_registry.agent_names(env_id) or (
-                    agent_registry.is_conditional(name)
-                ):
-                    make_named_agent(name, env)
+                make_named_agent(name, env)
         finally:
             env.close()
 

@@ -1,4 +1,5 @@
-"""Scripted agents notice a new episode without ``reset()`` and refuse a non-sonar env."""
+"""Scripted agents notice a new episode without ``reset()`` and refuse, when made, an env they
+cannot act in."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from sonar_gym.agents import ScriptedAgent, make_agent
+from sonar_gym.agents import AgentEnvMismatchError, ScriptedAgent, make_agent
 from sonar_gym.agents.base import Agent
 from sonar_gym.agents.beacon_scan import PaperAgent as BeaconScanPaperAgent
 
@@ -95,3 +96,65 @@ def test_reset_before_the_env_reset_starts_the_episode_once() -> None:
 def test_scripted_agent_refuses_an_env_that_is_not_a_sonar_env() -> None:
     with pytest.raises(ValueError, match="sonar_gym environment.*CartPoleEnv"):
         BeaconScanPaperAgent(gym.make("CartPole-v1"))
+
+
+ACTIVE_BEACON_SCAN = "SonarGym/ActiveBeaconScan-v0"
+
+
+@pytest.mark.parametrize(
+    ("env_id", "agent_name", "env_kwargs", "argument", "needed", "offered"),
+    [
+        (BEACON_SCAN, "paper", {"increments_deg": [5]}, "increments_deg", "1", "[5]"),
+        (
+            BEACON_SCAN,
+            "paper",
+            {"sector_widths_deg": [90, 180]},
+            "sector_widths_deg",
+            "360",
+            "[90, 180]",
+        ),
+        (BEACON_SCAN, "sector", {"sector_widths_deg": [60]}, "sector_widths_deg", "360", "[60]"),
+        (ACTIVE_BEACON_SCAN, "paper", {"increments_deg": [2, 5]}, "increments_deg", "1", "[2, 5]"),
+        (ACTIVE_BEACON_SCAN, "retry", {"increments_deg": [5]}, "increments_deg", "1", "[5]"),
+        (
+            ACTIVE_BEACON_SCAN,
+            "retry",
+            {"turn_angles_deg": [30, -30]},
+            "turn_angles_deg",
+            "90",
+            "[30, -30]",
+        ),
+    ],
+)
+def test_scripted_agent_refuses_up_front_an_env_without_the_choices_it_needs(
+    env_id: str,
+    agent_name: str,
+    env_kwargs: dict[str, Any],
+    argument: str,
+    needed: str,
+    offered: str,
+) -> None:
+    env = gym.make(env_id, **env_kwargs)
+    with pytest.raises(AgentEnvMismatchError) as caught:
+        make_agent(agent_name, env)
+    message = str(caught.value)
+    assert f"agent {agent_name!r} cannot act in {env_id}" in message
+    assert f"env argument {argument!r} to include {needed}" in message
+    assert f"the env has {argument}={offered}" in message
+
+
+@pytest.mark.parametrize(
+    ("env_id", "agent_name", "env_kwargs"),
+    [
+        # no 360 deg sector, but one wide enough wherever the 90 deg centre grid snaps to
+        (BEACON_SCAN, "sector", {"sector_widths_deg": [90, 180], "n_sector_centres": 4}),
+        # the paper agent never turns, so it needs none of the turns
+        (ACTIVE_BEACON_SCAN, "paper", {"turn_angles_deg": [30, -30]}),
+    ],
+)
+def test_scripted_agent_plays_an_env_that_offers_what_its_procedure_uses(
+    env_id: str, agent_name: str, env_kwargs: dict[str, Any]
+) -> None:
+    env = gym.make(env_id, **env_kwargs)
+    outcomes = _play(env, make_agent(agent_name, env), range(5), reset_agent=False)
+    assert len(outcomes) == 5

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import re
 
 import gymnasium as gym
 import numpy as np
@@ -13,6 +14,7 @@ from hypothesis import strategies as st
 
 from sonar_gym.envs.action_types import (
     ACTION_TYPES,
+    ActionType,
     BoxActions,
     ContinuousRange,
     DiscreteChoices,
@@ -158,3 +160,63 @@ def test_bad_choices_name_the_field(sizes, parameterless, field) -> None:
 def test_bad_ranges_are_refused(low, high) -> None:
     with pytest.raises(ValueError, match="'low' and 'high'"):
         ContinuousRange(low, high)
+
+
+@pytest.mark.parametrize(
+    ("codec", "action", "allowed"),
+    [
+        (
+            MultiDiscreteActions(DiscreteChoices((3, 4))),
+            [0, 4],
+            r"2 integers, in \[0, 2\], \[0, 3\]",
+        ),
+        (MultiDiscreteActions(DiscreteChoices((3, 4))), [-1, 0], r"in \[0, 2\], \[0, 3\]"),
+        (MultiDiscreteActions(DiscreteChoices((3, 4))), [0.5, 1.0], r"in \[0, 2\], \[0, 3\]"),
+        (MultiDiscreteActions(DiscreteChoices((3, 4))), [[0], [0, 1]], r"in \[0, 2\], \[0, 3\]"),
+        (FlatDiscreteActions(DiscreteChoices((2, 3), (0,))), 4, r"an integer in \[0, 3\]"),
+        (FlatDiscreteActions(DiscreteChoices((2, 3), (0,))), -1, r"an integer in \[0, 3\]"),
+        (FlatDiscreteActions(DiscreteChoices((2, 3), (0,))), "1", r"an integer in \[0, 3\]"),
+        (BoxActions(ContinuousRange.unit(3)), [5.0, 5.0, 5.0], r"3 finite numbers in \[-1, 1\]"),
+        (BoxActions(ContinuousRange.unit(3)), [math.nan, 0.0, 0.0], r"finite numbers"),
+        (BoxActions(ContinuousRange.unit(3)), [0.0, -math.inf, 0.0], r"finite numbers"),
+        (BoxActions(ContinuousRange.unit(3)), [1e300, 0.0, 0.0], r"finite numbers"),
+        (BoxActions(ContinuousRange.unit(3)), [0.0, 0.0], r"3 finite numbers"),
+        (BoxActions(ContinuousRange.unit(3)), None, r"3 finite numbers"),
+        (BoxActions(ContinuousRange.unit(3)), "abc", r"3 finite numbers"),
+    ],
+)
+def test_check_refuses_an_action_outside_the_space_naming_it_and_what_is_allowed(
+    codec: ActionType, action: object, allowed: str
+) -> None:
+    with pytest.raises(ValueError, match=r"argument 'action' must be an element of") as error:
+        codec.check(action)
+    assert re.search(allowed, str(error.value)), error.value
+    assert str(error.value).endswith(f"got {action!r}")
+
+
+@pytest.mark.filterwarnings("ignore:.*Casting input x to numpy array")
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast")
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.floats(-1.0, 1.0),
+            st.floats(1.0, 1.0 + 1e-7),  # rounds to 1 in float32 or past it
+            st.floats(-1.0 - 1e-7, -1.0),
+            st.floats(),  # anything, NaN and inf included
+        ),
+        min_size=3,
+        max_size=3,
+    )
+)
+def test_box_check_accepts_exactly_what_the_space_contains(action: list[float]) -> None:
+    codec = BoxActions(ContinuousRange.unit(3))
+    contained = codec.space.contains(action)  # what step accepts
+    try:
+        codec.check(action)
+    except ValueError:
+        assert not contained
+    else:
+        assert contained
+        decoded = codec.decode(action)
+        assert np.all((decoded >= 0.0) & (decoded <= 1.0))  # inside the range

@@ -177,3 +177,25 @@ def test_a_turn_after_moves_into_contact_works() -> None:
         assert not (terminated or truncated)
     assert np.isfinite(obs).all()
     assert env.unwrapped.world.is_free(info["true_pose"][:2], radius=0.29)
+
+
+@pytest.mark.parametrize("centre_deg", [math.nan, math.inf, None, "north"])
+def test_a_pan_centre_that_is_not_a_finite_number_is_refused_naming_it(centre_deg: Any) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    with pytest.raises(ValueError, match=r"argument 'centre_deg' must be a finite number; got"):
+        env.encode_action("pan", centre_deg=centre_deg)
+
+
+@pytest.mark.parametrize(
+    "action", [[6, 0, 0, 0, 0], [0, 36, 0, 0, 0], [4, 0, 0, 0, 4], [4, 0, 0, 0, -1]]
+)
+def test_decoding_an_action_outside_the_space_names_it_and_the_allowed_range(
+    action: list[int],
+) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    with pytest.raises(
+        ValueError,
+        match=r"argument 'action' must be .*: 5 integers, in \[0, 5\], \[0, 35\], "
+        r"\[0, 4\], \[0, 2\], \[0, 3\]; got",
+    ):
+        env.decode_action(action)

@@ -120,6 +120,35 @@ def test_encode_and_decode_are_inverse(action_type: str) -> None:
     )
 
 
+@pytest.mark.parametrize("centre_deg", [math.nan, math.inf, -math.inf, None, "90", True])
+def test_a_pan_centre_that_is_not_a_finite_number_is_refused_naming_it(centre_deg: Any) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    with pytest.raises(ValueError, match=r"argument 'centre_deg' must be a finite number; got"):
+        env.encode_action("pan", centre_deg=centre_deg)
+
+
+@pytest.mark.parametrize(
+    ("action_type", "action", "allowed"),
+    [
+        (
+            "multi_discrete",
+            [0, 36, 0, 0],
+            r"4 integers, in \[0, 2\], \[0, 35\], \[0, 4\], \[0, 2\]",
+        ),
+        ("multi_discrete", [0, 0, -1, 0], r"4 integers, in \[0, 2\], \[0, 35\]"),
+        ("multi_discrete", [3, 0, 0, 0], r"4 integers, in \[0, 2\]"),
+        ("discrete", 10_000, r"an integer in \[0, 541\]"),
+        ("discrete", -1, r"an integer in \[0, 541\]"),
+    ],
+)
+def test_decoding_an_action_outside_the_space_names_it_and_the_allowed_range(
+    action_type: str, action: Any, allowed: str
+) -> None:
+    env = gym.make(ENV_ID, action_type=action_type).unwrapped
+    with pytest.raises(ValueError, match=rf"argument 'action' must be .*: {allowed}.*; got"):
+        env.decode_action(action)
+
+
 def _paper_agent_errors(
     episodes: int, **env_kwargs: object
 ) -> tuple[list[str], np.ndarray, np.ndarray]:

@@ -422,3 +422,26 @@ def test_ranging_along_a_route_reuses_its_geometry_only_for_the_same_beacons() -
             np.random.default_rng(3),
             geometry,
         )
+
+
+@pytest.mark.parametrize(
+    "action",
+    [[5.0, 5.0, 5.0], [0.0, -1.5, 0.0], [math.nan, 0.0, 0.0], [0.0, math.inf, 0.0], [0.1, 0.2]],
+)
+def test_decoding_an_action_outside_the_space_names_it_and_the_allowed_range(
+    action: list[float],
+) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    with pytest.raises(
+        ValueError, match=r"argument 'action' must be .*: 3 finite numbers in \[-1, 1\]; got"
+    ):
+        env.decode_action(action)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.floats(-1.0, 1.0, width=32), min_size=3, max_size=3))
+def test_every_element_of_the_space_decodes_inside_the_distance_range(action: list[float]) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    (d,) = env.decode_action(np.asarray(action, dtype=np.float32))
+    low, high = env.config.distance_range_m
+    assert all(low <= value <= high for value in d)

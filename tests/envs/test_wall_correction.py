@@ -411,3 +411,15 @@ def test_sensing_both_walls_beats_the_papers_single_wall_at_the_same_sensing_tim
         assert both_info["n_matched_walls"] > paper_info["n_matched_walls"]
     assert both_rewards.mean() > paper_rewards.mean()
     assert both_rewards.min() > paper_rewards.min()  # the drift that loses the heading
+
+
+@pytest.mark.parametrize("action", [[5, 5, 5], [0, -1, 0], [4, 0, 0], [0, 0, 5]])
+def test_decoding_an_action_outside_the_space_names_it_and_the_allowed_range(
+    action: list[int],
+) -> None:
+    env = gym.make(ENV_ID).unwrapped
+    with pytest.raises(
+        ValueError,
+        match=r"argument 'action' must be .*: 3 integers, in \[0, 3\], \[0, 2\], \[0, 4\]; got",
+    ):
+        env.decode_action(action)
