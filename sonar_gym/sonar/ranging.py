@@ -496,9 +496,9 @@ def _rounds_loop(
     """``(n_rounds, R, E)`` measured distances (metres, NaN = dropout) and timestamps (s).
 
     Steps 2-4 of the module docstring for every measurement: ``TOF = d / c_true`` plus the
-    jitter (at least 0), the counter ``floor(TOF / T0) T0``, ``c_assumed TOF``; emitter ``k`` fires at
-    ``k`` intervals and its measurement completes a TOF later (a dropout: an interval later).
-    Elementwise IEEE arithmetic in numpy's order, so numpy's bits.
+    jitter (at least 0), the counter ``floor(TOF / T0) T0``, ``c_assumed TOF``; emitter ``k``
+    fires at ``k`` intervals and its measurement completes a TOF later (a dropout: an interval
+    later). Elementwise IEEE arithmetic in numpy's order, so numpy's bits.
 
     Args:
         distance, heard: ``(n_rounds, R, E)`` true distances (metres) and what is heard, or
