@@ -291,6 +291,7 @@ def test_unknown_env_exits_2_naming_the_allowed_ids(capsys):
     code, out, err = run_cli(capsys, "evaluate", "--env", "SonarGym/Nope-v0")
     assert code == 2
     assert "unknown env 'SonarGym/Nope-v0'" in err and "'all'" in err
+    assert "any other registered Gymnasium id" in err
     assert "SonarGym/BeaconScan-v0" in err
     assert "Traceback" not in err + out
 

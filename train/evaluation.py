@@ -227,7 +227,8 @@ def resolve_env_ids(selection: str | Sequence[str], namespace: str = ENV_NAMESPA
                 guesses = difflib.get_close_matches(candidate, known, n=1, cutoff=0.6)
                 hint = f" (did you mean {guesses[0]!r}?)" if guesses else ""
                 raise UsageError(
-                    f"unknown env {candidate!r}{hint}; choose one of {known + [ALL_ENVS]}"
+                    f"unknown env {candidate!r}{hint}; choose one of {known + [ALL_ENVS]} "
+                    "(or any other registered Gymnasium id)"
                 )
             if candidate not in env_ids:
                 env_ids.append(candidate)
