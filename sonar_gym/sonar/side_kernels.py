@@ -1,7 +1,8 @@
 """Compiled loops of the side sonars' first echoes (numba): one ping from each of many sensors.
 
-:func:`sonar_gym.sonar.swept._side_first_echoes_arrays` evaluates the echo search and the
-detection for ``P`` sensor positions as ``(P, N)`` arrays of ``N`` candidates. On the few dozen
+The array form (``tests/sonar/side_echoes_reference.py``, the tests' reference) evaluates the
+echo search and the detection for ``P`` sensor positions as ``(P, N)`` arrays of ``N``
+candidates. On the few dozen
 positions of a leg and the few dozen candidates of a room, numpy's per-call cost is most of
 that time. These loops do the same arithmetic element by element, in the same order, so they
 return the same bits (see :mod:`sonar_gym.sonar.kernels` for why elementwise steps agree).

@@ -1,7 +1,7 @@
 """The side sonars' compiled first echoes against the array form they replace, bit for bit.
 
 :func:`~sonar_gym.sonar.swept._side_first_echoes` runs the loops of
-:mod:`sonar_gym.sonar.side_kernels`; :func:`~sonar_gym.sonar.swept._side_first_echoes_arrays`
+:mod:`sonar_gym.sonar.side_kernels`; ``side_echoes_reference.side_first_echoes_arrays``
 is the ``(P, N)`` array form (itself checked pose by pose against the pan's echo search in
 ``test_swept.py``). Every transducer option the loops branch on is covered: air absorption,
 the receiver's gain, side lobes, leakage, the GTD edge law, sensors off the robot centre, the
@@ -26,6 +26,7 @@ from sonar_gym.sonar.pulse_echo import FirstEchoes
 from sonar_gym.sonar.swept import SIDE_NAMES, SideSonars
 from sonar_gym.world import World
 from tests.fuzzing import fuzz_settings
+from tests.sonar.side_echoes_reference import side_first_echoes_arrays
 from tests.sonar.worlds import cluttered_room, world
 
 
@@ -77,7 +78,7 @@ def _both(sonar: SideSonars, world: Any, poses: np.ndarray) -> tuple[FirstEchoes
     angle = headings + side_sign * (math.pi / 2.0)
     sensors = centres + sonar.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
     arguments = (sonar, world, sensors, centres, headings, side_sign)
-    return swept._side_first_echoes(*arguments), swept._side_first_echoes_arrays(*arguments)
+    return swept._side_first_echoes(*arguments), side_first_echoes_arrays(*arguments)
 
 
 def _assert_same_bits(compiled: FirstEchoes, arrays: FirstEchoes) -> None:
