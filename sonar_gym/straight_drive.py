@@ -175,9 +175,16 @@ def drive_commands(
     noise = robot.noise
     normals = np.array(draws.normals)
     uniforms = np.array(draws.uniforms)
-    encoder = noise.encoder_increments(commanded, normals)  # (K, 2)
-    scale_errors = np.array([noise.scale_error_left, noise.scale_error_right])
-    ground = noise.ground_travel(commanded, scale_errors, uniforms[:, :2], uniforms[:, 2:])
+    encoder, ground = straight_drive_kernels.wheel_travel(
+        commanded,
+        normals,
+        uniforms,
+        noise.slip_probability(commanded),
+        noise.encoder_std_m_per_sqrt_m,
+        noise.scale_error_left,
+        noise.scale_error_right,
+        noise.slip_fraction_max,
+    )
     odometry = robot.odometry_pose if robot.odometry_pose is not None else world.robot_pose
     ground_turn, substeps, substep_distance, substep_heading, odometry_theta_after = (
         straight_drive_kernels.command_substeps(

@@ -9,6 +9,7 @@ differently from libm's): callers pass it in.
 
 For a run of ``K`` commands, in order:
 
+0. :func:`wheel_travel`: each command's encoder increments and ground travel;
 1. :func:`command_substeps`: each command's heading change on the ground and its physics
    substeps, and the odometry's substeps (distance and midpoint heading of each);
 2. :func:`arc_headings`: the headings of the planned arcs of the ground travel from the
@@ -28,6 +29,7 @@ import numpy as np
 from numba import types
 
 from sonar_gym.compiled import NUMBERS, TABLE, compiled, nan_max, nan_min, wrap_to_pi
+from sonar_gym.drive_kernels import encoder_increment, slipped_travel
 from sonar_gym.pose import FloatArray
 
 _VECTOR_OUT = types.Array(types.float64, 1, "C")
@@ -40,6 +42,56 @@ ROUNDING_M = 1e-6
 """Slack (metres) added to every clearance bound, for the rounding of the planned path."""
 _SMALL_HALF_TURN_RAD = 1e-4
 """:func:`sonar_gym.odometry.sinc` takes its series below this argument (radians)."""
+
+
+@compiled(  # type: ignore[misc]
+    types.UniTuple(_TABLE_OUT, 2),
+    TABLE,  # commanded
+    TABLE,  # normals
+    TABLE,  # uniforms
+    TABLE,  # slip_probability
+    types.float64,  # encoder_std_m_per_sqrt_m
+    types.float64,  # scale_error_left
+    types.float64,  # scale_error_right
+    types.float64,  # slip_fraction_max
+)
+def wheel_travel(
+    commanded: FloatArray,
+    normals: FloatArray,
+    uniforms: FloatArray,
+    slip_probability: FloatArray,
+    encoder_std_m_per_sqrt_m: float,
+    scale_error_left: float,
+    scale_error_right: float,
+    slip_fraction_max: float,
+) -> tuple[FloatArray, FloatArray]:
+    """``(encoder, ground)``, each ``(K, 2)`` ``(left, right)`` (metres): what the encoders
+    report and how far the wheels roll for the ``(K, 2)`` ``commanded`` increments, as
+    :meth:`~sonar_gym.odometry.OdometryConfig.encoder_increments` and
+    :meth:`~sonar_gym.odometry.OdometryConfig.ground_travel` of the arrays.
+
+    Per command, ``normals`` ``(K, 2)`` are its two standard normals and ``uniforms``
+    ``(K, 4)`` its slip draws (left, right) then slip sizes (left, right);
+    ``slip_probability`` ``(K, 2)`` is numpy's
+    :meth:`~sonar_gym.odometry.OdometryConfig.slip_probability` of ``commanded``.
+    """
+    count = commanded.shape[0]
+    encoder = np.empty((count, 2))
+    ground = np.empty((count, 2))
+    for command in range(count):
+        for wheel in range(2):
+            encoder[command, wheel] = encoder_increment(
+                commanded[command, wheel], encoder_std_m_per_sqrt_m, normals[command, wheel]
+            )
+            ground[command, wheel] = slipped_travel(
+                commanded[command, wheel],
+                scale_error_left if wheel == 0 else scale_error_right,
+                uniforms[command, wheel],
+                uniforms[command, 2 + wheel],
+                slip_probability[command, wheel],
+                slip_fraction_max,
+            )
+    return encoder, ground
 
 
 @compiled(  # type: ignore[misc]

@@ -21,7 +21,7 @@ from sonar_gym.straight_drive import (
     _free_commands,
     drive_commands,
 )
-from sonar_gym.straight_drive_kernels import clearance
+from sonar_gym.straight_drive_kernels import clearance, wheel_travel
 from sonar_gym.world import World
 from tests.fuzzing import fuzz_settings
 from tests.straight_drive_reference import (
@@ -96,6 +96,44 @@ def test_clearance_is_the_arrays_clearance_on_any_shapes(
     expected = clearance_arrays(geometry, at, within_m)
     bound = math.inf if within_m is None else within_m
     _assert_same_bits(clearance(at, bound, *_shapes(geometry)), expected)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_wheel_travel_is_the_wheel_models_arrays(seed: int) -> None:
+    """Encoder increments and ground travel of random commands (zero, negative, turns in
+    place, metres long), slip draws on and around the slip probability."""
+    rng = np.random.default_rng(seed)
+    noise = OdometryNoise(
+        float(rng.uniform(0.0, 0.02)),
+        float(rng.uniform(-0.4, 0.4)),
+        float(rng.uniform(-0.4, 0.4)),
+        float(rng.choice([0.0, 0.01, rng.uniform(0.0, 1.0), 1.0])),
+        float(rng.uniform(0.0, 1.0)),
+    )
+    for count in (1, 2, 7, 60, 300):
+        commanded = rng.normal(0.0, 10.0 ** rng.uniform(-4.0, 0.5), (count, 2))
+        commanded[rng.random((count, 2)) < 0.1] = 0.0
+        normals = rng.standard_normal((count, 2))
+        uniforms = rng.random((count, 4))
+        probability = noise.slip_probability(commanded)
+        on_edge = rng.random((count, 2)) < 0.2
+        uniforms[:, :2][on_edge] = probability[on_edge]
+        encoder, ground = wheel_travel(
+            commanded,
+            normals,
+            uniforms,
+            probability,
+            noise.encoder_std_m_per_sqrt_m,
+            noise.scale_error_left,
+            noise.scale_error_right,
+            noise.slip_fraction_max,
+        )
+        scale_errors = np.array([noise.scale_error_left, noise.scale_error_right])
+        _assert_same_bits(encoder, noise.encoder_increments(commanded, normals))
+        _assert_same_bits(
+            ground,
+            noise.ground_travel(commanded, scale_errors, uniforms[:, :2], uniforms[:, 2:]),
+        )
 
 
 def _ground(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray]:
