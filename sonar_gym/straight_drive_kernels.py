@@ -9,14 +9,14 @@ differently from libm's): callers pass it in.
 
 For a run of ``K`` commands, in order:
 
-0. :func:`wheel_travel`: each command's encoder increments and ground travel;
-1. :func:`command_substeps`: each command's heading change on the ground and its physics
+1. :func:`wheel_travel`: each command's encoder increments and ground travel;
+2. :func:`command_substeps`: each command's heading change on the ground and its physics
    substeps, and the odometry's substeps (distance and midpoint heading of each);
-2. :func:`arc_headings`: the headings of the planned arcs of the ground travel from the
+3. :func:`arc_headings`: the headings of the planned arcs of the ground travel from the
    robot's true pose;
-3. :func:`clear_commands`: the planned end poses, and how many commands keep clear of every
+4. :func:`clear_commands`: the planned end poses, and how many commands keep clear of every
    static shape (:func:`clearance`);
-4. :func:`odometry_poses`: the dead-reckoned pose after each command.
+5. :func:`odometry_poses`: the dead-reckoned pose after each command.
 
 Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
 """
@@ -159,6 +159,8 @@ def command_substeps(
         distance = 0.5 * (encoder[command, 0] + encoder[command, 1]) / n
         turn = (encoder[command, 1] - encoder[command, 0]) / wheel_base_m / n
         for _ in range(n):
+            # numpy's theta + concatenate([[0.0], cumsum(turns)]): the sum starts at its first
+            # term, and theta + 0.0 differs from theta for theta = -0.0
             theta = odometry_theta + 0.0 if substep == 0 else odometry_theta + turned
             turned = turn if substep == 0 else turned + turn
             substep_distance[substep] = distance
@@ -223,6 +225,7 @@ def arc_headings(
     theta_after = np.empty(count)
     turned = 0.0
     for command in range(count):
+        # as in command_substeps: numpy's start_theta + concatenate([[0.0], cumsum(turns)])
         theta = start_theta + 0.0 if command == 0 else start_theta + turned
         turned = ground_turn[command] if command == 0 else turned + ground_turn[command]
         half_turn = 0.5 * ground_turn[command]
