@@ -222,6 +222,34 @@ _integrate_substeps_compiled = compiled(
 (the integration as a code: :data:`EULER`, :data:`MIDPOINT`, :data:`ARC`)."""
 
 
+def _encoder_increment(commanded_m: float, encoder_std_m_per_sqrt_m: float, normal: float) -> float:
+    return commanded_m + encoder_std_m_per_sqrt_m * math.sqrt(abs(commanded_m)) * normal
+
+
+encoder_increment = compiled(types.float64, *[types.float64] * 3, inline=True)(_encoder_increment)
+""":meth:`sonar_gym.odometry.OdometryConfig.encoder_increments` of one wheel inside a compiled
+loop: ``encoder_increment(commanded_m, encoder_std_m_per_sqrt_m, normal)``, metres."""
+
+
+def _slipped_travel(
+    commanded_m: float,
+    scale_error: float,
+    slip_draw: float,
+    size_draw: float,
+    slip_probability: float,
+    slip_fraction_max: float,
+) -> float:
+    slip_loss = size_draw * slip_fraction_max if slip_draw < slip_probability else 0.0
+    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
+
+
+slipped_travel = compiled(types.float64, *[types.float64] * 6, inline=True)(_slipped_travel)
+""":meth:`sonar_gym.odometry.OdometryConfig.ground_travel` of one wheel inside a compiled loop,
+given its :meth:`~sonar_gym.odometry.OdometryConfig.slip_probability`: ``slipped_travel(
+commanded_m, scale_error, slip_draw, size_draw, slip_probability, slip_fraction_max)``,
+metres."""
+
+
 def _ground_travel(
     commanded_m: float,
     scale_error: float,
@@ -231,8 +259,9 @@ def _ground_travel(
     slip_fraction_max: float,
 ) -> float:
     slip_probability = 1.0 - (1.0 - slip_probability_per_m) ** abs(commanded_m)
-    slip_loss = size_draw * slip_fraction_max if slip_draw < slip_probability else 0.0
-    return commanded_m * (1.0 + scale_error) * (1.0 - slip_loss)
+    return slipped_travel(
+        commanded_m, scale_error, slip_draw, size_draw, slip_probability, slip_fraction_max
+    )
 
 
 _ground_travel_compiled = compiled(types.float64, *[types.float64] * 6, inline=True)(_ground_travel)
@@ -351,8 +380,8 @@ def drive_commands(
     for command in range(count):
         left, right = commands_m[command, 0], commands_m[command, 1]
         first = 6 * command
-        encoder_left = left + encoder_std * math.sqrt(abs(left)) * draws[first]
-        encoder_right = right + encoder_std * math.sqrt(abs(right)) * draws[first + 1]
+        encoder_left = encoder_increment(left, encoder_std, draws[first])
+        encoder_right = encoder_increment(right, encoder_std, draws[first + 1])
         ground_left = _ground_travel_compiled(
             left, scale_left, draws[first + 2], draws[first + 4], slip_probability, slip_fraction
         )

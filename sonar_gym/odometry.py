@@ -113,11 +113,12 @@ class OdometryConfig:
         """No noise at all: odometry equals the truth unless the robot is blocked."""
         return cls(0.0, 0.0, 0.0, 0.0, 0.0)
 
-    # The two methods below are the one model of the wheel errors. They take one wheel's
+    # The methods below are the one model of the wheel errors. They take one wheel's
     # numbers as Python floats (DifferentialDriveRobot.drive) or many as arrays (a run of
-    # commands, sonar_gym.straight_drive). ``abs`` and ``**`` stay Python's on floats and
-    # NumPy's on arrays, so each caller keeps its arithmetic bit for bit (NumPy's vectorised
-    # power can differ from the scalar one in the last bit).
+    # commands: sonar_gym.straight_drive takes numpy's slip_probability of them into its
+    # compiled loop). ``abs`` and ``**`` stay Python's on floats and NumPy's on arrays, so each
+    # caller keeps its arithmetic bit for bit (NumPy's vectorised power can differ from the
+    # scalar one in the last bit).
 
     def encoder_increments(self, commanded_m: Wheels, normals: Wheels) -> Wheels:
         """What the encoders report for wheels commanded ``commanded_m`` metres: the command
@@ -127,6 +128,11 @@ class OdometryConfig:
         root = math.sqrt if isinstance(commanded_m, float) else np.sqrt
         return commanded_m + self.encoder_std_m_per_sqrt_m * root(abs(commanded_m)) * normals
 
+    def slip_probability(self, commanded_m: Wheels) -> Wheels:
+        """Probability that wheels commanded ``commanded_m`` metres slip on the command:
+        ``1 - (1 - p)^|d|`` (``p`` per metre)."""
+        return 1.0 - (1.0 - self.slip_probability_per_m) ** abs(commanded_m)
+
     def ground_travel(
         self, commanded_m: Wheels, scale_errors: Wheels, slip_draws: Wheels, size_draws: Wheels
     ) -> Wheels:
@@ -135,7 +141,7 @@ class OdometryConfig:
         uniform draw ``slip_draws`` falls below ``1 - (1 - p)^|d|`` (``p`` per metre) and then
         loses the fraction ``size_draws * slip_fraction_max`` of the command (``size_draws``
         uniform in [0, 1))."""
-        slip_probability = 1.0 - (1.0 - self.slip_probability_per_m) ** abs(commanded_m)
+        slip_probability = self.slip_probability(commanded_m)
         if isinstance(slip_draws, float):  # one wheel: a plain branch, no 0-d arrays
             slip_loss = (
                 size_draws * self.slip_fraction_max if slip_draws < slip_probability else 0.0

@@ -10,7 +10,8 @@ same wheel-error model (:meth:`~sonar_gym.odometry.OdometryConfig.ground_travel`
 the clearance of the whole planned path against the world's static geometry, and hands every
 command from the first one that comes near a shape to ``drive`` itself (pymunk), so contacts
 are resolved exactly as before. The odometry integrates the encoder increments per physics
-substep, as ``drive`` does.
+substep, as ``drive`` does. The arithmetic over the commands runs in the compiled loops of
+:mod:`sonar_gym.straight_drive_kernels`, between numpy's ``sin`` and ``cos`` of whole arrays.
 
 :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_commands` is the compiled form of the
 same drive that the other tasks use; the two agree to rounding (the odometry's substep sums
@@ -27,16 +28,13 @@ from typing import Any
 
 import numpy as np
 
-from sonar_gym import drive_kernels
-from sonar_gym.geometry import StaticGeometry
-from sonar_gym.odometry import sinc_of_array
-from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym import drive_kernels, straight_drive_kernels
+from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot
 from sonar_gym.world import World
 
 CLEARANCE_MARGIN_M = 0.002
 """Clearance (metres) beyond the robot's radius below which a command goes through pymunk."""
-_ROUNDING_M = 1e-6
 
 
 @dataclass(frozen=True)
@@ -55,46 +53,6 @@ class StraightRun:
     true_poses: FloatArray
     odometry_poses: FloatArray
     collided: np.ndarray
-
-
-def _clearance(
-    geometry: StaticGeometry, points: FloatArray, within_m: float | None = None
-) -> FloatArray:
-    """``(P,)`` distance (metres) from each point to the nearest static segment or circle.
-
-    With ``within_m``, only the distances up to ``within_m`` are exact; a point whose nearest
-    shape is farther gets some value above ``within_m``. Shapes whose bounding box lies
-    farther than ``within_m`` from the points' bounding box are then left out.
-    """
-    nearest = np.full(len(points), math.inf)
-    starts, ends = geometry.segment_starts, geometry.segment_ends
-    circles = geometry.circles
-    if within_m is not None:
-        low, high = points.min(axis=0), points.max(axis=0)
-        reach = within_m + _ROUNDING_M
-        if geometry.n_segments:
-            box_low, box_high = np.minimum(starts, ends), np.maximum(starts, ends)
-            near = np.all((box_low - high <= reach) & (low - box_high <= reach), axis=1)
-            starts, ends = starts[near], ends[near]
-        if geometry.n_circles:
-            radii = circles[:, 2:3]
-            near = np.all(
-                (circles[:, :2] - radii - high <= reach) & (low - circles[:, :2] - radii <= reach),
-                axis=1,
-            )
-            circles = circles[near]
-    if len(starts):
-        edges = ends - starts
-        lengths_sq = np.maximum(np.einsum("sk,sk->s", edges, edges), 1e-24)
-        rel = points[:, None, :] - starts[None, :, :]
-        t = np.clip(np.einsum("psk,sk->ps", rel, edges) / lengths_sq, 0.0, 1.0)
-        gap = rel - t[:, :, None] * edges[None, :, :]
-        nearest = np.minimum(nearest, np.sqrt(np.einsum("psk,psk->ps", gap, gap)).min(axis=1))
-    if len(circles):
-        centres, radii = circles[:, :2], circles[:, 2]
-        gaps = np.hypot(*(points[:, None, :] - centres[None, :, :]).transpose(2, 0, 1)) - radii
-        nearest = np.minimum(nearest, np.abs(gaps).min(axis=1))
-    return nearest
 
 
 def drive_straight_run(
@@ -217,21 +175,24 @@ def drive_commands(
     noise = robot.noise
     normals = np.array(draws.normals)
     uniforms = np.array(draws.uniforms)
-    encoder = noise.encoder_increments(commanded, normals)  # (K, 2)
-    scale_errors = np.array([noise.scale_error_left, noise.scale_error_right])
-    ground = noise.ground_travel(commanded, scale_errors, uniforms[:, :2], uniforms[:, 2:])
-    travel = np.maximum(np.abs(ground).max(axis=1), np.abs(encoder).max(axis=1))
-    ground_turn = (ground[:, 1] - ground[:, 0]) / base
-    substeps = np.maximum.reduce(
-        [
-            np.ones(count, dtype=np.int64),
-            np.ceil(travel / robot.max_substep_m).astype(np.int64),
-            np.ceil(np.abs(ground_turn) / robot.max_substep_rad).astype(np.int64),
-        ]
+    encoder, ground = straight_drive_kernels.wheel_travel(
+        commanded,
+        normals,
+        uniforms,
+        noise.slip_probability(commanded),
+        noise.encoder_std_m_per_sqrt_m,
+        noise.scale_error_left,
+        noise.scale_error_right,
+        noise.slip_fraction_max,
+    )
+    odometry = robot.odometry_pose if robot.odometry_pose is not None else world.robot_pose
+    ground_turn, substeps, substep_distance, substep_heading, odometry_theta_after = (
+        straight_drive_kernels.command_substeps(
+            encoder, ground, base, robot.max_substep_m, robot.max_substep_rad, odometry.theta
+        )
     )
     true_poses = np.empty((count, 3))
     collided = np.zeros(count, dtype=bool)
-    odometry = robot.odometry_pose if robot.odometry_pose is not None else world.robot_pose
     first = 0
     while first < count:
         free = first + _free_commands(
@@ -249,14 +210,14 @@ def drive_commands(
     draws.rewind(rng, count)
 
     # The odometry: each command's encoder increments split over its substeps (midpoint).
-    sub_distance = np.repeat(0.5 * (encoder[:, 0] + encoder[:, 1]) / substeps, substeps)
-    sub_turn = np.repeat((encoder[:, 1] - encoder[:, 0]) / base / substeps, substeps)
-    thetas = odometry.theta + np.concatenate([[0.0], np.cumsum(sub_turn)])
-    heading = thetas[:-1] + 0.5 * sub_turn
-    xs = np.cumsum(np.concatenate([[odometry.x], sub_distance * np.cos(heading)]))
-    ys = np.cumsum(np.concatenate([[odometry.y], sub_distance * np.sin(heading)]))
-    ends = np.cumsum(substeps)
-    odometry_poses = np.column_stack([xs[ends], ys[ends], wrap_angles(thetas[ends])])
+    odometry_poses = straight_drive_kernels.odometry_poses(
+        substep_distance,
+        np.cos(substep_heading),
+        np.sin(substep_heading),
+        substeps,
+        odometry_theta_after,
+        (odometry.x, odometry.y),
+    )
     robot.odometry_pose = Pose(*odometry_poses[-1])
     return StraightRun(
         encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
@@ -270,28 +231,25 @@ def _free_commands(
 
     Fills ``out[:k]`` with their planned end poses (``k`` the returned count).
     """
-    count = len(ground)
     start = world.robot_pose
-    distance = 0.5 * (ground[:, 0] + ground[:, 1])
-    thetas = start.theta + np.concatenate([[0.0], np.cumsum(ground_turn)])
-    half_turn = 0.5 * ground_turn
-    step = distance * sinc_of_array(half_turn)
-    ends_x = np.cumsum(np.concatenate([[start.x], step * np.cos(thetas[:-1] + half_turn)]))
-    ends_y = np.cumsum(np.concatenate([[start.y], step * np.sin(thetas[:-1] + half_turn)]))
-    # Distance to a shape is 1-Lipschitz: no point of a command's chord is nearer a shape
-    # than the chord's nearer end minus half its length; the arc leaves its chord by at most
-    # its sagitta, |d dtheta| / 8.
-    reach = 0.5 * np.abs(distance) + np.abs(distance * ground_turn) / 8.0 + _ROUNDING_M
-    margin = world.robot_radius + CLEARANCE_MARGIN_M
-    # Only whether each gap exceeds reach + margin matters: farther shapes can be left out.
-    gaps = _clearance(
-        world.geometry, np.column_stack([ends_x, ends_y]), float(reach.max()) + margin
+    chord_heading, sinc_argument, theta_after = straight_drive_kernels.arc_headings(
+        ground_turn, start.theta
     )
-    clear = np.minimum(gaps[:-1], gaps[1:]) - reach > margin
-    free = count if clear.all() else int(np.argmin(clear))
-    out[:free, 0] = ends_x[1 : free + 1]
-    out[:free, 1] = ends_y[1 : free + 1]
-    out[:free, 2] = wrap_angles(thetas[1 : free + 1])
+    geometry = world.geometry
+    free: int = straight_drive_kernels.clear_commands(
+        ground,
+        ground_turn,
+        np.sin(sinc_argument),
+        np.cos(chord_heading),
+        np.sin(chord_heading),
+        theta_after,
+        (start.x, start.y),
+        world.robot_radius + CLEARANCE_MARGIN_M,
+        geometry.segment_starts,
+        geometry.segment_ends,
+        geometry.circles,
+        out,
+    )
     return free
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 
 import numpy as np
@@ -15,7 +16,8 @@ from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
 from sonar_gym.scenario import Scenario, load_scenario, scenario_from_dict
 from sonar_gym.sonar.presets import preset
 from sonar_gym.sonar.swept import SideSonars
-from sonar_gym.straight_drive import _clearance, drive_straight_run, turn_run
+from sonar_gym.straight_drive import drive_straight_run, turn_run
+from sonar_gym.straight_drive_kernels import clearance
 from sonar_gym.world import World
 
 NOISE = OdometryNoise(0.0005, 0.003, -0.002, 0.3, 0.3)  # slips are frequent on purpose
@@ -162,8 +164,10 @@ def test_clearance_within_a_bound_is_exact_up_to_it_and_above_it_beyond(within_m
     for _ in range(30):
         start = world.sample_free_pose(rng).position
         path = start + np.cumsum(rng.normal(0.0, 0.05, (40, 2)), axis=0)
-        exact = _clearance(world.geometry, path)
-        bounded = _clearance(world.geometry, path, within_m)
+        geometry = world.geometry
+        shapes = (geometry.segment_starts, geometry.segment_ends, geometry.circles)
+        exact = clearance(path, math.inf, *shapes)
+        bounded = clearance(path, within_m, *shapes)
         close = exact <= within_m
         np.testing.assert_array_equal(bounded[close], exact[close])
         assert np.all(bounded[~close] > within_m)
