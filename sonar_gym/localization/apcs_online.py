@@ -38,7 +38,7 @@ from sonar_gym.localization.apcs import (
     correct_with_checked_wall,
 )
 from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
-from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_rows
+from sonar_gym.localization.apcs_walls import WallMap, fit_group_points, newest_reflection_rows
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import predict_run
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
@@ -81,18 +81,8 @@ def rejection_reason(match: MatchResult) -> str | None:
         return None
     if match.status == AMBIGUOUS:
         return AMBIGUOUS
-    if not match.checks:
-        return "empty_map"
-    best = max(
-        match.checks,
-        key=lambda check: (
-            check.orientation_ok + check.inclusion_ok + check.distance_ok,
-            check.orientation_ok,
-            check.inclusion_ok,
-            -check.endpoint_distance_squared_m2,
-        ),
-    )
-    return best.reason
+    closest = match.closest_check
+    return "empty_map" if closest is None else closest.reason
 
 
 @dataclass(frozen=True)
@@ -434,7 +424,7 @@ class APCSTracker:
                 f"argument 'correction_method' must be one of {list(CORRECTION_METHODS)}; "
                 f"got {correction_method!r}"
             )
-        self.wall_map = tuple(wall_map)
+        self.wall_map = WallMap(tuple(wall_map))
         self.estimate = estimate
         self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
         # Checked once here: dead reckoning and the Joseph-form corrections keep it so.

@@ -3,14 +3,17 @@
 Yamamoto, Maeyama, Ohya & Yuta, *APCS: autonomous position correction system using
 ultrasonic sensing*, sections 4.1-4.3 and the thresholds of section 6:
 
-- 4.1: the map is a list of oriented wall vectors, occupied on the left (:class:`WallVector`).
+- 4.1: the map is a list of oriented wall vectors, occupied on the left (:class:`WallVector`,
+  :class:`WallMap`).
 - 4.2.1: estimated reflection points (ERP) from two consecutive side-sonar readings, eqs (1)-(6)
   (:func:`estimated_reflection_points`).
 - 4.2.2: grouping of consecutive ERPs by continuity, group size limits, least-squares line and
   variance test (:func:`group_erps`, :func:`fit_wall_group`, :func:`detect_walls`).
 - 4.2.3: end points of the detected segment, Fig. 6.
 - 4.3: matching a detected vector to the map by orientation, inclusion of the projection and
-  ``d1^2 + d2^2`` (:func:`match_wall`); no match or more than one match means no correction.
+  ``d1^2 + d2^2`` (:func:`match_wall`, every map wall in one compiled loop of
+  :mod:`~sonar_gym.localization.apcs_match_kernels`); no match or more than one match means no
+  correction.
 
 All coordinates are metres in the world frame {W}; angles are radians, counter-clockwise from
 the {W} x-axis, as the paper's angle ``phi`` of eq. (2).
@@ -19,15 +22,15 @@ the {W} x-axis, as the paper's angle ``phi`` of eq. (2).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Literal
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
+from typing import Literal, overload
 
 import numpy as np
 import numpy.typing as npt
 
-from sonar_gym.localization import apcs_kernels
-from sonar_gym.pose import FloatArray, wrap_angle, wrap_angles
+from sonar_gym.localization import apcs_kernels, apcs_match_kernels
+from sonar_gym.pose import FloatArray, wrap_angles
 
 IntArray = npt.NDArray[np.int64]
 
@@ -818,6 +821,66 @@ def detect_walls_from_readings(
 
 
 @dataclass(frozen=True)
+class WallMap(Sequence[WallVector]):
+    """The map's wall vectors (section 4.1) with their numbers as one table, for the matching.
+
+    A sequence of :class:`WallVector` in map order. :func:`match_wall` checks every wall of the
+    map against each detected vector in one compiled loop over :attr:`table`; a caller that
+    matches many vectors against one map builds this once and passes it as ``wall_map``.
+
+    Attributes:
+        walls: the wall vectors, in map order.
+        table: ``(n, 7)`` read-only, one row per wall: its direction angle (radians), start
+            (metres in {W}), unit direction, line offset ``c`` (metres) and length (metres);
+            the columns of :data:`~sonar_gym.localization.apcs_match_kernels.WALL_COLUMNS`.
+
+    Raises:
+        ValueError: if an entry of ``walls`` is not a :class:`WallVector`.
+    """
+
+    walls: tuple[WallVector, ...]
+    table: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        walls = tuple(self.walls)
+        for index, wall in enumerate(walls):
+            if not isinstance(wall, WallVector):
+                raise ValueError(
+                    f"wall_map[{index}] must be a WallVector, got {type(wall).__name__}"
+                )
+        object.__setattr__(self, "walls", walls)
+        object.__setattr__(self, "table", _wall_table(walls))
+
+    def __len__(self) -> int:
+        return len(self.walls)
+
+    @overload
+    def __getitem__(self, index: int) -> WallVector: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[WallVector, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> WallVector | tuple[WallVector, ...]:
+        return self.walls[index]
+
+    def __iter__(self) -> Iterator[WallVector]:
+        return iter(self.walls)
+
+
+def _wall_table(walls: Sequence[WallVector]) -> FloatArray:
+    """The rows of :attr:`WallMap.table` of ``walls``, read-only."""
+    table = np.array(
+        [
+            (wall._angle, *wall.start, *wall._unit, wall._offset, wall._length)  # type: ignore[attr-defined]
+            for wall in walls
+        ],
+        dtype=np.float64,
+    ).reshape(len(walls), len(apcs_match_kernels.WALL_COLUMNS))
+    table.setflags(write=False)
+    return table
+
+
+@dataclass(frozen=True)
 class WallCheck:
     """How one map wall fared against a detected vector (section 4.3, Fig. 7).
 
@@ -851,13 +914,7 @@ class WallCheck:
     @property
     def reason(self) -> str | None:
         """The first failed condition in the paper's order, or ``None`` when matched."""
-        if not self.orientation_ok:
-            return REJECT_ORIENTATION
-        if not self.inclusion_ok:
-            return REJECT_INCLUSION
-        if not self.distance_ok:
-            return REJECT_DISTANCE
-        return None
+        return _FIRST_FAILED[self.orientation_ok, self.inclusion_ok, self.distance_ok]
 
     @property
     def failed_conditions(self) -> tuple[str, ...]:
@@ -872,6 +929,127 @@ class WallCheck:
         return tuple(failed)
 
 
+def _first_failed(orientation_ok: bool, inclusion_ok: bool, distance_ok: bool) -> str | None:
+    """The first failed condition of section 4.3 in the paper's order, ``None`` if none."""
+    if not orientation_ok:
+        return REJECT_ORIENTATION
+    if not inclusion_ok:
+        return REJECT_INCLUSION
+    if not distance_ok:
+        return REJECT_DISTANCE
+    return None
+
+
+# (orientation_ok, inclusion_ok, distance_ok) -> the first failed condition, for every outcome.
+_FIRST_FAILED = {
+    (orientation, inclusion, distance): _first_failed(orientation, inclusion, distance)
+    for orientation in (False, True)
+    for inclusion in (False, True)
+    for distance in (False, True)
+}
+
+
+class WallChecks(Sequence[WallCheck]):
+    """One :class:`WallCheck` per map wall, in map order, against one detected vector (4.3).
+
+    Held as the arrays of :func:`~sonar_gym.localization.apcs_match_kernels.check_map_walls`;
+    the :class:`WallCheck` objects are built when first read. Equal to a tuple (or another
+    :class:`WallChecks`) of equal checks, as the tuple of them.
+
+    Args:
+        wall_map: the map the detected vector was checked against.
+        numbers: ``(n, 4)`` per wall: orientation error (radians), start and end parameters
+            and ``d1^2 + d2^2`` (m^2).
+        conditions: ``(n, 3)`` per wall: orientation, inclusion and distance passed.
+        closest: the wall that came closest to matching, -1 for an empty map.
+    """
+
+    __slots__ = ("_built", "_closest", "_conditions", "_numbers", "_wall_map")
+
+    def __init__(
+        self, wall_map: WallMap, numbers: FloatArray, conditions: np.ndarray, closest: int
+    ) -> None:
+        self._wall_map = wall_map
+        self._numbers = numbers
+        self._conditions = conditions
+        self._closest = closest
+        self._built: tuple[WallCheck, ...] | None = None
+
+    def _all(self) -> tuple[WallCheck, ...]:
+        if self._built is None:
+            self._built = tuple(
+                WallCheck(index, wall, *numbers, *conditions)
+                for index, (wall, numbers, conditions) in enumerate(
+                    zip(
+                        self._wall_map.walls,
+                        self._numbers.tolist(),
+                        self._conditions.tolist(),
+                        strict=True,
+                    )
+                )
+            )
+        return self._built
+
+    def __len__(self) -> int:
+        return len(self._wall_map.walls)
+
+    @overload
+    def __getitem__(self, index: int) -> WallCheck: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[WallCheck, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> WallCheck | tuple[WallCheck, ...]:
+        return self._all()[index]
+
+    def __iter__(self) -> Iterator[WallCheck]:
+        return iter(self._all())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, WallChecks):
+            return self._all() == other._all()
+        if isinstance(other, tuple):
+            return self._all() == other
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self._all())
+
+    def __repr__(self) -> str:
+        return repr(self._all())
+
+    @property
+    def candidate_indices(self) -> tuple[int, ...]:
+        """Map positions of every wall that passed all three conditions."""
+        return tuple(np.flatnonzero(self._conditions.all(axis=1)).tolist())
+
+    @property
+    def rejections(self) -> dict[int, str]:
+        """Map position -> first failed condition, for every wall that failed one."""
+        return {
+            index: reason
+            for index, passed in enumerate(self._conditions.tolist())
+            if (reason := _FIRST_FAILED[tuple(passed)]) is not None
+        }
+
+    @property
+    def closest(self) -> WallCheck | None:
+        """The check of the wall that came closest to matching, ``None`` for an empty map.
+
+        The most conditions passed, then orientation, then inclusion (the paper's order), then
+        the smaller ``d1^2 + d2^2``; the first in map order on a tie.
+        """
+        if self._closest < 0:
+            return None
+        if self._built is not None:
+            return self._built[self._closest]
+        index = self._closest
+        numbers = self._numbers[index].tolist()
+        return WallCheck(
+            index, self._wall_map.walls[index], *numbers, *self._conditions[index].tolist()
+        )
+
+
 @dataclass(frozen=True)
 class MatchResult:
     """Outcome of matching one detected vector against the map (section 4.3).
@@ -880,14 +1058,15 @@ class MatchResult:
         status: ``"matched"`` (exactly one map wall passes), ``"no_match"`` (none) or
             ``"ambiguous"`` (more than one; the paper then does not correct, Fig. 2).
         detected: the detected vector ``T_s -> T_e``.
-        checks: one :class:`WallCheck` per map wall, in map order.
+        checks: one :class:`WallCheck` per map wall, in map order (:class:`WallChecks`, equal
+            to the tuple of them).
         wall: the matched map wall when ``status == "matched"``, else ``None``.
         wall_index: its position in the map, else ``None``.
     """
 
     status: str
     detected: WallVector
-    checks: tuple[WallCheck, ...]
+    checks: WallChecks
     wall: WallVector | None = None
     wall_index: int | None = None
 
@@ -899,12 +1078,21 @@ class MatchResult:
     @property
     def candidate_indices(self) -> tuple[int, ...]:
         """Map positions of every wall that passed all three conditions."""
-        return tuple(check.map_index for check in self.checks if check.matched)
+        return self.checks.candidate_indices
 
     @property
     def rejections(self) -> dict[int, str]:
         """Map position -> reason, for every wall that failed a condition."""
-        return {c.map_index: reason for c in self.checks if (reason := c.reason) is not None}
+        return self.checks.rejections
+
+    @property
+    def closest_check(self) -> WallCheck | None:
+        """The check of the map wall that came closest to matching, ``None`` for an empty map.
+
+        The most conditions passed, then orientation, then inclusion (the paper's order), then
+        the smaller ``d1^2 + d2^2``; the first in map order on a tie.
+        """
+        return self.checks.closest
 
 
 def check_wall(
@@ -919,67 +1107,24 @@ def check_wall(
     ``d1 = |T_s V_s|`` and ``d2 = |T_e V_e|`` are the distances of the detected end points
     from that line.
     """
+    numbers, conditions, _, _, _ = _checked(detected, _wall_table((map_wall,)), params)
+    return WallCheck(map_index, map_wall, *numbers[0].tolist(), *conditions[0].tolist())
+
+
+def _checked(
+    detected: WallVector, table: FloatArray, params: APCSParameters
+) -> tuple[FloatArray, np.ndarray, int, int, int]:
+    """:func:`~sonar_gym.localization.apcs_match_kernels.check_map_walls` of ``detected``."""
     (start_x, start_y), (end_x, end_y) = detected.start, detected.end
-    return _wall_check(
+    return apcs_match_kernels.check_map_walls(  # type: ignore[no-any-return]
+        table,
         detected._angle,  # type: ignore[attr-defined]
         start_x,
         start_y,
         end_x,
         end_y,
-        map_wall,
-        map_index,
-        params,
-    )
-
-
-def _check_walls(
-    detected: WallVector, walls: Sequence[WallVector], params: APCSParameters
-) -> tuple[WallCheck, ...]:
-    """:func:`check_wall` of every map wall in turn, the detected vector's numbers read once."""
-    angle = detected._angle  # type: ignore[attr-defined]
-    (start_x, start_y), (end_x, end_y) = detected.start, detected.end
-    return tuple(
-        _wall_check(angle, start_x, start_y, end_x, end_y, wall, index, params)
-        for index, wall in enumerate(walls)
-    )
-
-
-def _wall_check(
-    detected_angle: float,
-    start_x: float,
-    start_y: float,
-    end_x: float,
-    end_y: float,
-    map_wall: WallVector,
-    map_index: int,
-    params: APCSParameters,
-) -> WallCheck:
-    """:func:`check_wall` on the detected vector's direction angle and end points."""
-    # angle_difference of the direction angles, and WallVector.projection_parameter and
-    # signed_distance (with line_coefficients (a, b, c) = (uy, -ux, offset)) on the validated
-    # float end points, inlined: this runs for every map wall against every detected wall.
-    orientation_error = wrap_angle(detected_angle - map_wall._angle)  # type: ignore[attr-defined]
-    wall_x, wall_y = map_wall.start
-    ux, uy = map_wall._unit  # type: ignore[attr-defined]
-    a, b, c = uy, -ux, map_wall._offset  # type: ignore[attr-defined]
-    length = map_wall._length  # type: ignore[attr-defined]
-    start_parameter = ((start_x - wall_x) * ux + (start_y - wall_y) * uy) / length
-    end_parameter = ((end_x - wall_x) * ux + (end_y - wall_y) * uy) / length
-    d1 = a * start_x + b * start_y + c
-    d2 = a * end_x + b * end_y + c
-    distance_squared = d1 * d1 + d2 * d2
-    slack = 1e-12
-    inside = -slack <= start_parameter <= 1.0 + slack and -slack <= end_parameter <= 1.0 + slack
-    return WallCheck(
-        map_index,
-        map_wall,
-        orientation_error,
-        start_parameter,
-        end_parameter,
-        distance_squared,
-        abs(orientation_error) <= params.orientation_tolerance_rad,
-        inside,
-        distance_squared < params.endpoint_distance_squared_m2,
+        params.orientation_tolerance_rad,
+        params.endpoint_distance_squared_m2,
     )
 
 
@@ -994,6 +1139,12 @@ def match_wall(
     (+-0.5 deg), the projection ``V_s V_e`` lies within it, and ``d1^2 + d2^2`` is below
     ``params.endpoint_distance_squared_m2`` (200 cm^2). Only a unique match is a match.
 
+    Args:
+        detected: the detected vector ``T_s -> T_e``.
+        wall_map: the map's wall vectors; a :class:`WallMap` is used as it is, any other
+            sequence is made one.
+        params: matching thresholds (section 6 by default).
+
     Raises:
         ValueError: if ``detected`` or an entry of ``wall_map`` has the wrong type.
     """
@@ -1005,12 +1156,11 @@ def match_wall(
         raise ValueError(
             f"detected must be a DetectedWall or WallVector, got {type(detected).__name__}"
         )
-    walls = list(wall_map)
-    for index, wall in enumerate(walls):
-        if not isinstance(wall, WallVector):
-            raise ValueError(f"wall_map[{index}] must be a WallVector, got {type(wall).__name__}")
-    checks = _check_walls(vector, walls, params)
-    candidates = [check for check in checks if check.matched]
-    if len(candidates) == 1:
-        return MatchResult(MATCHED, vector, checks, candidates[0].wall, candidates[0].map_index)
+    walls = wall_map if isinstance(wall_map, WallMap) else WallMap(tuple(wall_map))
+    numbers, conditions, candidates, first_candidate, closest = _checked(
+        vector, walls.table, params
+    )
+    checks = WallChecks(walls, numbers, conditions, closest)
+    if candidates == 1:
+        return MatchResult(MATCHED, vector, checks, walls.walls[first_candidate], first_candidate)
     return MatchResult(AMBIGUOUS if candidates else NO_MATCH, vector, checks)
