@@ -1,0 +1,129 @@
+"""A world's static shapes and their table, made from the scenario's geometry, equal the shapes
+made straight from the scenario (:mod:`tests.world_shapes_reference`) and the table read back
+from pymunk (:meth:`StaticShapeTable.of`), bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pymunk
+import pytest
+
+from sonar_gym.geometry import build_static_geometry
+from sonar_gym.path_clearance import StaticShapeTable
+from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall
+from sonar_gym.world import World
+from tests.world_shapes_reference import reference_static_shapes
+
+
+def _coordinate(rng: np.random.Generator) -> float:
+    """A coordinate in metres, often a signed zero or a value that repeats."""
+    choice = rng.integers(6)
+    if choice == 0:
+        return -0.0
+    if choice == 1:
+        return 0.0
+    if choice == 2:
+        return float(rng.choice([-1.5, 1.25, -0.5]))
+    return float(rng.uniform(-3.0, 3.0))
+
+
+def random_scenario(rng: np.random.Generator) -> Scenario:
+    """A room (or none) with free walls, boxes at any angle and cylinders, anywhere in it."""
+    room = None
+    if rng.random() < 0.8:
+        low_y, high_y = [(-0.0, 4.0), (-3.0, 0.0), (-3.0, 4.0)][rng.integers(3)]
+        room = Room((-float(rng.uniform(2.0, 4.0)), low_y), (float(rng.uniform(3.0, 5.0)), high_y))
+
+    def point() -> tuple[float, float]:
+        return (_coordinate(rng), _coordinate(rng))
+
+    walls = []
+    while len(walls) < rng.integers(4):
+        a, b = point(), point()
+        if a != b:  # a scenario's walls have a length
+            walls.append(Wall(a, b, bool(rng.random() < 0.5)))
+    boxes = tuple(
+        Box(
+            point(),
+            (float(rng.uniform(0.05, 1.0)), float(rng.uniform(0.05, 1.0))),
+            float(rng.choice([0.0, 90.0, -30.0, rng.uniform(-180.0, 180.0)])),
+            bool(rng.random() < 0.5),
+        )
+        for _ in range(rng.integers(5))
+    )
+    cylinders = tuple(
+        Cylinder(point(), float(rng.uniform(0.01, 0.5))) for _ in range(rng.integers(4))
+    )
+    return Scenario("random", room, tuple(walls), boxes, cylinders)
+
+
+def _same_bits(left: np.ndarray, right: np.ndarray) -> bool:
+    """Equal shape, dtype and bytes (so ``-0.0`` and ``0.0`` differ)."""
+    return (
+        left.shape == right.shape
+        and left.dtype == right.dtype
+        and (left.tobytes() == right.tobytes())
+    )
+
+
+def _shape_state(shape: pymunk.Shape) -> tuple[object, ...]:
+    """Everything of a static shape that collisions and queries read, as exact floats."""
+    box = shape.bb
+    common = (
+        type(shape).__name__,
+        shape.friction,
+        shape.elasticity,
+        shape.filter,
+        shape.sensor,
+        shape.collision_type,
+        tuple(shape.surface_velocity),
+        shape.body is not None and shape.body.body_type,
+        (box.left, box.bottom, box.right, box.top),
+    )
+    if isinstance(shape, pymunk.Segment):
+        detail: tuple[float, ...] = (*shape.a, *shape.b, shape.radius, *shape.normal)
+    else:
+        assert isinstance(shape, pymunk.Circle)
+        detail = (*shape.offset, shape.radius)
+    return (*common, np.array(detail, dtype=np.float64).tobytes())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_table_of_the_outlines_equals_the_table_read_from_pymunk(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        scenario = random_scenario(rng)
+        space = pymunk.Space()
+        expected = StaticShapeTable.of(reference_static_shapes(space, scenario))
+        geometry = build_static_geometry(scenario)
+        table = StaticShapeTable.of_outlines(
+            geometry.segment_starts, geometry.segment_ends, geometry.circles
+        )
+        for name in ("bounds", "kinds", "shapes"):
+            assert _same_bits(getattr(table, name), getattr(expected, name)), (name, scenario)
+            assert not getattr(table, name).flags.writeable
+
+
+def test_the_table_of_no_outlines_is_empty() -> None:
+    table = StaticShapeTable.of_outlines(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros((0, 3)))
+    expected = StaticShapeTable.of([])
+    for name in ("bounds", "kinds", "shapes"):
+        assert _same_bits(getattr(table, name), getattr(expected, name))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_worlds_shapes_equal_the_shapes_made_from_its_scenario(seed: int) -> None:
+    rng = np.random.default_rng(100 + seed)
+    for _ in range(40):
+        scenario = random_scenario(rng)
+        world = World(scenario)
+        space = pymunk.Space()
+        expected = reference_static_shapes(space, scenario)
+        assert [_shape_state(s) for s in world.static_shapes] == [
+            _shape_state(s) for s in expected
+        ], scenario
+        # The same insertion order: the spatial index and the contact order depend on it.
+        assert list(world.space.shapes)[: len(expected)] == list(world.static_shapes)
+        table = StaticShapeTable.of(world.static_shapes)
+        for name in ("bounds", "kinds", "shapes"):
+            assert _same_bits(getattr(world.static_shape_table, name), getattr(table, name))
