@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from sonar_gym.geometry import StaticGeometry, static_geometry
+from sonar_gym.geometry import StaticGeometry, ring_shift, static_geometry
 from sonar_gym.path_clearance import StaticShapeTable
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
@@ -553,7 +553,7 @@ class _ConvexPolygons:
     """
 
     def __init__(self, corners: FloatArray) -> None:
-        previous = np.roll(corners, 1, axis=1)
+        previous = ring_shift(corners, -1, axis=1)
         edges = corners - previous
         self._polygons = [
             [

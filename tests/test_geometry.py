@@ -301,3 +301,14 @@ def test_scenarios_differing_in_boxes_share_the_walls_analysis_and_build_as_the_
         for name, array in vars(geometry).items():
             assert array.tobytes() == getattr(fresh, name).tobytes(), name
         first_walls = geometry_module._wall_corners(scenario.room, scenario.walls)
+
+
+@pytest.mark.parametrize("shape", [(0,), (1,), (4,), (3, 4, 2), (0, 4, 2), (2, 5), (6, 1, 3)])
+def test_ring_shift_equals_np_roll(shape: tuple[int, ...]) -> None:
+    rng = np.random.default_rng(len(shape))
+    values = rng.normal(size=shape)
+    for axis in range(len(shape)):
+        for step in (1, -1):
+            shifted = geometry_module.ring_shift(values, step, axis)
+            expected = np.roll(values, -step, axis=axis)
+            assert shifted.shape == expected.shape and shifted.tobytes() == expected.tobytes()

@@ -10,51 +10,9 @@ import pytest
 
 from sonar_gym.geometry import build_static_geometry
 from sonar_gym.path_clearance import StaticShapeTable
-from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall
 from sonar_gym.world import World
+from tests.random_static_scenarios import random_scenario
 from tests.world_shapes_reference import reference_static_shapes
-
-
-def _coordinate(rng: np.random.Generator) -> float:
-    """A coordinate in metres, often a signed zero or a value that repeats."""
-    choice = rng.integers(6)
-    if choice == 0:
-        return -0.0
-    if choice == 1:
-        return 0.0
-    if choice == 2:
-        return float(rng.choice([-1.5, 1.25, -0.5]))
-    return float(rng.uniform(-3.0, 3.0))
-
-
-def random_scenario(rng: np.random.Generator) -> Scenario:
-    """A room (or none) with free walls, boxes at any angle and cylinders, anywhere in it."""
-    room = None
-    if rng.random() < 0.8:
-        low_y, high_y = [(-0.0, 4.0), (-3.0, 0.0), (-3.0, 4.0)][rng.integers(3)]
-        room = Room((-float(rng.uniform(2.0, 4.0)), low_y), (float(rng.uniform(3.0, 5.0)), high_y))
-
-    def point() -> tuple[float, float]:
-        return (_coordinate(rng), _coordinate(rng))
-
-    walls = []
-    while len(walls) < rng.integers(4):
-        a, b = point(), point()
-        if a != b:  # a scenario's walls have a length
-            walls.append(Wall(a, b, bool(rng.random() < 0.5)))
-    boxes = tuple(
-        Box(
-            point(),
-            (float(rng.uniform(0.05, 1.0)), float(rng.uniform(0.05, 1.0))),
-            float(rng.choice([0.0, 90.0, -30.0, rng.uniform(-180.0, 180.0)])),
-            bool(rng.random() < 0.5),
-        )
-        for _ in range(rng.integers(5))
-    )
-    cylinders = tuple(
-        Cylinder(point(), float(rng.uniform(0.01, 0.5))) for _ in range(rng.integers(4))
-    )
-    return Scenario("random", room, tuple(walls), boxes, cylinders)
 
 
 def _same_bits(left: np.ndarray, right: np.ndarray) -> bool:

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from sonar_gym.geometry import StaticGeometry
+from sonar_gym.geometry import StaticGeometry, ring_shift
 from sonar_gym.pose import FloatArray
 
 PATH_END_TOLERANCE = 1e-9
@@ -335,18 +335,20 @@ def convex_loops(
     points = np.concatenate([starts, ends, centres])
     solid_side = np.zeros(n)
     encloses = np.zeros(n, dtype=bool)
-    seen = np.zeros(n, dtype=bool)
+    seen = [False] * n
+    next_segment: list[int] = successor.tolist()
     for first in range(n):
         if seen[first]:
             continue
         loop = [first]
-        while successor[loop[-1]] >= 0 and successor[loop[-1]] not in loop:
-            loop.append(int(successor[loop[-1]]))
-        seen[loop] = True
-        if len(loop) < 3 or successor[loop[-1]] != first:
+        while next_segment[loop[-1]] >= 0 and next_segment[loop[-1]] not in loop:
+            loop.append(next_segment[loop[-1]])
+        for segment in loop:
+            seen[segment] = True
+        if len(loop) < 3 or next_segment[loop[-1]] != first:
             continue
         d = ends[loop] - starts[loop]
-        turns = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
+        turns = d[:, 0] * ring_shift(d[:, 1], 1) - d[:, 1] * ring_shift(d[:, 0], 1)
         if not (np.all(turns > 1e-12) or np.all(turns < -1e-12)):
             continue
         interior_left = np.sign(turns[0])
