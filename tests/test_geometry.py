@@ -12,6 +12,7 @@ from sonar_gym import geometry as geometry_module
 from sonar_gym.geometry import build_static_geometry, static_geometry
 from sonar_gym.random_room import random_scenario
 from sonar_gym.scenario import Box, Scenario, builtin_names, load_scenario, scenario_from_dict
+from tests.random_static_scenarios import random_scenario as random_static_scenario
 
 ROOM = {"room": {"min": [0.0, 0.0], "max": [4.0, 3.0]}}
 
@@ -312,3 +313,59 @@ def test_ring_shift_equals_np_roll(shape: tuple[int, ...]) -> None:
             shifted = geometry_module.ring_shift(values, step, axis)
             expected = np.roll(values, -step, axis=axis)
             assert shifted.shape == expected.shape and shifted.tobytes() == expected.tobytes()
+
+
+def test_segments_near_points_are_the_unique_owners_of_the_samples_in_reach() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        n = int(rng.integers(1, 30))
+        starts = rng.uniform(-3.0, 3.0, size=(n, 2))
+        ends = starts + rng.normal(size=(n, 2)) * rng.choice([0.05, 1.0, 3.0])
+        index = geometry_module._SegmentIndex(starts, ends)
+        points = np.concatenate([starts, ends, rng.uniform(-3.0, 3.0, size=(20, 2))])
+        tolerance = float(rng.choice([1e-6, 1e-3, 0.3]))
+        near = index.near(points, tolerance)
+        owner = np.array(index._owner, dtype=np.int64)
+        hits = index._tree.query_ball_point(points, index._reach + tolerance)
+        assert near == [np.unique(owner[np.asarray(h, dtype=np.int64)]).tolist() for h in hits]
+        for point, candidates in zip(points, near, strict=True):  # none within reach left out
+            gaps = [_point_segment_gap(point, starts[i], ends[i]) for i in range(n)]
+            assert {i for i in range(n) if gaps[i] <= tolerance} <= set(candidates)
+
+
+def _point_segment_gap(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    span = end - start
+    t = float(np.clip((point - start) @ span / (span @ span), 0.0, 1.0))
+    return float(np.linalg.norm(point - (start + t * span)))
+
+
+def _flattened_in_order(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Start points, end points and map flags of the room's sides, the free walls and the box
+    sides, listed one by one from the scenario (the order and the floats the build keeps)."""
+    rows: list[tuple[tuple[float, float], tuple[float, float], bool]] = []
+
+    def add_polygon(corners: tuple[tuple[float, float], ...], mapped: bool) -> None:
+        rows.extend((corner, corners[(i + 1) % 4], mapped) for i, corner in enumerate(corners))
+
+    if scenario.room is not None:
+        add_polygon(scenario.room.corners, True)
+    rows.extend((wall.a, wall.b, wall.mapped) for wall in scenario.walls)
+    for box in scenario.boxes:
+        add_polygon(box.corners, box.mapped)
+    return (
+        np.array([row[0] for row in rows], dtype=np.float64).reshape(-1, 2),
+        np.array([row[1] for row in rows], dtype=np.float64).reshape(-1, 2),
+        np.array([row[2] for row in rows], dtype=bool),
+    )
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_segments_are_the_scenarios_sides_in_order_bit_for_bit(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        scenario = random_static_scenario(rng)
+        geometry = build_static_geometry(scenario)
+        built = (geometry.segment_starts, geometry.segment_ends, geometry.segment_mapped)
+        for array, expected in zip(built, _flattened_in_order(scenario), strict=True):
+            assert array.dtype == expected.dtype and array.shape == expected.shape
+            assert array.tobytes() == expected.tobytes(), scenario
