@@ -7,7 +7,7 @@ import pytest
 
 from sonar_gym.apcs_route import with_wall_obstacles
 from sonar_gym.geometry import build_static_geometry
-from sonar_gym.scenario import builtin_names, load_scenario
+from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, builtin_names, load_scenario
 from sonar_gym.sonar.echo_tables import convex_loops
 from tests.random_static_scenarios import random_scenario
 from tests.sonar.convex_loops_reference import reference_convex_loops
@@ -54,3 +54,33 @@ def test_convex_loops_equal_the_reference_on_the_builtin_scenarios(name: str) ->
 def test_convex_loops_of_nothing_are_empty() -> None:
     empty = np.zeros((0, 2))
     _assert_same_loops("empty", (empty, empty, empty))
+
+
+def _chain(*points: tuple[float, float]) -> list[Wall]:
+    return [Wall(a, b) for a, b in zip(points[:-1], points[1:], strict=True)]
+
+
+@pytest.mark.parametrize(
+    "walls",
+    [
+        _chain((0.0, 0.0), (1.0, 0.0), (0.5, 1.0), (0.0, 0.0)),  # a triangle, counter-clockwise
+        _chain((0.0, 0.0), (0.5, 1.0), (1.0, 0.0), (0.0, 0.0)),  # and clockwise
+        _chain((0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 0.5), (0.0, 1.0), (0.0, 0.0)),  # concave
+        _chain((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.5, 1.5), (0.0, 1.0), (1.0, 0.0)),  # rho
+        _chain((0.0, 0.0), (1.0, 0.0), (1.0, 1.0)),  # open
+    ],
+)
+def test_convex_loops_equal_the_reference_on_closed_chains_of_free_walls(
+    walls: list[Wall],
+) -> None:
+    for room in (None, Room((-3.0, -3.0), (3.0, 3.0))):
+        scenario = Scenario(
+            "chains",
+            room,
+            tuple(walls),
+            (Box((-2.0, -2.0), (0.5, 0.5)),),
+            (Cylinder((2.0, 2.0), 0.1),),
+        )
+        geometry = build_static_geometry(scenario)
+        args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
+        _assert_same_loops("chains", args)
