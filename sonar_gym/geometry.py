@@ -261,10 +261,10 @@ def _segment_containing(
     for i in candidates:
         span, length = walls.spans[i], walls.lengths[i]
         t = float((point - walls.starts[i]) @ span) / length
-        if -tolerance_m <= t <= length + tolerance_m and (
-            np.linalg.norm(point - (walls.starts[i] + span * t / length)) <= tolerance_m
-        ):
-            return span / length
+        if -tolerance_m <= t <= length + tolerance_m:
+            offset = point - (walls.starts[i] + span * t / length)
+            if np.sqrt(offset.dot(offset)) <= tolerance_m:  # np.linalg.norm's arithmetic
+                return span / length
     return None
 
 

@@ -369,3 +369,37 @@ def test_segments_are_the_scenarios_sides_in_order_bit_for_bit(seed: int) -> Non
         for array, expected in zip(built, _flattened_in_order(scenario), strict=True):
             assert array.dtype == expected.dtype and array.shape == expected.shape
             assert array.tobytes() == expected.tobytes(), scenario
+
+
+def test_the_norm_of_a_point_vector_is_np_linalg_norms() -> None:
+    """_segment_containing measures an offset as ``np.sqrt(v.dot(v))``: np.linalg.norm's own
+    arithmetic for a float vector, without its checks."""
+    rng = np.random.default_rng(5)
+    scales = rng.choice([1e-9, 1e-6, 1e-3, 1.0, 1e3], size=(20000, 1))
+    for offset in rng.normal(size=(20000, 2)) * scales:
+        assert np.sqrt(offset.dot(offset)) == np.linalg.norm(offset)
+
+
+def test_box_corners_against_walls_take_the_walls_direction() -> None:
+    rng = np.random.default_rng(8)
+    for _ in range(200):
+        starts = rng.uniform(-3.0, 3.0, size=(6, 2))
+        ends = starts + rng.normal(size=(6, 2))
+        index = geometry_module._SegmentIndex(starts, ends)
+        pick = rng.integers(6, size=30)
+        along = rng.uniform(-0.01, 1.01, size=(30, 1))
+        points = (
+            starts[pick] + along * (ends[pick] - starts[pick]) + rng.normal(size=(30, 2)) * 1e-3
+        )
+        for point, candidates in zip(points, index.near(points, 1e-3), strict=True):
+            found = geometry_module._segment_containing(point, index, candidates, 1e-3)
+            expected = None
+            for i in candidates:  # with np.linalg.norm
+                span, length = index.spans[i], index.lengths[i]
+                t = float((point - index.starts[i]) @ span) / length
+                foot = index.starts[i] + span * t / length
+                if -1e-3 <= t <= length + 1e-3 and np.linalg.norm(point - foot) <= 1e-3:
+                    expected = span / length
+                    break
+            assert (found is None) == (expected is None)
+            assert found is None or found.tobytes() == expected.tobytes()
