@@ -165,9 +165,10 @@ class World:
         return body, shape
 
     def _add_static_shapes(self, scenario: Scenario) -> None:
-        # The geometry lists the segments (room, walls, box sides) and the cylinders in that
-        # order, as the same floats: the shapes are made from it. New pymunk shapes are already
-        # frictionless and inelastic; only their filter needs setting.
+        # The geometry lists the segments (room, walls, box sides from each box's first corner)
+        # and the cylinders in that order, as the same floats: the shapes and the box polygons
+        # are made from it. New pymunk shapes are already frictionless and inelastic; only
+        # their filter needs setting.
         static_body = self.space.static_body
         geometry = self.geometry
         shapes: list[pymunk.Shape] = [
@@ -187,8 +188,8 @@ class World:
         self.static_shape_table = StaticShapeTable.of_outlines(
             geometry.segment_starts, geometry.segment_ends, geometry.circles
         )
-        box_corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
-        self._box_polygons = _ConvexPolygons(box_corners.reshape(-1, 4, 2))
+        box_sides = geometry.segment_starts[geometry.n_segments - 4 * len(scenario.boxes) :]
+        self._box_polygons = _ConvexPolygons(box_sides.reshape(-1, 4, 2))  # the boxes' corners
 
     def rebuild_geometry(self) -> None:
         """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).

@@ -10,7 +10,7 @@ import pytest
 
 from sonar_gym.geometry import build_static_geometry
 from sonar_gym.path_clearance import StaticShapeTable
-from sonar_gym.world import World
+from sonar_gym.world import World, _ConvexPolygons
 from tests.random_static_scenarios import random_scenario
 from tests.world_shapes_reference import reference_static_shapes
 
@@ -70,7 +70,7 @@ def test_the_table_of_no_outlines_is_empty() -> None:
 
 
 @pytest.mark.parametrize("seed", range(3))
-def test_a_worlds_shapes_equal_the_shapes_made_from_its_scenario(seed: int) -> None:
+def test_a_worlds_shapes_and_box_polygons_equal_those_made_from_its_scenario(seed: int) -> None:
     rng = np.random.default_rng(100 + seed)
     for _ in range(40):
         scenario = random_scenario(rng)
@@ -82,6 +82,9 @@ def test_a_worlds_shapes_equal_the_shapes_made_from_its_scenario(seed: int) -> N
         ], scenario
         # The same insertion order: the spatial index and the contact order depend on it.
         assert list(world.space.shapes)[: len(expected)] == list(world.static_shapes)
+        corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+        polygons = _ConvexPolygons(corners.reshape(-1, 4, 2))
+        assert repr(world._box_polygons._polygons) == repr(polygons._polygons)
         table = StaticShapeTable.of(world.static_shapes)
         for name in ("bounds", "kinds", "shapes"):
             assert _same_bits(getattr(world.static_shape_table, name), getattr(table, name))
