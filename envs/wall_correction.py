@@ -473,7 +473,7 @@ class WallCorrectionEnv(SonarEnv):
         world = World(scenario, temperature_c=config.temperature_c, robot_pose=start)
 
         def scale_error() -> float:
-            return float(np.clip(rng.normal(0.0, config.wheel_scale_error_std), -0.4, 0.4))
+            return min(max(float(rng.normal(0.0, config.wheel_scale_error_std)), -0.4), 0.4)
 
         noise = OdometryNoise(
             encoder_std_m_per_sqrt_m=config.encoder_std_m_per_sqrt_m,

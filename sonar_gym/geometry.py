@@ -89,21 +89,15 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
     The corner analysis finds coincident end points and segments through a point with k-d
     trees (:class:`_SegmentIndex`), so the build takes O(n log n) in the number of segments.
     """
-    starts, ends, mapped = _room_and_wall_segments(scenario.room, scenario.walls)
-    n_room_and_walls = len(starts)
-    for box in scenario.boxes:
-        corners = box.corners
-        for i, corner in enumerate(corners):
-            starts.append(corner)
-            ends.append(corners[(i + 1) % len(corners)])
-            mapped.append(box.mapped)
-
-    segment_starts = np.array(starts, dtype=np.float64).reshape(-1, 2)
-    segment_ends = np.array(ends, dtype=np.float64).reshape(-1, 2)
     walls = _wall_corners(scenario.room, scenario.walls)
-    box_corners, box_arms = _box_corner_arms(
-        segment_starts[n_room_and_walls:].reshape(-1, 4, 2), walls.index
-    )
+    box_starts = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+    box_starts = box_starts.reshape(-1, 4, 2)
+    box_ends = ring_shift(box_starts, 1, axis=1)
+    box_mapped = np.array([box.mapped for box in scenario.boxes], dtype=bool)
+    segment_starts = np.concatenate([walls.index.starts, box_starts.reshape(-1, 2)])
+    segment_ends = np.concatenate([walls.index.ends, box_ends.reshape(-1, 2)])
+    mapped = np.concatenate([walls.mapped, np.repeat(box_mapped, 4)])
+    box_corners, box_arms = _box_corner_arms(box_starts, walls.index)
     vertices = np.concatenate([walls.vertices, box_corners])
     arms = np.concatenate([walls.arms, box_arms])
     circles = np.array(
@@ -112,7 +106,7 @@ def build_static_geometry(scenario: Scenario) -> StaticGeometry:
     geometry = StaticGeometry(
         segment_starts=segment_starts,
         segment_ends=segment_ends,
-        segment_mapped=np.array(mapped, dtype=bool),
+        segment_mapped=mapped,
         circles=circles,
         circle_mapped=np.array([c.mapped for c in scenario.cylinders], dtype=bool),
         vertices=vertices,
@@ -157,9 +151,11 @@ def _room_and_wall_segments(
 
 @dataclass(frozen=True, eq=False)
 class _WallCorners:
-    """The room's and free walls' segments, indexed, with their merged vertices and arms."""
+    """The room's and free walls' segments, indexed, with their map flags, merged vertices and
+    arms."""
 
     index: _SegmentIndex
+    mapped: np.ndarray
     vertices: FloatArray
     arms: FloatArray
 
@@ -171,15 +167,24 @@ def _wall_corners(room: Room | None, walls: tuple[Wall, ...]) -> _WallCorners:
     It does not depend on the boxes and cylinders, so scenarios that differ only in those (an
     env that draws new obstacles every episode) share it: built once per room and walls.
     """
-    starts, ends, _ = _room_and_wall_segments(room, walls)
+    starts, ends, mapped = _room_and_wall_segments(room, walls)
     index = _SegmentIndex(
         np.array(starts, dtype=np.float64).reshape(-1, 2),
         np.array(ends, dtype=np.float64).reshape(-1, 2),
     )
     vertices, arms = _merge_vertices(index)
-    for array in (index.starts, index.ends, index.spans, index.lengths, vertices, arms):
+    wall_mapped = np.array(mapped, dtype=bool)
+    for array in (
+        index.starts,
+        index.ends,
+        index.spans,
+        index.lengths,
+        wall_mapped,
+        vertices,
+        arms,
+    ):
         array.setflags(write=False)
-    return _WallCorners(index, vertices, arms)
+    return _WallCorners(index, wall_mapped, vertices, arms)
 
 
 class _SegmentIndex:
@@ -202,19 +207,21 @@ class _SegmentIndex:
         spacing = max(float(np.median(self.lengths)), float(self.lengths.sum()) / (8 * n))
         pieces = np.maximum(np.ceil(self.lengths / spacing).astype(np.int64), 1)
         per_segment = pieces + 1
-        self._owner = np.repeat(np.arange(n), per_segment)
+        owner = np.repeat(np.arange(n), per_segment)
+        self._owner: list[int] = owner.tolist()  # the segment of each sample, read by near()
         first = np.repeat(np.cumsum(per_segment) - per_segment, per_segment)
-        fraction = (np.arange(len(self._owner)) - first) / np.repeat(pieces, per_segment)
-        samples = starts[self._owner] + self.spans[self._owner] * fraction[:, None]
+        fraction = (np.arange(len(owner)) - first) / np.repeat(pieces, per_segment)
+        samples = starts[owner] + self.spans[owner] * fraction[:, None]
         self._tree = cKDTree(samples)
         self._reach = float(np.max(self.lengths / pieces)) / 2.0 * (1.0 + 1e-9) + 1e-12
 
-    def near(self, points: FloatArray, tolerance_m: float) -> list[np.ndarray]:
+    def near(self, points: FloatArray, tolerance_m: float) -> list[list[int]]:
         """Per point, the ascending indices of the segments that may pass within ``tolerance_m``."""
         if self._tree is None or len(points) == 0:
-            return [np.zeros(0, dtype=np.int64) for _ in range(len(points))]
+            return [[] for _ in range(len(points))]
         hits = self._tree.query_ball_point(points, self._reach + tolerance_m)
-        return [np.unique(self._owner[np.asarray(h, dtype=np.int64)]) for h in hits]
+        owner = self._owner
+        return [sorted({owner[sample] for sample in h}) for h in hits]
 
 
 def _box_corner_arms(
@@ -229,8 +236,8 @@ def _box_corner_arms(
     encode.
     """
     points = box_corners.reshape(-1, 2)
-    to_next = (np.roll(box_corners, -1, axis=1) - box_corners).reshape(-1, 2)
-    to_previous = (np.roll(box_corners, 1, axis=1) - box_corners).reshape(-1, 2)
+    to_next = (ring_shift(box_corners, 1, axis=1) - box_corners).reshape(-1, 2)
+    to_previous = (ring_shift(box_corners, -1, axis=1) - box_corners).reshape(-1, 2)
     to_next /= _norms(to_next)[:, None]
     to_previous /= _norms(to_previous)[:, None]
     arms = np.stack([to_next, to_next], axis=1)
@@ -247,17 +254,17 @@ def _box_corner_arms(
 
 
 def _segment_containing(
-    point: FloatArray, walls: _SegmentIndex, candidates: np.ndarray, tolerance_m: float
+    point: FloatArray, walls: _SegmentIndex, candidates: list[int], tolerance_m: float
 ) -> FloatArray | None:
     """Unit direction of the first segment passing within ``tolerance_m`` of ``point`` (ends
     included), among the ascending ``candidates``."""
     for i in candidates:
         span, length = walls.spans[i], walls.lengths[i]
         t = float((point - walls.starts[i]) @ span) / length
-        if -tolerance_m <= t <= length + tolerance_m and (
-            np.linalg.norm(point - (walls.starts[i] + span * t / length)) <= tolerance_m
-        ):
-            return span / length
+        if -tolerance_m <= t <= length + tolerance_m:
+            offset = point - (walls.starts[i] + span * t / length)
+            if np.sqrt(offset.dot(offset)) <= tolerance_m:  # np.linalg.norm's arithmetic
+                return span / length
     return None
 
 
@@ -313,7 +320,7 @@ def _merge_vertices(walls: _SegmentIndex) -> tuple[FloatArray, FloatArray]:
 
 
 def _segment_through_interior(
-    point: FloatArray, walls: _SegmentIndex, candidates: np.ndarray
+    point: FloatArray, walls: _SegmentIndex, candidates: list[int]
 ) -> FloatArray | None:
     """Unit direction of the first of the ascending ``candidates`` with ``point`` inside it."""
     for i in candidates:
@@ -325,6 +332,18 @@ def _segment_through_interior(
             if np.linalg.norm(point - foot) < _MERGE_TOLERANCE_M:
                 return span / np.sqrt(length_sq)
     return None
+
+
+def ring_shift(values: np.ndarray, step: int, axis: int = 0) -> np.ndarray:
+    """``np.roll(values, -step, axis)``: along ``axis``, the element ``step`` places after each
+    one, wrapping round (``step = 1`` the next corner of a polygon, ``-1`` the previous one).
+
+    Two slices joined: ``np.roll``'s general bookkeeping costs several times this move on the
+    few corners of a room's polygons.
+    """
+    after, before = [slice(None)] * values.ndim, [slice(None)] * values.ndim
+    after[axis], before[axis] = slice(step, None), slice(None, step)
+    return np.concatenate((values[tuple(after)], values[tuple(before)]), axis=axis)
 
 
 def _norms(vectors: FloatArray) -> FloatArray:

@@ -35,7 +35,7 @@ import numpy as np
 import numpy.typing as npt
 import pymunk
 
-from sonar_gym.geometry import StaticGeometry, static_geometry
+from sonar_gym.geometry import StaticGeometry, ring_shift, static_geometry
 from sonar_gym.path_clearance import StaticShapeTable
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
@@ -50,6 +50,7 @@ STATIC_CATEGORY = 0b01
 ROBOT_CATEGORY = 0b10
 STATIC_ONLY = pymunk.ShapeFilter(mask=STATIC_CATEGORY)
 """Query filter that sees the static shapes and ignores the robot."""
+_STATIC_FILTER = pymunk.ShapeFilter(categories=STATIC_CATEGORY)
 
 _ROBOT_MASS_KG = 10.0
 _COLLISION_SLOP_M = 1e-6
@@ -143,6 +144,7 @@ class World:
         space.collision_bias = 0.0
         self.space = space
         self._static_shapes: list[pymunk.Shape] = []
+        self.rebuild_geometry()
         self._add_static_shapes(scenario)
 
         self._commanded_velocity: tuple[float, float] = (0.0, 0.0)
@@ -151,7 +153,6 @@ class World:
         self._robot_is_fresh = True  # not stepped by the space since it was made
         self._placed_pose: Pose | None = None  # the pose teleported to, until the body moves
         space.add(self._robot_body, self._robot_shape)
-        self.rebuild_geometry()
 
     def _new_robot(self) -> tuple[pymunk.Body, pymunk.Circle]:
         radius = self.scenario.robot.radius
@@ -164,34 +165,31 @@ class World:
         return body, shape
 
     def _add_static_shapes(self, scenario: Scenario) -> None:
+        # The geometry lists the segments (room, walls, box sides from each box's first corner)
+        # and the cylinders in that order, as the same floats: the shapes and the box polygons
+        # are made from it. New pymunk shapes are already frictionless and inelastic; only
+        # their filter needs setting.
         static_body = self.space.static_body
-        shapes: list[pymunk.Shape] = []
-
-        def segment(a: tuple[float, float], b: tuple[float, float]) -> None:
-            shapes.append(pymunk.Segment(static_body, a, b, 0.0))
-
-        if scenario.room is not None:
-            corners = scenario.room.corners
-            for i, corner in enumerate(corners):
-                segment(corner, corners[(i + 1) % 4])
-        for wall in scenario.walls:
-            segment(wall.a, wall.b)
-        for box in scenario.boxes:
-            corners = box.corners
-            for i, corner in enumerate(corners):
-                segment(corner, corners[(i + 1) % 4])
-        for cylinder in scenario.cylinders:
-            shapes.append(pymunk.Circle(static_body, cylinder.radius, cylinder.center))
+        geometry = self.geometry
+        shapes: list[pymunk.Shape] = [
+            pymunk.Segment(static_body, a, b, 0.0)
+            for a, b in zip(
+                geometry.segment_starts.tolist(), geometry.segment_ends.tolist(), strict=True
+            )
+        ]
+        shapes += [
+            pymunk.Circle(static_body, radius, (x, y)) for x, y, radius in geometry.circles.tolist()
+        ]
         for shape in shapes:
-            shape.friction = 0.0
-            shape.elasticity = 0.0
-            shape.filter = pymunk.ShapeFilter(categories=STATIC_CATEGORY)
+            shape.filter = _STATIC_FILTER
         if shapes:
             self.space.add(*shapes)
         self._static_shapes = shapes
-        self.static_shape_table = StaticShapeTable.of(shapes)
-        box_corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
-        self._box_polygons = _ConvexPolygons(box_corners.reshape(-1, 4, 2))
+        self.static_shape_table = StaticShapeTable.of_outlines(
+            geometry.segment_starts, geometry.segment_ends, geometry.circles
+        )
+        box_sides = geometry.segment_starts[geometry.n_segments - 4 * len(scenario.boxes) :]
+        self._box_polygons = _ConvexPolygons(box_sides.reshape(-1, 4, 2))  # the boxes' corners
 
     def rebuild_geometry(self) -> None:
         """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).
@@ -556,7 +554,7 @@ class _ConvexPolygons:
     """
 
     def __init__(self, corners: FloatArray) -> None:
-        previous = np.roll(corners, 1, axis=1)
+        previous = ring_shift(corners, -1, axis=1)
         edges = corners - previous
         self._polygons = [
             [

@@ -12,6 +12,7 @@ from sonar_gym import geometry as geometry_module
 from sonar_gym.geometry import build_static_geometry, static_geometry
 from sonar_gym.random_room import random_scenario
 from sonar_gym.scenario import Box, Scenario, builtin_names, load_scenario, scenario_from_dict
+from tests.random_static_scenarios import random_scenario as random_static_scenario
 
 ROOM = {"room": {"min": [0.0, 0.0], "max": [4.0, 3.0]}}
 
@@ -301,3 +302,104 @@ def test_scenarios_differing_in_boxes_share_the_walls_analysis_and_build_as_the_
         for name, array in vars(geometry).items():
             assert array.tobytes() == getattr(fresh, name).tobytes(), name
         first_walls = geometry_module._wall_corners(scenario.room, scenario.walls)
+
+
+@pytest.mark.parametrize("shape", [(0,), (1,), (4,), (3, 4, 2), (0, 4, 2), (2, 5), (6, 1, 3)])
+def test_ring_shift_equals_np_roll(shape: tuple[int, ...]) -> None:
+    rng = np.random.default_rng(len(shape))
+    values = rng.normal(size=shape)
+    for axis in range(len(shape)):
+        for step in (1, -1):
+            shifted = geometry_module.ring_shift(values, step, axis)
+            expected = np.roll(values, -step, axis=axis)
+            assert shifted.shape == expected.shape and shifted.tobytes() == expected.tobytes()
+
+
+def test_segments_near_points_are_the_unique_owners_of_the_samples_in_reach() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        n = int(rng.integers(1, 30))
+        starts = rng.uniform(-3.0, 3.0, size=(n, 2))
+        ends = starts + rng.normal(size=(n, 2)) * rng.choice([0.05, 1.0, 3.0])
+        index = geometry_module._SegmentIndex(starts, ends)
+        points = np.concatenate([starts, ends, rng.uniform(-3.0, 3.0, size=(20, 2))])
+        tolerance = float(rng.choice([1e-6, 1e-3, 0.3]))
+        near = index.near(points, tolerance)
+        owner = np.array(index._owner, dtype=np.int64)
+        hits = index._tree.query_ball_point(points, index._reach + tolerance)
+        assert near == [np.unique(owner[np.asarray(h, dtype=np.int64)]).tolist() for h in hits]
+        for point, candidates in zip(points, near, strict=True):  # none within reach left out
+            gaps = [_point_segment_gap(point, starts[i], ends[i]) for i in range(n)]
+            assert {i for i in range(n) if gaps[i] <= tolerance} <= set(candidates)
+
+
+def _point_segment_gap(point: np.ndarray, start: np.ndarray, end: np.ndarray) -> float:
+    span = end - start
+    t = float(np.clip((point - start) @ span / (span @ span), 0.0, 1.0))
+    return float(np.linalg.norm(point - (start + t * span)))
+
+
+def _flattened_in_order(scenario: Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Start points, end points and map flags of the room's sides, the free walls and the box
+    sides, listed one by one from the scenario (the order and the floats the build keeps)."""
+    rows: list[tuple[tuple[float, float], tuple[float, float], bool]] = []
+
+    def add_polygon(corners: tuple[tuple[float, float], ...], mapped: bool) -> None:
+        rows.extend((corner, corners[(i + 1) % 4], mapped) for i, corner in enumerate(corners))
+
+    if scenario.room is not None:
+        add_polygon(scenario.room.corners, True)
+    rows.extend((wall.a, wall.b, wall.mapped) for wall in scenario.walls)
+    for box in scenario.boxes:
+        add_polygon(box.corners, box.mapped)
+    return (
+        np.array([row[0] for row in rows], dtype=np.float64).reshape(-1, 2),
+        np.array([row[1] for row in rows], dtype=np.float64).reshape(-1, 2),
+        np.array([row[2] for row in rows], dtype=bool),
+    )
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_segments_are_the_scenarios_sides_in_order_bit_for_bit(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    for _ in range(100):
+        scenario = random_static_scenario(rng)
+        geometry = build_static_geometry(scenario)
+        built = (geometry.segment_starts, geometry.segment_ends, geometry.segment_mapped)
+        for array, expected in zip(built, _flattened_in_order(scenario), strict=True):
+            assert array.dtype == expected.dtype and array.shape == expected.shape
+            assert array.tobytes() == expected.tobytes(), scenario
+
+
+def test_the_norm_of_a_point_vector_is_np_linalg_norms() -> None:
+    """_segment_containing measures an offset as ``np.sqrt(v.dot(v))``: np.linalg.norm's own
+    arithmetic for a float vector, without its checks."""
+    rng = np.random.default_rng(5)
+    scales = rng.choice([1e-9, 1e-6, 1e-3, 1.0, 1e3], size=(20000, 1))
+    for offset in rng.normal(size=(20000, 2)) * scales:
+        assert np.sqrt(offset.dot(offset)) == np.linalg.norm(offset)
+
+
+def test_box_corners_against_walls_take_the_walls_direction() -> None:
+    rng = np.random.default_rng(8)
+    for _ in range(200):
+        starts = rng.uniform(-3.0, 3.0, size=(6, 2))
+        ends = starts + rng.normal(size=(6, 2))
+        index = geometry_module._SegmentIndex(starts, ends)
+        pick = rng.integers(6, size=30)
+        along = rng.uniform(-0.01, 1.01, size=(30, 1))
+        points = (
+            starts[pick] + along * (ends[pick] - starts[pick]) + rng.normal(size=(30, 2)) * 1e-3
+        )
+        for point, candidates in zip(points, index.near(points, 1e-3), strict=True):
+            found = geometry_module._segment_containing(point, index, candidates, 1e-3)
+            expected = None
+            for i in candidates:  # with np.linalg.norm
+                span, length = index.spans[i], index.lengths[i]
+                t = float((point - index.starts[i]) @ span) / length
+                foot = index.starts[i] + span * t / length
+                if -1e-3 <= t <= length + 1e-3 and np.linalg.norm(point - foot) <= 1e-3:
+                    expected = span / length
+                    break
+            assert (found is None) == (expected is None)
+            assert found is None or found.tobytes() == expected.tobytes()

@@ -332,30 +332,54 @@ def convex_loops(
     successor = np.full(n, -1)
     if len(starts):  # (argmax refuses an empty axis)
         successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
-    points = np.concatenate([starts, ends, centres])
     solid_side = np.zeros(n)
     encloses = np.zeros(n, dtype=bool)
-    seen = np.zeros(n, dtype=bool)
-    for first in range(n):
+    loops = _closed_chains(successor.tolist())
+    if not loops:
+        return solid_side, encloses
+    # All loops at once, row by row the arithmetic of one loop: its members in loop order, the
+    # rows of each loop reduced from its first row (reduceat).
+    lengths = [len(loop) for loop in loops]
+    firsts = np.cumsum([0, *lengths[:-1]])
+    members = np.array([segment for loop in loops for segment in loop])
+    next_members = np.array([segment for loop in loops for segment in (*loop[1:], loop[0])])
+    d = ends[members] - starts[members]
+    d_next = ends[next_members] - starts[next_members]
+    turns = d[:, 0] * d_next[:, 1] - d[:, 1] * d_next[:, 0]
+    convex = np.logical_and.reduceat(turns > 1e-12, firsts) | np.logical_and.reduceat(
+        turns < -1e-12, firsts
+    )
+    interior_left = np.sign(turns[firsts])
+    points = np.concatenate([starts, ends, centres])
+    offsets = points[None, :, :] - starts[members][:, None, :]
+    sides = np.repeat(interior_left, lengths)[:, None] * (
+        d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0]
+    )
+    enclosure = np.logical_and.reduceat(np.all(sides >= -LOOP_TOLERANCE_M, axis=1), firsts)
+    solid = np.repeat(convex, lengths)
+    solid_side[members[solid]] = np.repeat(
+        np.where(enclosure, -interior_left, interior_left), lengths
+    )[solid]
+    encloses[members[solid]] = np.repeat(enclosure, lengths)[solid]
+    return solid_side, encloses
+
+
+def _closed_chains(successor: list[int]) -> list[list[int]]:
+    """The chains along ``successor`` (each segment's next, or -1) that close into a loop of
+    at least three segments, walked from each segment in turn that no earlier walk reached."""
+    loops: list[list[int]] = []
+    seen = [False] * len(successor)
+    for first in range(len(successor)):
         if seen[first]:
             continue
         loop = [first]
         while successor[loop[-1]] >= 0 and successor[loop[-1]] not in loop:
-            loop.append(int(successor[loop[-1]]))
-        seen[loop] = True
-        if len(loop) < 3 or successor[loop[-1]] != first:
-            continue
-        d = ends[loop] - starts[loop]
-        turns = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
-        if not (np.all(turns > 1e-12) or np.all(turns < -1e-12)):
-            continue
-        interior_left = np.sign(turns[0])
-        offsets = points[None, :, :] - starts[loop][:, None, :]
-        sides = interior_left * (d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0])
-        enclosure = bool(np.all(sides >= -LOOP_TOLERANCE_M))
-        solid_side[loop] = -interior_left if enclosure else interior_left
-        encloses[loop] = enclosure
-    return solid_side, encloses
+            loop.append(successor[loop[-1]])
+        for segment in loop:
+            seen[segment] = True
+        if len(loop) >= 3 and successor[loop[-1]] == first:
+            loops.append(loop)
+    return loops
 
 
 def _pairwise_distances(from_points: FloatArray, to_points: FloatArray) -> FloatArray:

@@ -1,0 +1,86 @@
+""":func:`~sonar_gym.sonar.echo_tables.convex_loops` equals its reference bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonar_gym.apcs_route import with_wall_obstacles
+from sonar_gym.geometry import build_static_geometry
+from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, builtin_names, load_scenario
+from sonar_gym.sonar.echo_tables import convex_loops
+from tests.random_static_scenarios import random_scenario
+from tests.sonar.convex_loops_reference import reference_convex_loops
+
+
+def _assert_same_loops(scenario_name: str, geometry_args: tuple[np.ndarray, ...]) -> None:
+    solid_side, encloses = convex_loops(*geometry_args)
+    expected_side, expected_encloses = reference_convex_loops(*geometry_args)
+    assert solid_side.dtype == expected_side.dtype, scenario_name
+    assert solid_side.tobytes() == expected_side.tobytes(), scenario_name
+    assert encloses.dtype == expected_encloses.dtype, scenario_name
+    assert np.array_equal(encloses, expected_encloses), scenario_name
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_convex_loops_equal_the_reference_on_random_scenarios(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    solid = 0
+    for _ in range(100):
+        geometry = build_static_geometry(random_scenario(rng))
+        args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
+        _assert_same_loops("random", args)
+        solid += int(np.count_nonzero(convex_loops(*args)[0]))
+    assert solid > 0, "the cases must hold closed loops"
+
+
+@pytest.mark.parametrize("name", builtin_names())
+def test_convex_loops_equal_the_reference_on_the_builtin_scenarios(name: str) -> None:
+    scenario = load_scenario(name)
+    rng = np.random.default_rng(0)
+    scenarios = [scenario]
+    if scenario.room is not None:
+        (x0, _), (x1, _) = scenario.room.min, scenario.room.max
+        scenarios += [
+            with_wall_obstacles(scenario, rng, 4, (0.3, 1.2), (0.1, 0.4), (x0 + 0.5, x1 - 0.5))
+            for _ in range(5)
+        ]
+    for each in scenarios:
+        geometry = build_static_geometry(each)
+        args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
+        _assert_same_loops(name, args)
+
+
+def test_convex_loops_of_nothing_are_empty() -> None:
+    empty = np.zeros((0, 2))
+    _assert_same_loops("empty", (empty, empty, empty))
+
+
+def _chain(*points: tuple[float, float]) -> list[Wall]:
+    return [Wall(a, b) for a, b in zip(points[:-1], points[1:], strict=True)]
+
+
+@pytest.mark.parametrize(
+    "walls",
+    [
+        _chain((0.0, 0.0), (1.0, 0.0), (0.5, 1.0), (0.0, 0.0)),  # a triangle, counter-clockwise
+        _chain((0.0, 0.0), (0.5, 1.0), (1.0, 0.0), (0.0, 0.0)),  # and clockwise
+        _chain((0.0, 0.0), (2.0, 0.0), (2.0, 1.0), (1.0, 0.5), (0.0, 1.0), (0.0, 0.0)),  # concave
+        _chain((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.5, 1.5), (0.0, 1.0), (1.0, 0.0)),  # rho
+        _chain((0.0, 0.0), (1.0, 0.0), (1.0, 1.0)),  # open
+    ],
+)
+def test_convex_loops_equal_the_reference_on_closed_chains_of_free_walls(
+    walls: list[Wall],
+) -> None:
+    for room in (None, Room((-3.0, -3.0), (3.0, 3.0))):
+        scenario = Scenario(
+            "chains",
+            room,
+            tuple(walls),
+            (Box((-2.0, -2.0), (0.5, 0.5)),),
+            (Cylinder((2.0, 2.0), 0.1),),
+        )
+        geometry = build_static_geometry(scenario)
+        args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
+        _assert_same_loops("chains", args)
