@@ -9,7 +9,7 @@ TORCH_SPEC ?= torch==2.13.0
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: install install-extras evaluate test test-slow lint benchmark baselines reproduce clean
+.PHONY: install install-extras evaluate test test-slow lint benchmark baselines reproduce clean clean-compiled
 
 # The slow group also covers the optional extras (RLlib on Ray, RL Zoo, video), installed in an
 # environment of their own: ray[rllib] pins an older gymnasium than the main set-up installs.
@@ -80,3 +80,9 @@ reproduce: $(STAMP)
 
 clean:
 	rm -rf $(VENV) $(EXTRAS_VENV) runs .pytest_cache
+	$(MAKE) clean-compiled
+
+# numba checks a cached compiled loop against its own module's source only: after editing a
+# helper that other modules' loops inline (compiled.py, drive_kernels.py), drop the caches.
+clean-compiled:
+	find sonar_gym envs agents train -name '*.nbi' -delete -o -name '*.nbc' -delete
