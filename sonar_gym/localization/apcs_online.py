@@ -40,7 +40,7 @@ from sonar_gym.localization.apcs import (
 from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
 from sonar_gym.localization.apcs_walls import WallMap, fit_group_points, newest_reflection_rows
 from sonar_gym.localization.result import OK
-from sonar_gym.odometry import predict_run
+from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
@@ -488,8 +488,10 @@ class APCSTracker:
             _check_ranges(array, f"readings[{side!r}]")
             ranges[side] = array
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
-        poses, covariances = predict_run(
-            self.estimate, self.covariance, left, right, self.wheel_base_m, self.variance_per_m
+        # The estimate, covariance and wheel base were checked on construction and stay so.
+        variance_per_m = checked_variance_per_m(self.variance_per_m)
+        poses, covariances = predict_run_unchecked(
+            self.estimate, self.covariance, left, right, self.wheel_base_m, variance_per_m
         )
         result = RunResult(estimated_path=poses[1:].copy(), consumed=len(left))
         limit = len(left)
@@ -539,13 +541,13 @@ class APCSTracker:
                 later_stops = [stop for stop in stops if stop > command]
                 if later_stops:
                     limit = min(limit, later_stops[0])
-                tail_poses, tail_covariances = predict_run(
+                tail_poses, tail_covariances = predict_run_unchecked(
                     self.estimate,
                     self.covariance,
                     left[command + 1 :],
                     right[command + 1 :],
                     self.wheel_base_m,
-                    self.variance_per_m,
+                    variance_per_m,
                 )
                 poses = np.vstack([poses[: command + 1], tail_poses])
                 covariances = np.concatenate([covariances[: command + 1], tail_covariances])
