@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.localization import apcs_kernels
 from sonar_gym.localization.apcs import (
     AMBIGUOUS,
     DEFAULT_PARAMETERS,
@@ -235,17 +236,21 @@ class WallStream:
         self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
     ) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """:meth:`pending_erps` on checked arrays."""
-        directions = headings + BEAM_OFFSET_RAD[self.side]
-        if self._previous is not None:
-            previous_xy, previous_direction, previous_range = self._previous
-            positions = np.vstack([previous_xy, positions])
-            directions = np.concatenate([[previous_direction], directions])
-            ranges = np.concatenate([[previous_range], ranges])
-            skipped = 1
+        if self._previous is None:
+            has_previous, previous = False, (0.0, 0.0, 0.0, 0.0)
         else:
-            skipped = 0
+            (previous_x, previous_y), previous_direction, previous_range = self._previous
+            has_previous = True
+            previous = (previous_x, previous_y, previous_direction, previous_range)
+        all_positions, directions, all_ranges = apcs_kernels.stream_readings(
+            positions, headings, ranges, BEAM_OFFSET_RAD[self.side], has_previous, previous
+        )
         return newest_reflection_rows(
-            positions, directions, ranges, self.params.sensing_range_m, skipped
+            all_positions,
+            directions,
+            all_ranges,
+            self.params.sensing_range_m,
+            int(has_previous),
         )
 
     def accept(
