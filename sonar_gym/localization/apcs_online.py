@@ -492,6 +492,21 @@ class APCSTracker:
                 )
             _check_ranges(array, f"readings[{side!r}]")
             ranges[side] = array
+        return self.run_unchecked(left, right, samples, ranges, sensor_offset_m, stops)
+
+    def run_unchecked(
+        self,
+        encoder_left_m: FloatArray,
+        encoder_right_m: FloatArray,
+        sample_commands: npt.NDArray[np.int64],
+        readings: Mapping[str, FloatArray],
+        sensor_offset_m: float,
+        stops: Sequence[int],
+    ) -> RunResult:
+        """:meth:`run` on checked arguments: finite float64 ``(K,)`` encoder increments
+        (metres), ``(M,)`` int64 increasing command indices in ``[0, K)``, per side in
+        :data:`SIDE_NAMES` float64 ``(M,)`` ranges ``>= 0`` metres (NaN = dropout)."""
+        left, right, samples, ranges = encoder_left_m, encoder_right_m, sample_commands, readings
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
         # The estimate, covariance and wheel base were checked on construction and stay so.
         variance_per_m = checked_variance_per_m(self.variance_per_m)
