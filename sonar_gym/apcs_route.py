@@ -310,10 +310,12 @@ class APCSRoute:
         sensor_state = self.sensor_rng.bit_generator.state
         readings, echoes = self._read(motion.true_poses, samples, active_sides)
         with self._timed("localization"):
-            result = self.tracker.run(
+            # the increments and the readings come from the drive and the sonars, valid as run
+            # requires them
+            result = self.tracker.run_unchecked(
                 motion.encoder_left_m,
                 motion.encoder_right_m,
-                samples,
+                np.asarray(samples, dtype=np.int64),
                 readings,
                 sensor_offset_m=self.sonars.lateral_offset_m,
                 stops=plan.stops,

@@ -29,7 +29,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym import odometry_kernels
-from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.validation import checked_array, checked_positive
 
 Integration = Literal["euler", "midpoint", "arc"]
@@ -343,21 +343,42 @@ def predict_run(
     right = checked_array(encoder_right_m, "encoder_right_m", (len(left),))
     start_covariance = checked_array(covariance, "covariance", (3, 3))
     base = checked_positive(wheel_base_m, "wheel_base_m")
+    k = checked_variance_per_m(variance_per_m)
+    return predict_run_unchecked(pose, start_covariance, left, right, base, k)
+
+
+def checked_variance_per_m(variance_per_m: float) -> float:
+    """A wheel's variance per metre rolled (m^2/m) as a float if finite and >= 0; else a
+    ``ValueError`` naming argument ``variance_per_m``."""
     k = float(variance_per_m)
     if not (math.isfinite(k) and k >= 0.0):
         raise ValueError(
             f"argument 'variance_per_m' must be finite and >= 0; got {variance_per_m!r}"
         )
-    distance = 0.5 * (right + left)
-    turn = (right - left) / base
-    thetas = pose.theta + np.concatenate([[0.0], np.cumsum(turn)])
-    heading = thetas[:-1] + 0.5 * turn
-    cos_h, sin_h = np.cos(heading), np.sin(heading)
-    poses = np.empty((len(left) + 1, 3))
-    poses[0] = pose.x, pose.y, pose.theta
-    poses[1:, 0] = pose.x + np.cumsum(distance * cos_h)
-    poses[1:, 1] = pose.y + np.cumsum(distance * sin_h)
-    poses[1:, 2] = wrap_angles(thetas[1:])
+    return k
+
+
+def predict_run_unchecked(
+    pose: Pose,
+    covariance: FloatArray,
+    encoder_left_m: FloatArray,
+    encoder_right_m: FloatArray,
+    wheel_base_m: float,
+    variance_per_m: float,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`predict_run` on checked arguments: finite float64 ``(K,)`` increments (metres),
+    a finite ``(3, 3)`` covariance, a positive wheel base and a variance ``>= 0`` as floats.
+
+    The closed form, in compiled loops (:mod:`sonar_gym.odometry_kernels`) with numpy's
+    cosines and sines of the midpoint headings between them.
+    """
+    distance, midpoint_headings, headings = odometry_kernels.run_headings(
+        pose.theta, encoder_left_m, encoder_right_m, wheel_base_m
+    )
+    cos_h, sin_h = np.cos(midpoint_headings), np.sin(midpoint_headings)
+    poses = odometry_kernels.run_poses(
+        (pose.x, pose.y, pose.theta), distance, cos_h, sin_h, headings
+    )
     # F V F^T per command (F's columns [d_right, d_left], V = k diag(|d_r|, |d_l|)). Every
     # A = I + u e3^T with u = (-d sin h, d cos h, 0): their products add the u's, so
     # P_k = Phi_0k P_0 Phi_0k^T + sum_{i<k} Phi_(i+1)k (F V F^T)_i Phi_(i+1)k^T with
@@ -366,7 +387,14 @@ def predict_run(
     # w = U_k - U_(i+1) the sums over i < k are running sums, so the whole run is O(K),
     # one compiled loop over the elements.
     covariances = odometry_kernels.run_covariances(
-        start_covariance, distance, cos_h, sin_h, right, left, base, k
+        covariance,
+        distance,
+        cos_h,
+        sin_h,
+        encoder_right_m,
+        encoder_left_m,
+        wheel_base_m,
+        variance_per_m,
     )
     return poses, covariances
 
@@ -405,9 +433,11 @@ __all__ = [
     "Integration",
     "OdometryConfig",
     "arc_displacements",
+    "checked_variance_per_m",
     "integrate_substeps",
     "predict_over_motion",
     "predict_run",
+    "predict_run_unchecked",
     "predict_step",
     "propagate_covariance",
     "sinc",

@@ -7,8 +7,10 @@ fused multiply-add, :data:`sonar_gym.compiled.fused_multiply_add`), the rest ele
 cosines and sines from libm as Python's ``math``. So it returns the same bits; numpy's four
 small products and three array constructions cost about 35 us per command.
 
-:func:`run_covariances` is the covariance part of :func:`sonar_gym.odometry.predict_run`'s
-closed form over a whole run, element by element in the order numpy evaluates the array form.
+:func:`run_headings`, :func:`run_poses` and :func:`run_covariances` are
+:func:`sonar_gym.odometry.predict_run`'s closed form over a whole run (the headings, the poses,
+the covariances), element by element in the order numpy evaluates the array form; the cosines
+and sines of the midpoint headings stay numpy's, taken between the first two.
 """
 
 from __future__ import annotations
@@ -18,7 +20,14 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import NUMBERS, TABLE, compiled, fused_multiply_add, wrap_angle
+from sonar_gym.compiled import (
+    NUMBERS,
+    TABLE,
+    compiled,
+    fused_multiply_add,
+    wrap_angle,
+    wrap_to_pi,
+)
 from sonar_gym.pose import FloatArray
 
 _MATRIX = types.Array(types.float64, 2, "C")
@@ -109,6 +118,71 @@ def predict_commands(
         x, y, theta = x + distance * cos_h, y + distance * sin_h, wrap_angle(theta + turned)
         poses[command, 0], poses[command, 1], poses[command, 2] = x, y, theta
     return poses, p
+
+
+@compiled(  # type: ignore[misc]
+    types.UniTuple(types.Array(types.float64, 1, "C"), 3),
+    types.float64,  # theta
+    NUMBERS,  # left
+    NUMBERS,  # right
+    types.float64,  # wheel_base_m
+)
+def run_headings(
+    theta: float, left: FloatArray, right: FloatArray, wheel_base_m: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(distance, midpoint_headings, headings)`` of a run of ``K`` commands from ``theta``.
+
+    Per command the distance ``(d_r + d_l)/2`` (metres) and the heading half way through its
+    turn ``(d_r - d_l)/l`` (radians, unwrapped); ``(K + 1,)`` the unwrapped headings from
+    ``theta + 0`` on, their turns summed left to right as ``cumsum`` sums them.
+    """
+    count = left.shape[0]
+    distance = np.empty(count)
+    midpoint_headings = np.empty(count)
+    headings = np.empty(count + 1)
+    headings[0] = theta + 0.0
+    turned = 0.0
+    for command in range(count):
+        distance[command] = 0.5 * (right[command] + left[command])
+        turn = (right[command] - left[command]) / wheel_base_m
+        turned = turn if command == 0 else turned + turn
+        midpoint_headings[command] = headings[command] + 0.5 * turn
+        headings[command + 1] = theta + turned
+    return distance, midpoint_headings, headings
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 2, "C"),
+    types.UniTuple(types.float64, 3),  # pose
+    NUMBERS,  # distance
+    NUMBERS,  # cos_h
+    NUMBERS,  # sin_h
+    NUMBERS,  # headings
+)
+def run_poses(
+    pose: tuple[float, float, float],
+    distance: FloatArray,
+    cos_h: FloatArray,
+    sin_h: FloatArray,
+    headings: FloatArray,
+) -> FloatArray:
+    """``(K + 1, 3)`` rows ``[x, y, theta]`` ({W}; metres, radians) from ``pose`` on: the
+    chords ``distance * (cos_h, sin_h)`` summed left to right, the unwrapped ``headings`` of
+    :func:`run_headings` wrapped as :func:`sonar_gym.pose.wrap_angles` wraps them."""
+    x, y, theta = pose
+    count = distance.shape[0]
+    poses = np.empty((count + 1, 3))
+    poses[0, 0], poses[0, 1], poses[0, 2] = x, y, theta
+    step_x = step_y = 0.0
+    for command in range(count):
+        chord_x = distance[command] * cos_h[command]
+        chord_y = distance[command] * sin_h[command]
+        step_x = chord_x if command == 0 else step_x + chord_x
+        step_y = chord_y if command == 0 else step_y + chord_y
+        poses[command + 1, 0] = x + step_x
+        poses[command + 1, 1] = y + step_y
+        poses[command + 1, 2] = wrap_to_pi(headings[command + 1])
+    return poses
 
 
 @compiled(  # type: ignore[misc]

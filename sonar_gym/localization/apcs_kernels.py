@@ -9,7 +9,8 @@ arithmetic element by element, in the same order, so they return the same bits (
 numpy, between the loops (its ``sin``, ``cos``, ``arctan2`` and ``arccos`` of arrays round
 differently from libm's): callers pass it in.
 
-The three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
+:func:`stream_readings` puts a side stream's stored reading before a run of new ones. The
+three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
 
 1. :func:`pair_geometry`: the eq. (4) inputs per pair (``sin alpha``, ``cos alpha`` of
    eqs (5)-(6), the cosine of the root's offset, whether a root exists) and the summed beam
@@ -40,6 +41,49 @@ _INDICES_OUT = types.Array(types.int64, 1, "C")
 # Below this, the sensor did not move between two readings (metres):
 # apcs_walls.ZERO_LENGTH_M, repeated here so that the loops do not import the wall module.
 _ZERO_LENGTH_M = 1e-9
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _VECTOR_OUT)),
+    TABLE,  # positions
+    NUMBERS,  # headings
+    NUMBERS,  # ranges
+    types.float64,  # beam_offset
+    types.boolean,  # has_previous
+    types.UniTuple(types.float64, 4),  # previous
+)
+def stream_readings(
+    positions: FloatArray,
+    headings: FloatArray,
+    ranges: FloatArray,
+    beam_offset: float,
+    has_previous: bool,
+    previous: tuple[float, float, float, float],
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """``(positions, directions, ranges)`` of a run of ``n`` readings, after the stream's
+    previous reading if ``has_previous``: ``(n + 1, 2)`` (or ``(n, 2)``) sensor positions
+    (metres), beam-axis directions ``heading + beam_offset`` (radians) and ranges (metres).
+
+    Args:
+        positions: ``(n, 2)`` sensor positions; ``headings`` ``(n,)`` robot headings;
+            ``ranges`` ``(n,)`` ranges (NaN for a dropout).
+        beam_offset: the side's beam axis relative to the heading, radians.
+        previous: the previous reading's ``(x, y, direction, range)``; ignored without one.
+    """
+    count = positions.shape[0]
+    first = 1 if has_previous else 0
+    all_positions = np.empty((count + first, 2))
+    directions = np.empty(count + first)
+    all_ranges = np.empty(count + first)
+    if has_previous:
+        all_positions[0, 0], all_positions[0, 1] = previous[0], previous[1]
+        directions[0], all_ranges[0] = previous[2], previous[3]
+    for i in range(count):
+        all_positions[first + i, 0] = positions[i, 0]
+        all_positions[first + i, 1] = positions[i, 1]
+        directions[first + i] = headings[i] + beam_offset
+        all_ranges[first + i] = ranges[i]
+    return all_positions, directions, all_ranges
 
 
 @compiled(  # type: ignore[misc]

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.localization import apcs_kernels
 from sonar_gym.localization.apcs import (
     AMBIGUOUS,
     DEFAULT_PARAMETERS,
@@ -40,7 +41,7 @@ from sonar_gym.localization.apcs import (
 from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
 from sonar_gym.localization.apcs_walls import WallMap, fit_group_points, newest_reflection_rows
 from sonar_gym.localization.result import OK
-from sonar_gym.odometry import predict_run
+from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from sonar_gym.validation import checked_array, checked_positive
 
@@ -235,17 +236,21 @@ class WallStream:
         self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
     ) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """:meth:`pending_erps` on checked arrays."""
-        directions = headings + BEAM_OFFSET_RAD[self.side]
-        if self._previous is not None:
-            previous_xy, previous_direction, previous_range = self._previous
-            positions = np.vstack([previous_xy, positions])
-            directions = np.concatenate([[previous_direction], directions])
-            ranges = np.concatenate([[previous_range], ranges])
-            skipped = 1
+        if self._previous is None:
+            has_previous, previous = False, (0.0, 0.0, 0.0, 0.0)
         else:
-            skipped = 0
+            (previous_x, previous_y), previous_direction, previous_range = self._previous
+            has_previous = True
+            previous = (previous_x, previous_y, previous_direction, previous_range)
+        all_positions, directions, all_ranges = apcs_kernels.stream_readings(
+            positions, headings, ranges, BEAM_OFFSET_RAD[self.side], has_previous, previous
+        )
         return newest_reflection_rows(
-            positions, directions, ranges, self.params.sensing_range_m, skipped
+            all_positions,
+            directions,
+            all_ranges,
+            self.params.sensing_range_m,
+            int(has_previous),
         )
 
     def accept(
@@ -487,9 +492,26 @@ class APCSTracker:
                 )
             _check_ranges(array, f"readings[{side!r}]")
             ranges[side] = array
+        return self.run_unchecked(left, right, samples, ranges, sensor_offset_m, stops)
+
+    def run_unchecked(
+        self,
+        encoder_left_m: FloatArray,
+        encoder_right_m: FloatArray,
+        sample_commands: npt.NDArray[np.int64],
+        readings: Mapping[str, FloatArray],
+        sensor_offset_m: float,
+        stops: Sequence[int],
+    ) -> RunResult:
+        """:meth:`run` on checked arguments: finite float64 ``(K,)`` encoder increments
+        (metres), ``(M,)`` int64 increasing command indices in ``[0, K)``, per side in
+        :data:`SIDE_NAMES` float64 ``(M,)`` ranges ``>= 0`` metres (NaN = dropout)."""
+        left, right, samples, ranges = encoder_left_m, encoder_right_m, sample_commands, readings
         sides = tuple(side for side in SIDE_NAMES if side in ranges)
-        poses, covariances = predict_run(
-            self.estimate, self.covariance, left, right, self.wheel_base_m, self.variance_per_m
+        # The estimate, covariance and wheel base were checked on construction and stay so.
+        variance_per_m = checked_variance_per_m(self.variance_per_m)
+        poses, covariances = predict_run_unchecked(
+            self.estimate, self.covariance, left, right, self.wheel_base_m, variance_per_m
         )
         result = RunResult(estimated_path=poses[1:].copy(), consumed=len(left))
         limit = len(left)
@@ -539,13 +561,13 @@ class APCSTracker:
                 later_stops = [stop for stop in stops if stop > command]
                 if later_stops:
                     limit = min(limit, later_stops[0])
-                tail_poses, tail_covariances = predict_run(
+                tail_poses, tail_covariances = predict_run_unchecked(
                     self.estimate,
                     self.covariance,
                     left[command + 1 :],
                     right[command + 1 :],
                     self.wheel_base_m,
-                    self.variance_per_m,
+                    variance_per_m,
                 )
                 poses = np.vstack([poses[: command + 1], tail_poses])
                 covariances = np.concatenate([covariances[: command + 1], tail_covariances])
