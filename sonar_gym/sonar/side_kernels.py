@@ -10,8 +10,9 @@ What only numpy rounds its own way stays in numpy, between the loops: the produc
 through BLAS (the search map at the sensors and the occlusion map at the heard paths), the
 ``einsum`` of the occlusion products and the air absorption's ``exp``.
 
-The three loops, in order:
+The loops, in order:
 
+0. :func:`side_sensors`: each sensor's homogeneous position and frame, from the robot's poses;
 1. :func:`side_ranges`: ranges, echo points and the on-axis echo laws per sensor and candidate;
 2. :func:`side_heard`: the candidate tests, the footprint and the beam's detection;
 3. :func:`side_first`: occlusion of the heard paths and the nearest path left, per sensor.
@@ -49,6 +50,62 @@ def _two_way_from_cos(cosine: float, cells: FloatArray, steps: float, reaches_ba
     if reaches_back and not cosine > 0.0:
         return 0.0
     return value
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, _TABLE_OUT)),
+    TABLE,  # robot
+    NUMBERS,  # cos_heading
+    NUMBERS,  # sin_heading
+    TABLE,  # offsets
+    types.int64,  # first
+    types.int64,  # stride
+)
+def side_sensors(
+    robot: FloatArray,
+    cos_heading: FloatArray,
+    sin_heading: FloatArray,
+    offsets: FloatArray,
+    first: int,
+    stride: int,
+) -> tuple[FloatArray, FloatArray]:
+    """``(homogeneous (P, 3), sensor_frames (P, 5))`` of the sensors ``first, first + stride,
+    ...`` of the ``2 n`` sensors left, right of each of ``robot``'s poses.
+
+    ``homogeneous`` holds each sensor's ``(x, y, 1)`` in {W} (metres); ``sensor_frames`` is the
+    input of :func:`side_heard`: ``cos`` and ``sin`` of the robot heading, the side sign (+1
+    left, -1 right) and the sensor's offset from the robot centre (m, {W}).
+
+    Args:
+        robot: ``(n, 3)`` poses ``[x, y, theta]`` in {W} (metres, radians).
+        cos_heading, sin_heading: ``(n,)`` numpy's ``cos`` and ``sin`` of ``theta``.
+        offsets: ``(2 n, 2)`` each sensor's offset from its robot centre (m, {W}), or
+            ``(0, 2)`` for sensors at the centre.
+        first, stride: the sensors evaluated (``0, 1`` for all, ``0, 2`` or ``1, 2`` for one
+            side).
+    """
+    n_all = 2 * robot.shape[0]
+    count = max(0, (n_all - first + stride - 1) // stride)
+    at_centre = offsets.shape[0] == 0
+    homogeneous = np.empty((count, 3))
+    frames = np.empty((count, 5))
+    for row in range(count):
+        sensor = first + row * stride
+        pose = sensor // 2
+        centre_x, centre_y = robot[pose, 0], robot[pose, 1]
+        sensor_x, sensor_y = centre_x, centre_y
+        if not at_centre:
+            sensor_x = centre_x + offsets[sensor, 0]
+            sensor_y = centre_y + offsets[sensor, 1]
+        homogeneous[row, 0] = sensor_x
+        homogeneous[row, 1] = sensor_y
+        homogeneous[row, 2] = 1.0
+        frames[row, 0] = cos_heading[pose]
+        frames[row, 1] = sin_heading[pose]
+        frames[row, 2] = 1.0 if sensor % 2 == 0 else -1.0
+        frames[row, 3] = sensor_x - centre_x
+        frames[row, 4] = sensor_y - centre_y
+    return homogeneous, frames
 
 
 @compiled(  # type: ignore[misc]
@@ -379,4 +436,4 @@ def side_first(
     return detected, path_lengths, first_amplitudes
 
 
-__all__ = ["side_first", "side_heard", "side_ranges"]
+__all__ = ["side_first", "side_heard", "side_ranges", "side_sensors"]

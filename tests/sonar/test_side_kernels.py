@@ -26,7 +26,11 @@ from sonar_gym.sonar.pulse_echo import FirstEchoes
 from sonar_gym.sonar.swept import SIDE_NAMES, SideSonars
 from sonar_gym.world import World
 from tests.fuzzing import fuzz_settings
-from tests.sonar.side_echoes_reference import side_first_echoes_arrays
+from tests.sonar.side_echoes_reference import (
+    sensor_rows_arrays,
+    side_first_echoes_arrays,
+    side_sensor_arrays,
+)
 from tests.sonar.worlds import cluttered_room, world
 
 
@@ -71,14 +75,11 @@ WORLDS = _worlds()
 
 def _both(sonar: SideSonars, world: Any, poses: np.ndarray) -> tuple[FirstEchoes, FirstEchoes]:
     """The compiled and the array first echoes of both sensors at ``poses`` ``(P, 3)``."""
-    n = len(poses)
-    headings = np.repeat(poses[:, 2], 2)
-    side_sign = np.tile([1.0, -1.0], n)
-    centres = np.repeat(poses[:, :2], 2, axis=0)
-    angle = headings + side_sign * (math.pi / 2.0)
-    sensors = centres + sonar.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
-    arguments = (sonar, world, sensors, centres, headings, side_sign)
-    return swept._side_first_echoes(*arguments), side_first_echoes_arrays(*arguments)
+    arguments = side_sensor_arrays(sonar, poses, SIDE_NAMES)
+    return (
+        swept._side_first_echoes(sonar, world, *sensor_rows_arrays(*arguments)),
+        side_first_echoes_arrays(sonar, world, *arguments),
+    )
 
 
 def _assert_same_bits(compiled: FirstEchoes, arrays: FirstEchoes) -> None:
@@ -258,3 +259,84 @@ def test_numpys_einsum_of_three_terms_sums_first_and_third_then_second() -> None
     einsum = np.einsum("hrk,hk->hr", matrix, paths)
     assert einsum.tobytes() == ordered.tobytes()
     assert einsum.tobytes() != sequential.tobytes()  # the order shows in these numbers
+
+
+def _array_echoes_along(
+    sonar: SideSonars, world: Any, poses: np.ndarray, sides: tuple[str, ...]
+) -> FirstEchoes:
+    """:meth:`SideSonars.first_echoes_along` through the array forms of the reference."""
+    sensed = side_first_echoes_arrays(sonar, world, *side_sensor_arrays(sonar, poses, sides))
+    if len(set(sides)) == len(SIDE_NAMES):
+        return sensed
+    n = len(poses)
+    echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+    rows = slice(SIDE_NAMES.index(sides[0]), None, 2)
+    echoes.detected[rows] = sensed.detected
+    echoes.path_lengths[rows] = sensed.path_lengths
+    echoes.amplitudes[rows] = sensed.amplitudes
+    return echoes
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    count=st.integers(0, 12),
+    sides=st.sampled_from([SIDE_NAMES, ("left",), ("right",), ("right", "left")]),
+    offset=st.sampled_from([0.0, 0.15, 1e-300, 2.5]),
+)
+def test_compiled_sensor_rows_are_the_array_sensor_rows(
+    seed: int, count: int, sides: tuple[str, ...], offset: float
+) -> None:
+    """Headings of any size and sign (huge ones too), sensors at or off the centre, either
+    or both sides."""
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack([rng.normal(0.0, 10.0, (count, 2)), rng.normal(0.0, 10.0, count) ** 3])
+    sonar = dataclasses.replace(SONARS["apcs"], lateral_offset_m=offset)
+    first, stride = (0, 1) if len(set(sides)) == 2 else (SIDE_NAMES.index(sides[0]), 2)
+    headings = poses[:, 2]
+    got = side_kernels.side_sensors(
+        poses,
+        np.cos(headings),
+        np.sin(headings),
+        sonar._sensor_offsets(headings),
+        first,
+        stride,
+    )
+    want = sensor_rows_arrays(*side_sensor_arrays(sonar, poses, sides))
+    for got_rows, want_rows in zip(got, want, strict=True):
+        assert got_rows.shape == want_rows.shape
+        assert got_rows.tobytes() == want_rows.tobytes()
+
+
+@pytest.mark.parametrize("sonar_name", ["apcs", "gtd_edges", "side_lobes_leakage", "srf04"])
+def test_first_echoes_along_are_the_array_echoes_as_air_and_world_change(
+    sonar_name: str,
+) -> None:
+    """One sonar object asked in turn in two worlds (robot radii 0.3 and 0.2 m) and at changing
+    temperatures: every answer is that of the array form, which remembers nothing."""
+    sonar = SONARS[sonar_name]
+    worlds = [cluttered_room(), World(load_scenario("apcs_corridor"))]
+    rng = np.random.default_rng(11)
+    poses = [_poses_in(world, rng, 40) for world in worlds]
+    changed = 0
+    last_amplitudes: dict[int, bytes] = {}
+    for temperature, which, sides in [
+        (20.0, 0, SIDE_NAMES),
+        (20.0, 1, SIDE_NAMES),
+        (-10.0, 1, ("left",)),
+        (-10.0, 1, SIDE_NAMES),
+        (40.0, 1, SIDE_NAMES),
+        (40.0, 0, ("right",)),
+        (40.0, 0, SIDE_NAMES),
+        (20.0, 0, SIDE_NAMES),
+        (20.0, 1, SIDE_NAMES),
+    ]:
+        world = worlds[which]
+        world.temperature_c = temperature
+        got = sonar.first_echoes_along(world, poses[which], sides)
+        _assert_same_bits(got, _array_echoes_along(sonar, world, poses[which], sides))
+        if len(sides) == 2:
+            previous = last_amplitudes.get(which)
+            changed += previous is not None and previous != got.amplitudes.tobytes()
+            last_amplitudes[which] = got.amplitudes.tobytes()
+    assert changed >= 2  # the temperature changed what was heard
