@@ -15,6 +15,7 @@ The loops, in order:
 0. :func:`side_sensors`: each sensor's homogeneous position and frame, from the robot's poses;
 1. :func:`side_ranges`: ranges, echo points and the on-axis echo laws per sensor and candidate;
 2. :func:`side_heard`: the candidate tests, the footprint and the beam's detection;
+   :func:`heard_paths` lists the heard paths and their sensors' rows;
 3. :func:`side_first`: occlusion of the heard paths and the nearest path left, per sensor.
 """
 
@@ -311,6 +312,38 @@ def side_heard(
 
 
 @compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.int64, 1, "C"), _TABLE_OUT)),
+    types.Array(types.boolean, 2, "A", readonly=True),  # heard
+    TABLE,  # homogeneous
+)
+def heard_paths(
+    heard: np.ndarray, homogeneous: FloatArray
+) -> tuple[np.ndarray, np.ndarray, FloatArray]:
+    """``(sensor_rows (H,), candidate_rows (H,), sensors (H, 3))``: ``np.nonzero(heard)`` (the
+    heard paths, sensors ascending) and the ``homogeneous`` row of each path's sensor."""
+    n_sensors, n_candidates = heard.shape
+    count = 0
+    for sensor in range(n_sensors):
+        for candidate in range(n_candidates):
+            if heard[sensor, candidate]:
+                count += 1
+    sensor_rows = np.empty(count, dtype=np.int64)
+    candidate_rows = np.empty(count, dtype=np.int64)
+    sensors = np.empty((count, 3))
+    path = 0
+    for sensor in range(n_sensors):
+        for candidate in range(n_candidates):
+            if heard[sensor, candidate]:
+                sensor_rows[path] = sensor
+                candidate_rows[path] = candidate
+                sensors[path, 0] = homogeneous[sensor, 0]
+                sensors[path, 1] = homogeneous[sensor, 1]
+                sensors[path, 2] = homogeneous[sensor, 2]
+                path += 1
+    return sensor_rows, candidate_rows, sensors
+
+
+@compiled(  # type: ignore[misc]
     types.float64,
     _GRID,  # matrix
     types.int64,  # path
@@ -436,4 +469,4 @@ def side_first(
     return detected, path_lengths, first_amplitudes
 
 
-__all__ = ["side_first", "side_heard", "side_ranges", "side_sensors"]
+__all__ = ["heard_paths", "side_first", "side_heard", "side_ranges", "side_sensors"]

@@ -418,8 +418,8 @@ def _side_first_echoes(
         beam.main_lobe_rising,
         beam.main_lobe_cells,
     )
-    sensor_rows, candidate_rows = np.nonzero(heard)
-    matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
+    sensor_rows, candidate_rows, path_sensors = side_kernels.heard_paths(heard, homogeneous)
+    matrix = (path_sensors @ tables.occlusion_map.T).reshape(
         len(sensor_rows), 3 * tables.n_segments + tables.n_circles, 3
     )
     detected, path_lengths, first_amplitudes = side_kernels.side_first(

@@ -340,3 +340,24 @@ def test_first_echoes_along_are_the_array_echoes_as_air_and_world_change(
             changed += previous is not None and previous != got.amplitudes.tobytes()
             last_amplitudes[which] = got.amplitudes.tobytes()
     assert changed >= 2  # the temperature changed what was heard
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.tuples(st.integers(0, 30), st.integers(0, 40)),
+    density=st.sampled_from([0.0, 0.05, 0.5, 1.0]),
+)
+def test_compiled_heard_paths_are_numpys_nonzero(
+    seed: int, shape: tuple[int, int], density: float
+) -> None:
+    rng = np.random.default_rng(seed)
+    heard = rng.random(shape) < density
+    homogeneous = np.column_stack([rng.normal(size=(shape[0], 2)), np.ones(shape[0])])
+    sensor_rows, candidate_rows, sensors = side_kernels.heard_paths(heard, homogeneous)
+    want_sensors, want_candidates = np.nonzero(heard)
+    assert sensor_rows.dtype == want_sensors.dtype
+    assert sensor_rows.tobytes() == want_sensors.tobytes()
+    assert candidate_rows.tobytes() == want_candidates.tobytes()
+    assert sensors.tobytes() == homogeneous[want_sensors].tobytes()
+    assert sensors.shape == (len(want_sensors), 3)
