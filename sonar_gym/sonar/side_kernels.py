@@ -17,6 +17,8 @@ The loops, in order:
 2. :func:`side_heard`: the candidate tests, the footprint and the beam's detection;
    :func:`heard_paths` lists the heard paths and their sensors' rows;
 3. :func:`side_first`: occlusion of the heard paths and the nearest path left, per sensor.
+
+:func:`side_readings` then turns the first echoes of both sensors into their readings.
 """
 
 from __future__ import annotations
@@ -469,4 +471,66 @@ def side_first(
     return detected, path_lengths, first_amplitudes
 
 
-__all__ = ["heard_paths", "side_first", "side_heard", "side_ranges", "side_sensors"]
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 1, "C"), types.Array(types.float64, 1, "C"))),
+    FLAGS,  # detected
+    NUMBERS,  # path_lengths
+    NUMBERS,  # amplitudes
+    NUMBERS,  # normals
+    NUMBERS,  # constants
+)
+def side_readings(
+    detected: np.ndarray,
+    path_lengths: FloatArray,
+    amplitudes: FloatArray,
+    normals: FloatArray,
+    constants: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """``(left (n,), right (n,))`` ranges (m, NaN for a dropout) the electronics report for the
+    first echoes of ``2 n`` pings, left then right of each sample.
+
+    Steps 1-5 of the readout of :mod:`sonar_gym.sonar.pulse_echo` (``echo_readings``), ping by
+    ping in its order of operations; a ping that detects nothing is a dropout.
+
+    Args:
+        detected, path_lengths, amplitudes: ``(2 n,)`` the first echoes (m, 1/m).
+        normals: ``(2 n,)`` standard normals of the jitter, or empty without jitter.
+        constants: seconds of flight per metre of path (``2 / c_true``); whether the crossing
+            delay is on (1 or 0) and its numerator (``rise time x threshold``, s/m); jitter in
+            seconds per normal; ``1 / T0`` and ``T0`` (0 without a counter); metres per second
+            of flight (``c_assumed / 2``); the maximum range (m).
+    """
+    tof_per_m, delay, delay_numerator = constants[0], constants[1] > 0.0, constants[2]
+    jitter_s, inverse_period, period = constants[3], constants[4], constants[5]
+    metres_per_s, max_range = constants[6], constants[7]
+    n_samples = path_lengths.shape[0] // 2
+    left = np.empty(n_samples)
+    right = np.empty(n_samples)
+    for ping in range(2 * n_samples):
+        reading = np.nan
+        if detected[ping]:
+            tof = path_lengths[ping] * tof_per_m
+            if delay:
+                tof = tof + delay_numerator / amplitudes[ping]
+            if normals.shape[0] > 0:
+                tof = tof + normals[ping] * jitter_s
+            if period > 0.0:
+                tof = np.floor(tof * inverse_period) * period
+            in_range = tof * metres_per_s
+            if in_range <= max_range:
+                reading = in_range
+        if ping % 2 == 0:
+            left[ping // 2] = reading
+        else:
+            right[ping // 2] = reading
+    return left, right
+
+
+__all__ = [
+    "heard_paths",
+    "side_first",
+    "side_heard",
+    "side_ranges",
+    "side_readings",
+    "side_sensors",
+]

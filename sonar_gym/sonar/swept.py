@@ -57,6 +57,9 @@ _AT_CENTRE = np.zeros((0, 2))
 """The sensor offsets of :func:`~sonar_gym.sonar.side_kernels.side_sensors` for sensors at the
 robot centre."""
 _AT_CENTRE.flags.writeable = False
+_NO_NORMALS = np.zeros(0)
+"""The jitter normals of :func:`~sonar_gym.sonar.side_kernels.side_readings` without jitter."""
+_NO_NORMALS.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -231,9 +234,22 @@ class SideSonars(PulseEchoSonar):
         ``m`` calls of :meth:`read`: a caller that keeps only a prefix of a run of samples
         replays their draws without finding their echoes again.
         """
-        ranges, _ = self.readings(world, echoes, rng)
-        pairs = ranges.reshape(-1, 2)
-        return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
+        count = len(echoes.path_lengths)
+        if count % 2:
+            raise ValueError(
+                f"argument 'echoes' must hold a left and a right echo per sample; got {count}"
+            )
+        transducer = self.transducer
+        air = _side_air(self, world.temperature_c, world.scenario.robot.radius)
+        normals = _NO_NORMALS
+        if self.readout.range_noise and transducer.range_noise_std_m > 0.0:
+            if rng is None:
+                raise ValueError("argument 'rng' is needed: the readout adds range noise")
+            normals = rng.standard_normal(count)
+        left, right = side_kernels.side_readings(
+            echoes.detected, echoes.path_lengths, echoes.amplitudes, normals, air.readout_constants
+        )
+        return SideReadings(left_m=left, right_m=right)
 
     def sample_along_per_pose(
         self, world: WorldLike, poses: Sequence[Pose], rng: np.random.Generator | None
@@ -315,6 +331,8 @@ class _SideAir:
     """``-alpha ln(10) / 10``: the exponent of the air's amplitude loss per metre, 1/m."""
     heard_constants: FloatArray
     first_constants: FloatArray
+    readout_constants: FloatArray
+    """The constants of :func:`~sonar_gym.sonar.side_kernels.side_readings`."""
 
 
 _LAST_SIDE_AIR: list[tuple[SideSonars, float, float, _SideAir]] = []
@@ -356,6 +374,7 @@ def _side_air(sonar: SideSonars, temperature_c: float, robot_radius_m: float) ->
     first_constants = np.array(
         (_UV_CENTRE_SCALAR, float(TABLE_STEPS_PER_UNIT), 1.0 if beam.reaches_back else 0.0)
     )
+    readout_constants = _readout_constants(sonar, speed)
     heard_constants.flags.writeable = False
     first_constants.flags.writeable = False
     answer = _SideAir(
@@ -366,9 +385,32 @@ def _side_air(sonar: SideSonars, temperature_c: float, robot_radius_m: float) ->
         absorption_per_m=-transducer.absorption_db_per_m * math.log(10.0) / 10.0,
         heard_constants=heard_constants,
         first_constants=first_constants,
+        readout_constants=readout_constants,
     )
     _LAST_SIDE_AIR[:] = [(sonar, temperature_c, robot_radius_m, answer)]
     return answer
+
+
+def _readout_constants(sonar: SideSonars, speed_mps: float) -> FloatArray:
+    """The constants of :func:`~sonar_gym.sonar.side_kernels.side_readings` for ``sonar`` in air
+    where sound travels at ``speed_mps`` (m/s); read-only."""
+    transducer, readout = sonar.transducer, sonar.readout
+    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
+    period = transducer.timer_period_s if readout.quantisation else 0.0
+    constants = np.array(
+        (
+            2.0 / speed_mps,
+            1.0 if delay else 0.0,
+            transducer.echo_rise_time_s * transducer.detection_threshold,
+            2.0 * transducer.range_noise_std_m / speed_mps,
+            1.0 / period if period > 0.0 else 0.0,
+            period if period > 0.0 else 0.0,
+            sonar.assumed_speed_of_sound_mps / 2.0,
+            transducer.max_range_m,
+        )
+    )
+    constants.flags.writeable = False
+    return constants
 
 
 def _side_first_echoes(

@@ -188,3 +188,14 @@ def side_first_echoes_arrays(
         path_lengths=np.where(hit, ranges[rows, first], 0.0),
         amplitudes=np.where(hit, first_amplitude, 0.0),
     )
+
+
+def read_echoes_arrays(
+    sonar: SideSonars, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
+) -> tuple[FloatArray, FloatArray]:
+    """``(left, right)`` readings of :meth:`~sonar_gym.sonar.swept.SideSonars.read_echoes`
+    through :meth:`~sonar_gym.sonar.pulse_echo.PulseEchoSonar.readings`: the form
+    :func:`~sonar_gym.sonar.side_kernels.side_readings` replaced."""
+    ranges, _ = sonar.readings(world, echoes, rng)
+    pairs = ranges.reshape(-1, 2)
+    return pairs[:, 0].copy(), pairs[:, 1].copy()

@@ -21,12 +21,13 @@ from hypothesis import strategies as st
 
 from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar import side_kernels, swept
-from sonar_gym.sonar.acoustics import TABLE_STEPS_PER_UNIT, PistonBeam
-from sonar_gym.sonar.pulse_echo import FirstEchoes
+from sonar_gym.sonar.acoustics import TABLE_STEPS_PER_UNIT, PistonBeam, speed_of_sound_mps
+from sonar_gym.sonar.pulse_echo import FirstEchoes, Readout
 from sonar_gym.sonar.swept import SIDE_NAMES, SideSonars
 from sonar_gym.world import World
 from tests.fuzzing import fuzz_settings
 from tests.sonar.side_echoes_reference import (
+    read_echoes_arrays,
     sensor_rows_arrays,
     side_first_echoes_arrays,
     side_sensor_arrays,
@@ -361,3 +362,87 @@ def test_compiled_heard_paths_are_numpys_nonzero(
     assert candidate_rows.tobytes() == want_candidates.tobytes()
     assert sensors.tobytes() == homogeneous[want_sensors].tobytes()
     assert sensors.shape == (len(want_sensors), 3)
+
+
+_READOUTS = [
+    Readout(range_noise=noise, crossing_delay=delay, quantisation=counter)
+    for noise in (True, False)
+    for delay in (True, False)
+    for counter in (True, False)
+]
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    count=st.integers(0, 40),
+    sonar_name=st.sampled_from(["apcs", "polaroid_gain", "srf04"]),
+    readout=st.sampled_from(_READOUTS),
+    temperature=st.sampled_from([-20.0, 15.0, 20.0, 45.0]),
+    assumed_speed=st.sampled_from([None, 331.0, 350.0]),
+)
+def test_compiled_side_readings_are_the_array_readings(
+    seed: int,
+    count: int,
+    sonar_name: str,
+    readout: Readout,
+    temperature: float,
+    assumed_speed: float | None,
+) -> None:
+    """Any first echoes (detected or not, at the threshold, beyond the maximum range, at the
+    counter's steps) under every readout switch: the same ranges and the same draws."""
+    sonar = dataclasses.replace(SONARS[sonar_name], readout=readout)
+    if assumed_speed is not None:
+        sonar = sonar.with_assumed_speed(assumed_speed)
+    transducer = sonar.transducer
+    world = WORLDS["apcs_corridor"]
+    world.temperature_c = temperature
+    rng = np.random.default_rng(seed)
+    path_lengths = rng.uniform(0.0, 1.2 * transducer.max_range_m, 2 * count)
+    edges = _edge_paths(sonar, speed_of_sound_mps(temperature), rng)
+    chosen = rng.random(2 * count) < 0.4
+    path_lengths[chosen] = rng.choice(edges, int(chosen.sum()))
+    amplitudes = transducer.detection_threshold * rng.uniform(1.0, 50.0, 2 * count)
+    amplitudes[rng.random(2 * count) < 0.2] = transducer.detection_threshold
+    echoes = FirstEchoes(rng.random(2 * count) < 0.8, path_lengths, amplitudes)
+    draws, reference_draws = np.random.default_rng(seed), np.random.default_rng(seed)
+    try:
+        got = sonar.read_echoes(world, echoes, draws)
+        want = read_echoes_arrays(sonar, world, echoes, reference_draws)
+    finally:
+        world.temperature_c = 15.0
+    assert got.left_m.tobytes() == want[0].tobytes()
+    assert got.right_m.tobytes() == want[1].tobytes()
+    assert draws.bit_generator.state == reference_draws.bit_generator.state
+
+
+def _edge_paths(sonar: SideSonars, speed_mps: float, rng: np.random.Generator) -> np.ndarray:
+    """Paths (m) a few ulps either side of a whole number of counter periods of flight and
+    of the maximum range (where the counter's floor and the range check decide)."""
+    transducer = sonar.transducer
+    metres_per_period = transducer.timer_period_s * speed_mps / 2.0
+    steps = rng.integers(1, int(transducer.max_range_m / metres_per_period), 8)
+    centres = np.concatenate(
+        [
+            steps * metres_per_period,
+            [transducer.max_range_m * speed_mps / sonar.assumed_speed_of_sound_mps],
+        ]
+    )
+    ulps = np.arange(-6, 7)
+    return (centres[:, None] + ulps[None, :] * np.spacing(centres)[:, None]).ravel()
+
+
+def test_side_readings_need_a_generator_only_with_noise() -> None:
+    world, sonar = WORLDS["apcs_corridor"], SONARS["apcs"]
+    echoes = FirstEchoes(np.ones(4, dtype=bool), np.full(4, 1.0), np.full(4, 1.0))
+    with pytest.raises(ValueError, match="'rng' is needed"):
+        sonar.read_echoes(world, echoes, None)
+    quiet = sonar.with_readout(range_noise=False).read_echoes(world, echoes, None)
+    assert (
+        quiet.left_m.tobytes()
+        == read_echoes_arrays(sonar.with_readout(range_noise=False), world, echoes, None)[
+            0
+        ].tobytes()
+    )
+    with pytest.raises(ValueError, match="a left and a right echo"):
+        sonar.read_echoes(world, FirstEchoes(np.ones(3, dtype=bool), np.ones(3), np.ones(3)), None)
