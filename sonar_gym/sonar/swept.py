@@ -320,10 +320,11 @@ class SideSonars(PulseEchoSonar):
 
 @dataclass(frozen=True)
 class _SideAir:
-    """What :func:`_side_first_echoes` needs of a sonar in a world's air and robot, besides
-    the geometry: its two-way beam, the edge law's constants and the constant vectors of
-    :func:`~sonar_gym.sonar.side_kernels.side_heard` and
-    :func:`~sonar_gym.sonar.side_kernels.side_first`."""
+    """What the side sonars' echoes and readout need of a sonar in a world's air and robot,
+    besides the geometry: its two-way beam, the edge law's constants and the constant vectors
+    of :func:`~sonar_gym.sonar.side_kernels.side_heard`,
+    :func:`~sonar_gym.sonar.side_kernels.side_first` and
+    :func:`~sonar_gym.sonar.side_kernels.side_readings`."""
 
     beam: PistonBeam
     edge_law: FloatArray
