@@ -10,11 +10,15 @@ What only numpy rounds its own way stays in numpy, between the loops: the produc
 through BLAS (the search map at the sensors and the occlusion map at the heard paths), the
 ``einsum`` of the occlusion products and the air absorption's ``exp``.
 
-The three loops, in order:
+The loops, in order:
 
+0. :func:`side_sensors`: each sensor's homogeneous position and frame, from the robot's poses;
 1. :func:`side_ranges`: ranges, echo points and the on-axis echo laws per sensor and candidate;
 2. :func:`side_heard`: the candidate tests, the footprint and the beam's detection;
+   :func:`heard_paths` lists the heard paths and their sensors' rows;
 3. :func:`side_first`: occlusion of the heard paths and the nearest path left, per sensor.
+
+:func:`side_readings` then turns the first echoes of both sensors into their readings.
 """
 
 from __future__ import annotations
@@ -49,6 +53,62 @@ def _two_way_from_cos(cosine: float, cells: FloatArray, steps: float, reaches_ba
     if reaches_back and not cosine > 0.0:
         return 0.0
     return value
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, _TABLE_OUT)),
+    TABLE,  # robot
+    NUMBERS,  # cos_heading
+    NUMBERS,  # sin_heading
+    TABLE,  # offsets
+    types.int64,  # first
+    types.int64,  # stride
+)
+def side_sensors(
+    robot: FloatArray,
+    cos_heading: FloatArray,
+    sin_heading: FloatArray,
+    offsets: FloatArray,
+    first: int,
+    stride: int,
+) -> tuple[FloatArray, FloatArray]:
+    """``(homogeneous (P, 3), sensor_frames (P, 5))`` of the sensors ``first, first + stride,
+    ...`` of the ``2 n`` sensors left, right of each of ``robot``'s poses.
+
+    ``homogeneous`` holds each sensor's ``(x, y, 1)`` in {W} (metres); ``sensor_frames`` is the
+    input of :func:`side_heard`: ``cos`` and ``sin`` of the robot heading, the side sign (+1
+    left, -1 right) and the sensor's offset from the robot centre (m, {W}).
+
+    Args:
+        robot: ``(n, 3)`` poses ``[x, y, theta]`` in {W} (metres, radians).
+        cos_heading, sin_heading: ``(n,)`` numpy's ``cos`` and ``sin`` of ``theta``.
+        offsets: ``(2 n, 2)`` each sensor's offset from its robot centre (m, {W}), or
+            ``(0, 2)`` for sensors at the centre.
+        first, stride: the sensors evaluated (``0, 1`` for all, ``0, 2`` or ``1, 2`` for one
+            side).
+    """
+    n_all = 2 * robot.shape[0]
+    count = max(0, (n_all - first + stride - 1) // stride)
+    at_centre = offsets.shape[0] == 0
+    homogeneous = np.empty((count, 3))
+    frames = np.empty((count, 5))
+    for row in range(count):
+        sensor = first + row * stride
+        pose = sensor // 2
+        centre_x, centre_y = robot[pose, 0], robot[pose, 1]
+        sensor_x, sensor_y = centre_x, centre_y
+        if not at_centre:
+            sensor_x = centre_x + offsets[sensor, 0]
+            sensor_y = centre_y + offsets[sensor, 1]
+        homogeneous[row, 0] = sensor_x
+        homogeneous[row, 1] = sensor_y
+        homogeneous[row, 2] = 1.0
+        frames[row, 0] = cos_heading[pose]
+        frames[row, 1] = sin_heading[pose]
+        frames[row, 2] = 1.0 if sensor % 2 == 0 else -1.0
+        frames[row, 3] = sensor_x - centre_x
+        frames[row, 4] = sensor_y - centre_y
+    return homogeneous, frames
 
 
 @compiled(  # type: ignore[misc]
@@ -254,6 +314,38 @@ def side_heard(
 
 
 @compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.int64, 1, "C"), _TABLE_OUT)),
+    types.Array(types.boolean, 2, "A", readonly=True),  # heard
+    TABLE,  # homogeneous
+)
+def heard_paths(
+    heard: np.ndarray, homogeneous: FloatArray
+) -> tuple[np.ndarray, np.ndarray, FloatArray]:
+    """``(sensor_rows (H,), candidate_rows (H,), sensors (H, 3))``: ``np.nonzero(heard)`` (the
+    heard paths, sensors ascending) and the ``homogeneous`` row of each path's sensor."""
+    n_sensors, n_candidates = heard.shape
+    count = 0
+    for sensor in range(n_sensors):
+        for candidate in range(n_candidates):
+            if heard[sensor, candidate]:
+                count += 1
+    sensor_rows = np.empty(count, dtype=np.int64)
+    candidate_rows = np.empty(count, dtype=np.int64)
+    sensors = np.empty((count, 3))
+    path = 0
+    for sensor in range(n_sensors):
+        for candidate in range(n_candidates):
+            if heard[sensor, candidate]:
+                sensor_rows[path] = sensor
+                candidate_rows[path] = candidate
+                sensors[path, 0] = homogeneous[sensor, 0]
+                sensors[path, 1] = homogeneous[sensor, 1]
+                sensors[path, 2] = homogeneous[sensor, 2]
+                path += 1
+    return sensor_rows, candidate_rows, sensors
+
+
+@compiled(  # type: ignore[misc]
     types.float64,
     _GRID,  # matrix
     types.int64,  # path
@@ -379,4 +471,66 @@ def side_first(
     return detected, path_lengths, first_amplitudes
 
 
-__all__ = ["side_first", "side_heard", "side_ranges"]
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.float64, 1, "C"), types.Array(types.float64, 1, "C"))),
+    FLAGS,  # detected
+    NUMBERS,  # path_lengths
+    NUMBERS,  # amplitudes
+    NUMBERS,  # normals
+    NUMBERS,  # constants
+)
+def side_readings(
+    detected: np.ndarray,
+    path_lengths: FloatArray,
+    amplitudes: FloatArray,
+    normals: FloatArray,
+    constants: FloatArray,
+) -> tuple[FloatArray, FloatArray]:
+    """``(left (n,), right (n,))`` ranges (m, NaN for a dropout) the electronics report for the
+    first echoes of ``2 n`` pings, left then right of each sample.
+
+    Steps 1-5 of the readout of :mod:`sonar_gym.sonar.pulse_echo` (``echo_readings``), ping by
+    ping in its order of operations; a ping that detects nothing is a dropout.
+
+    Args:
+        detected, path_lengths, amplitudes: ``(2 n,)`` the first echoes (m, 1/m).
+        normals: ``(2 n,)`` standard normals of the jitter, or empty without jitter.
+        constants: seconds of flight per metre of path (``2 / c_true``); whether the crossing
+            delay is on (1 or 0) and its numerator (``rise time x threshold``, s/m); jitter in
+            seconds per normal; ``1 / T0`` and ``T0`` (0 without a counter); metres per second
+            of flight (``c_assumed / 2``); the maximum range (m).
+    """
+    tof_per_m, delay, delay_numerator = constants[0], constants[1] > 0.0, constants[2]
+    jitter_s, inverse_period, period = constants[3], constants[4], constants[5]
+    metres_per_s, max_range = constants[6], constants[7]
+    n_samples = path_lengths.shape[0] // 2
+    left = np.empty(n_samples)
+    right = np.empty(n_samples)
+    for ping in range(2 * n_samples):
+        reading = np.nan
+        if detected[ping]:
+            tof = path_lengths[ping] * tof_per_m
+            if delay:
+                tof = tof + delay_numerator / amplitudes[ping]
+            if normals.shape[0] > 0:
+                tof = tof + normals[ping] * jitter_s
+            if period > 0.0:
+                tof = np.floor(tof * inverse_period) * period
+            in_range = tof * metres_per_s
+            if in_range <= max_range:
+                reading = in_range
+        if ping % 2 == 0:
+            left[ping // 2] = reading
+        else:
+            right[ping // 2] = reading
+    return left, right
+
+
+__all__ = [
+    "heard_paths",
+    "side_first",
+    "side_heard",
+    "side_ranges",
+    "side_readings",
+    "side_sensors",
+]

@@ -53,6 +53,13 @@ SIDE_NAMES = ("left", "right")
 _SIDE_DIRECTIONS = np.array([[0.0, 1.0], [0.0, -1.0]])  # left, right in {R}
 _UV_CENTRE_SCALAR = (1.0 - PATH_END_TOLERANCE) / 2.0
 """The middle (and half width) of ``[0, 1 - tol]``, where a path's ``u`` blocks it."""
+_AT_CENTRE = np.zeros((0, 2))
+"""The sensor offsets of :func:`~sonar_gym.sonar.side_kernels.side_sensors` for sensors at the
+robot centre."""
+_AT_CENTRE.flags.writeable = False
+_NO_NORMALS = np.zeros(0)
+"""The jitter normals of :func:`~sonar_gym.sonar.side_kernels.side_readings` without jitter."""
+_NO_NORMALS.flags.writeable = False
 
 
 @dataclass(frozen=True)
@@ -227,9 +234,22 @@ class SideSonars(PulseEchoSonar):
         ``m`` calls of :meth:`read`: a caller that keeps only a prefix of a run of samples
         replays their draws without finding their echoes again.
         """
-        ranges, _ = self.readings(world, echoes, rng)
-        pairs = ranges.reshape(-1, 2)
-        return SideReadings(left_m=pairs[:, 0].copy(), right_m=pairs[:, 1].copy())
+        count = len(echoes.path_lengths)
+        if count % 2:
+            raise ValueError(
+                f"argument 'echoes' must hold a left and a right echo per sample; got {count}"
+            )
+        transducer = self.transducer
+        air = _side_air(self, world.temperature_c, world.scenario.robot.radius)
+        normals = _NO_NORMALS
+        if self.readout.range_noise and transducer.range_noise_std_m > 0.0:
+            if rng is None:
+                raise ValueError("argument 'rng' is needed: the readout adds range noise")
+            normals = rng.standard_normal(count)
+        left, right = side_kernels.side_readings(
+            echoes.detected, echoes.path_lengths, echoes.amplitudes, normals, air.readout_constants
+        )
+        return SideReadings(left_m=left, right_m=right)
 
     def sample_along_per_pose(
         self, world: WorldLike, poses: Sequence[Pose], rng: np.random.Generator | None
@@ -267,73 +287,163 @@ class SideSonars(PulseEchoSonar):
         else:
             robot = np.array([[p.x, p.y, p.theta] for p in poses], dtype=np.float64).reshape(-1, 3)
         n = len(robot)
-        if not np.all(np.isfinite(robot)):
+        if not np.isfinite(robot).all():
             raise ValueError(f"argument 'poses' must hold finite poses; got {poses!r}")
-        headings = np.repeat(robot[:, 2], 2)
-        side_sign = np.tile([1.0, -1.0], n)
-        centres = np.repeat(robot[:, :2], 2, axis=0)
-        if self.lateral_offset_m == 0.0:
-            sensors = centres.copy()
-        else:
-            angle = headings + side_sign * (math.pi / 2.0)
-            sensors = centres + self.lateral_offset_m * np.column_stack(
-                [np.cos(angle), np.sin(angle)]
-            )
         if len(set(sides)) == len(SIDE_NAMES):
-            return _side_first_echoes(self, world, sensors, centres, headings, side_sign)
-        echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
-        if not sides:
-            return echoes
-        rows = slice(SIDE_NAMES.index(sides[0]), None, 2)
-        sensed = _side_first_echoes(
-            self, world, sensors[rows], centres[rows], headings[rows], side_sign[rows]
+            first, stride = 0, 1
+        elif sides:
+            first, stride = SIDE_NAMES.index(sides[0]), 2
+        else:
+            return FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+        headings = robot[:, 2]
+        homogeneous, sensor_frames = side_kernels.side_sensors(
+            robot, np.cos(headings), np.sin(headings), self._sensor_offsets(headings), first, stride
         )
+        sensed = _side_first_echoes(self, world, homogeneous, sensor_frames)
+        if stride == 1:
+            return sensed
+        echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+        rows = slice(first, None, 2)
         echoes.detected[rows] = sensed.detected
         echoes.path_lengths[rows] = sensed.path_lengths
         echoes.amplitudes[rows] = sensed.amplitudes
         return echoes
 
+    def _sensor_offsets(self, headings: FloatArray) -> FloatArray:
+        """``(2 n, 2)`` offsets of the left and right sensor from the robot centre at each of
+        ``headings`` (metres, {W}; radians), or ``(0, 2)`` when the sensors sit at the centre."""
+        if self.lateral_offset_m == 0.0:
+            return _AT_CENTRE
+        angle = np.repeat(headings, 2) + np.tile([1.0, -1.0], len(headings)) * (math.pi / 2.0)
+        return self.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+@dataclass(frozen=True)
+class _SideAir:
+    """What the side sonars' echoes and readout need of a sonar in a world's air and robot,
+    besides the geometry: its two-way beam, the edge law's constants and the constant vectors
+    of :func:`~sonar_gym.sonar.side_kernels.side_heard`,
+    :func:`~sonar_gym.sonar.side_kernels.side_first` and
+    :func:`~sonar_gym.sonar.side_kernels.side_readings`."""
+
+    beam: PistonBeam
+    edge_law: FloatArray
+    absorption_per_m: float
+    """``-alpha ln(10) / 10``: the exponent of the air's amplitude loss per metre, 1/m."""
+    heard_constants: FloatArray
+    first_constants: FloatArray
+    readout_constants: FloatArray
+    """The constants of :func:`~sonar_gym.sonar.side_kernels.side_readings`."""
+
+
+_LAST_SIDE_AIR: list[tuple[SideSonars, float, float, _SideAir]] = []
+"""The last sonar, air temperature (deg C) and robot radius (m) asked of :func:`_side_air`,
+and its answer."""
+
+
+def _side_air(sonar: SideSonars, temperature_c: float, robot_radius_m: float) -> _SideAir:
+    """The :class:`_SideAir` of ``sonar`` at ``temperature_c`` (deg C) on a robot of radius
+    ``robot_radius_m`` (metres); remembered for the last sonar object, temperature and radius
+    (the samples of an episode all ask the same)."""
+    if _LAST_SIDE_AIR:
+        last_sonar, last_temperature, last_radius, answer = _LAST_SIDE_AIR[0]
+        if (
+            last_sonar is sonar
+            and last_temperature == temperature_c
+            and last_radius == robot_radius_m
+        ):
+            return answer
+    transducer = sonar.transducer
+    speed = speed_of_sound_mps(temperature_c)
+    beam = PistonBeam.for_ka(
+        transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
+    )
+    heard_constants = np.array(
+        (
+            max(transducer.min_range_m, 1e-9),
+            transducer.detection_threshold,
+            robot_radius_m,
+            transducer.min_range_m,
+            beam.widest_main_lobe_cos,
+            1.0 if beam.side_lobes else 0.0,
+            float(TABLE_STEPS_PER_UNIT),
+            1.0 / TABLE_STEPS_PER_UNIT,
+            SMALLEST_COSINE,
+            1.0 if beam.reaches_back else 0.0,
+        )
+    )
+    first_constants = np.array(
+        (_UV_CENTRE_SCALAR, float(TABLE_STEPS_PER_UNIT), 1.0 if beam.reaches_back else 0.0)
+    )
+    readout_constants = _readout_constants(sonar, speed)
+    heard_constants.flags.writeable = False
+    first_constants.flags.writeable = False
+    answer = _SideAir(
+        beam=beam,
+        edge_law=edge_law_constants(
+            sonar.edge_law, wavenumber_per_m(transducer.frequency_hz, speed)
+        ),
+        absorption_per_m=-transducer.absorption_db_per_m * math.log(10.0) / 10.0,
+        heard_constants=heard_constants,
+        first_constants=first_constants,
+        readout_constants=readout_constants,
+    )
+    _LAST_SIDE_AIR[:] = [(sonar, temperature_c, robot_radius_m, answer)]
+    return answer
+
+
+def _readout_constants(sonar: SideSonars, speed_mps: float) -> FloatArray:
+    """The constants of :func:`~sonar_gym.sonar.side_kernels.side_readings` for ``sonar`` in air
+    where sound travels at ``speed_mps`` (m/s); read-only."""
+    transducer, readout = sonar.transducer, sonar.readout
+    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
+    period = transducer.timer_period_s if readout.quantisation else 0.0
+    constants = np.array(
+        (
+            2.0 / speed_mps,
+            1.0 if delay else 0.0,
+            transducer.echo_rise_time_s * transducer.detection_threshold,
+            2.0 * transducer.range_noise_std_m / speed_mps,
+            1.0 / period if period > 0.0 else 0.0,
+            period if period > 0.0 else 0.0,
+            sonar.assumed_speed_of_sound_mps / 2.0,
+            transducer.max_range_m,
+        )
+    )
+    constants.flags.writeable = False
+    return constants
+
 
 def _side_first_echoes(
-    sonar: SideSonars,
-    world: WorldLike,
-    sensors: FloatArray,
-    centres: FloatArray,
-    headings: FloatArray,
-    side_sign: FloatArray,
+    sonar: SideSonars, world: WorldLike, homogeneous: FloatArray, sensor_frames: FloatArray
 ) -> FirstEchoes:
-    """First echoes of pings along ``heading + side_sign pi/2`` from each of ``sensors``.
+    """First echoes of pings along ``heading + side_sign pi/2`` from each sensor.
 
     Row by row :func:`~sonar_gym.sonar.echoes.echo_candidates` then
     :func:`~sonar_gym.sonar.pulse_echo.first_echoes`, through the compiled loops of
     :mod:`sonar_gym.sonar.side_kernels` (the same numbers, bit for bit, as the array form in
     ``tests/sonar/side_echoes_reference.py``). numpy keeps the steps
     it rounds its own way: the BLAS products, the absorption's ``exp`` and the receiver's gain.
+
+    Args:
+        homogeneous: ``(P, 3)`` each sensor's ``(x, y, 1)`` in {W} (metres).
+        sensor_frames: ``(P, 5)`` ``cos`` and ``sin`` of the robot heading, the side sign (+1
+            left, -1 right) and the sensor's offset from the robot centre (m, {W}), as
+            :func:`~sonar_gym.sonar.side_kernels.side_sensors` gives them.
     """
     transducer = sonar.transducer
-    speed = speed_of_sound_mps(world.temperature_c)
-    wavenumber = wavenumber_per_m(transducer.frequency_hz, speed)
-    threshold = transducer.detection_threshold
+    air = _side_air(sonar, world.temperature_c, world.scenario.robot.radius)
+    beam = air.beam
     tables = echo_tables(world.geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
     layout = tables.search_layout[:4]
-    count = len(sensors)
-    homogeneous = np.column_stack([sensors, np.ones(count)])  # (P, 3)
     mapped = homogeneous @ tables.position_map.T  # (P, M)
     rel, ranges, safe, amplitudes, centre_distance, concave = side_kernels.side_ranges(
-        mapped, layout, tables.radius, edge_law_constants(sonar.edge_law, wavenumber)
+        mapped, layout, tables.radius, air.edge_law
     )
     if transducer.absorption_db_per_m > 0.0:
-        amplitudes = amplitudes * np.exp(
-            (-transducer.absorption_db_per_m * math.log(10.0) / 10.0) * safe
-        )
+        amplitudes = amplitudes * np.exp(air.absorption_per_m * safe)
     if transducer.time_varying_gain is not None:
         amplitudes = amplitudes * transducer.time_varying_gain.gain(safe)
-    beam = PistonBeam.for_ka(
-        transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
-    )
-    sensor_frames = np.column_stack(
-        [np.cos(headings), np.sin(headings), side_sign, sensors - centres]
-    )
     heard, cosines, facing = side_kernels.side_heard(
         mapped,
         rel,
@@ -346,26 +456,13 @@ def _side_first_echoes(
         tables.solid_side,
         tables.twin,
         tables.twin_comes_first,
-        np.array(
-            (
-                max(transducer.min_range_m, 1e-9),
-                threshold,
-                world.scenario.robot.radius,
-                transducer.min_range_m,
-                beam.widest_main_lobe_cos,
-                1.0 if beam.side_lobes else 0.0,
-                float(TABLE_STEPS_PER_UNIT),
-                1.0 / TABLE_STEPS_PER_UNIT,
-                SMALLEST_COSINE,
-                1.0 if beam.reaches_back else 0.0,
-            )
-        ),
+        air.heard_constants,
         beam.cells,
         beam.main_lobe_rising,
         beam.main_lobe_cells,
     )
-    sensor_rows, candidate_rows = np.nonzero(heard)
-    matrix = (homogeneous[sensor_rows] @ tables.occlusion_map.T).reshape(
+    sensor_rows, candidate_rows, path_sensors = side_kernels.heard_paths(heard, homogeneous)
+    matrix = (path_sensors @ tables.occlusion_map.T).reshape(
         len(sensor_rows), 3 * tables.n_segments + tables.n_circles, 3
     )
     detected, path_lengths, first_amplitudes = side_kernels.side_first(
@@ -380,9 +477,7 @@ def _side_first_echoes(
         tables.encloses,
         centre_distance,
         tables.radius_sq,
-        np.array(
-            (_UV_CENTRE_SCALAR, float(TABLE_STEPS_PER_UNIT), 1.0 if beam.reaches_back else 0.0)
-        ),
+        air.first_constants,
         beam.cells,
     )
     return FirstEchoes(detected=detected, path_lengths=path_lengths, amplitudes=first_amplitudes)

@@ -24,6 +24,37 @@ _UV_CENTRE = np.array([_UV_CENTRE_SCALAR, 0.5])[None, :, None]
 _UV_HALF_WIDTH = _UV_CENTRE
 
 
+def side_sensor_arrays(
+    sonar: SideSonars, poses: FloatArray, sides: tuple[str, ...]
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """``(sensors, centres, headings, side_sign)`` of the sensors named in ``sides`` (left,
+    right of each of ``poses`` ``(n, 3)``, in that order), as numpy arrays: the form
+    :func:`~sonar_gym.sonar.side_kernels.side_sensors` replaced."""
+    n = len(poses)
+    headings = np.repeat(poses[:, 2], 2)
+    side_sign = np.tile([1.0, -1.0], n)
+    centres = np.repeat(poses[:, :2], 2, axis=0)
+    if sonar.lateral_offset_m == 0.0:
+        sensors = centres.copy()
+    else:
+        angle = headings + side_sign * (math.pi / 2.0)
+        sensors = centres + sonar.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+    if len(set(sides)) == 2:
+        return sensors, centres, headings, side_sign
+    rows = slice(("left", "right").index(sides[0]), None, 2)
+    return sensors[rows], centres[rows], headings[rows], side_sign[rows]
+
+
+def sensor_rows_arrays(
+    sensors: FloatArray, centres: FloatArray, headings: FloatArray, side_sign: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """``(homogeneous (P, 3), sensor_frames (P, 5))`` of the sensors, as numpy arrays: the form
+    :func:`~sonar_gym.sonar.side_kernels.side_sensors` replaced."""
+    homogeneous = np.column_stack([sensors, np.ones(len(sensors))])
+    frames = np.column_stack([np.cos(headings), np.sin(headings), side_sign, sensors - centres])
+    return homogeneous, frames
+
+
 def side_first_echoes_arrays(
     sonar: SideSonars,
     world: WorldLike,
@@ -157,3 +188,14 @@ def side_first_echoes_arrays(
         path_lengths=np.where(hit, ranges[rows, first], 0.0),
         amplitudes=np.where(hit, first_amplitude, 0.0),
     )
+
+
+def read_echoes_arrays(
+    sonar: SideSonars, world: WorldLike, echoes: FirstEchoes, rng: np.random.Generator | None
+) -> tuple[FloatArray, FloatArray]:
+    """``(left, right)`` readings of :meth:`~sonar_gym.sonar.swept.SideSonars.read_echoes`
+    through :meth:`~sonar_gym.sonar.pulse_echo.PulseEchoSonar.readings`: the form
+    :func:`~sonar_gym.sonar.side_kernels.side_readings` replaced."""
+    ranges, _ = sonar.readings(world, echoes, rng)
+    pairs = ranges.reshape(-1, 2)
+    return pairs[:, 0].copy(), pairs[:, 1].copy()

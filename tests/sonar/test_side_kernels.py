@@ -21,12 +21,17 @@ from hypothesis import strategies as st
 
 from sonar_gym.scenario import load_scenario
 from sonar_gym.sonar import side_kernels, swept
-from sonar_gym.sonar.acoustics import TABLE_STEPS_PER_UNIT, PistonBeam
-from sonar_gym.sonar.pulse_echo import FirstEchoes
+from sonar_gym.sonar.acoustics import TABLE_STEPS_PER_UNIT, PistonBeam, speed_of_sound_mps
+from sonar_gym.sonar.pulse_echo import FirstEchoes, Readout
 from sonar_gym.sonar.swept import SIDE_NAMES, SideSonars
 from sonar_gym.world import World
 from tests.fuzzing import fuzz_settings
-from tests.sonar.side_echoes_reference import side_first_echoes_arrays
+from tests.sonar.side_echoes_reference import (
+    read_echoes_arrays,
+    sensor_rows_arrays,
+    side_first_echoes_arrays,
+    side_sensor_arrays,
+)
 from tests.sonar.worlds import cluttered_room, world
 
 
@@ -71,14 +76,11 @@ WORLDS = _worlds()
 
 def _both(sonar: SideSonars, world: Any, poses: np.ndarray) -> tuple[FirstEchoes, FirstEchoes]:
     """The compiled and the array first echoes of both sensors at ``poses`` ``(P, 3)``."""
-    n = len(poses)
-    headings = np.repeat(poses[:, 2], 2)
-    side_sign = np.tile([1.0, -1.0], n)
-    centres = np.repeat(poses[:, :2], 2, axis=0)
-    angle = headings + side_sign * (math.pi / 2.0)
-    sensors = centres + sonar.lateral_offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
-    arguments = (sonar, world, sensors, centres, headings, side_sign)
-    return swept._side_first_echoes(*arguments), side_first_echoes_arrays(*arguments)
+    arguments = side_sensor_arrays(sonar, poses, SIDE_NAMES)
+    return (
+        swept._side_first_echoes(sonar, world, *sensor_rows_arrays(*arguments)),
+        side_first_echoes_arrays(sonar, world, *arguments),
+    )
 
 
 def _assert_same_bits(compiled: FirstEchoes, arrays: FirstEchoes) -> None:
@@ -258,3 +260,189 @@ def test_numpys_einsum_of_three_terms_sums_first_and_third_then_second() -> None
     einsum = np.einsum("hrk,hk->hr", matrix, paths)
     assert einsum.tobytes() == ordered.tobytes()
     assert einsum.tobytes() != sequential.tobytes()  # the order shows in these numbers
+
+
+def _array_echoes_along(
+    sonar: SideSonars, world: Any, poses: np.ndarray, sides: tuple[str, ...]
+) -> FirstEchoes:
+    """:meth:`SideSonars.first_echoes_along` through the array forms of the reference."""
+    sensed = side_first_echoes_arrays(sonar, world, *side_sensor_arrays(sonar, poses, sides))
+    if len(set(sides)) == len(SIDE_NAMES):
+        return sensed
+    n = len(poses)
+    echoes = FirstEchoes(np.zeros(2 * n, dtype=bool), np.zeros(2 * n), np.zeros(2 * n))
+    rows = slice(SIDE_NAMES.index(sides[0]), None, 2)
+    echoes.detected[rows] = sensed.detected
+    echoes.path_lengths[rows] = sensed.path_lengths
+    echoes.amplitudes[rows] = sensed.amplitudes
+    return echoes
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    count=st.integers(0, 12),
+    sides=st.sampled_from([SIDE_NAMES, ("left",), ("right",), ("right", "left")]),
+    offset=st.sampled_from([0.0, 0.15, 1e-300, 2.5]),
+)
+def test_compiled_sensor_rows_are_the_array_sensor_rows(
+    seed: int, count: int, sides: tuple[str, ...], offset: float
+) -> None:
+    """Headings of any size and sign (huge ones too), sensors at or off the centre, either
+    or both sides."""
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack([rng.normal(0.0, 10.0, (count, 2)), rng.normal(0.0, 10.0, count) ** 3])
+    sonar = dataclasses.replace(SONARS["apcs"], lateral_offset_m=offset)
+    first, stride = (0, 1) if len(set(sides)) == 2 else (SIDE_NAMES.index(sides[0]), 2)
+    headings = poses[:, 2]
+    got = side_kernels.side_sensors(
+        poses,
+        np.cos(headings),
+        np.sin(headings),
+        sonar._sensor_offsets(headings),
+        first,
+        stride,
+    )
+    want = sensor_rows_arrays(*side_sensor_arrays(sonar, poses, sides))
+    for got_rows, want_rows in zip(got, want, strict=True):
+        assert got_rows.shape == want_rows.shape
+        assert got_rows.tobytes() == want_rows.tobytes()
+
+
+@pytest.mark.parametrize("sonar_name", ["apcs", "gtd_edges", "side_lobes_leakage", "srf04"])
+def test_first_echoes_along_are_the_array_echoes_as_air_and_world_change(
+    sonar_name: str,
+) -> None:
+    """One sonar object asked in turn in two worlds (robot radii 0.3 and 0.2 m) and at changing
+    temperatures: every answer is that of the array form, which remembers nothing."""
+    sonar = SONARS[sonar_name]
+    worlds = [cluttered_room(), World(load_scenario("apcs_corridor"))]
+    rng = np.random.default_rng(11)
+    poses = [_poses_in(world, rng, 40) for world in worlds]
+    changed = 0
+    last_amplitudes: dict[int, bytes] = {}
+    for temperature, which, sides in [
+        (20.0, 0, SIDE_NAMES),
+        (20.0, 1, SIDE_NAMES),
+        (-10.0, 1, ("left",)),
+        (-10.0, 1, SIDE_NAMES),
+        (40.0, 1, SIDE_NAMES),
+        (40.0, 0, ("right",)),
+        (40.0, 0, SIDE_NAMES),
+        (20.0, 0, SIDE_NAMES),
+        (20.0, 1, SIDE_NAMES),
+    ]:
+        world = worlds[which]
+        world.temperature_c = temperature
+        got = sonar.first_echoes_along(world, poses[which], sides)
+        _assert_same_bits(got, _array_echoes_along(sonar, world, poses[which], sides))
+        if len(sides) == 2:
+            previous = last_amplitudes.get(which)
+            changed += previous is not None and previous != got.amplitudes.tobytes()
+            last_amplitudes[which] = got.amplitudes.tobytes()
+    assert changed >= 2  # the temperature changed what was heard
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    shape=st.tuples(st.integers(0, 30), st.integers(0, 40)),
+    density=st.sampled_from([0.0, 0.05, 0.5, 1.0]),
+)
+def test_compiled_heard_paths_are_numpys_nonzero(
+    seed: int, shape: tuple[int, int], density: float
+) -> None:
+    rng = np.random.default_rng(seed)
+    heard = rng.random(shape) < density
+    homogeneous = np.column_stack([rng.normal(size=(shape[0], 2)), np.ones(shape[0])])
+    sensor_rows, candidate_rows, sensors = side_kernels.heard_paths(heard, homogeneous)
+    want_sensors, want_candidates = np.nonzero(heard)
+    assert sensor_rows.dtype == want_sensors.dtype
+    assert sensor_rows.tobytes() == want_sensors.tobytes()
+    assert candidate_rows.tobytes() == want_candidates.tobytes()
+    assert sensors.tobytes() == homogeneous[want_sensors].tobytes()
+    assert sensors.shape == (len(want_sensors), 3)
+
+
+_READOUTS = [
+    Readout(range_noise=noise, crossing_delay=delay, quantisation=counter)
+    for noise in (True, False)
+    for delay in (True, False)
+    for counter in (True, False)
+]
+
+
+@fuzz_settings(200)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    count=st.integers(0, 40),
+    sonar_name=st.sampled_from(["apcs", "polaroid_gain", "srf04"]),
+    readout=st.sampled_from(_READOUTS),
+    temperature=st.sampled_from([-20.0, 15.0, 20.0, 45.0]),
+    assumed_speed=st.sampled_from([None, 331.0, 350.0]),
+)
+def test_compiled_side_readings_are_the_array_readings(
+    seed: int,
+    count: int,
+    sonar_name: str,
+    readout: Readout,
+    temperature: float,
+    assumed_speed: float | None,
+) -> None:
+    """Any first echoes (detected or not, at the threshold, beyond the maximum range, at the
+    counter's steps) under every readout switch: the same ranges and the same draws."""
+    sonar = dataclasses.replace(SONARS[sonar_name], readout=readout)
+    if assumed_speed is not None:
+        sonar = sonar.with_assumed_speed(assumed_speed)
+    transducer = sonar.transducer
+    world = WORLDS["apcs_corridor"]
+    world.temperature_c = temperature
+    rng = np.random.default_rng(seed)
+    path_lengths = rng.uniform(0.0, 1.2 * transducer.max_range_m, 2 * count)
+    edges = _edge_paths(sonar, speed_of_sound_mps(temperature), rng)
+    chosen = rng.random(2 * count) < 0.4
+    path_lengths[chosen] = rng.choice(edges, int(chosen.sum()))
+    amplitudes = transducer.detection_threshold * rng.uniform(1.0, 50.0, 2 * count)
+    amplitudes[rng.random(2 * count) < 0.2] = transducer.detection_threshold
+    echoes = FirstEchoes(rng.random(2 * count) < 0.8, path_lengths, amplitudes)
+    draws, reference_draws = np.random.default_rng(seed), np.random.default_rng(seed)
+    try:
+        got = sonar.read_echoes(world, echoes, draws)
+        want = read_echoes_arrays(sonar, world, echoes, reference_draws)
+    finally:
+        world.temperature_c = 15.0
+    assert got.left_m.tobytes() == want[0].tobytes()
+    assert got.right_m.tobytes() == want[1].tobytes()
+    assert draws.bit_generator.state == reference_draws.bit_generator.state
+
+
+def _edge_paths(sonar: SideSonars, speed_mps: float, rng: np.random.Generator) -> np.ndarray:
+    """Paths (m) a few ulps either side of a whole number of counter periods of flight and
+    of the maximum range (where the counter's floor and the range check decide)."""
+    transducer = sonar.transducer
+    metres_per_period = transducer.timer_period_s * speed_mps / 2.0
+    steps = rng.integers(1, int(transducer.max_range_m / metres_per_period), 8)
+    centres = np.concatenate(
+        [
+            steps * metres_per_period,
+            [transducer.max_range_m * speed_mps / sonar.assumed_speed_of_sound_mps],
+        ]
+    )
+    ulps = np.arange(-6, 7)
+    return (centres[:, None] + ulps[None, :] * np.spacing(centres)[:, None]).ravel()
+
+
+def test_side_readings_need_a_generator_only_with_noise() -> None:
+    world, sonar = WORLDS["apcs_corridor"], SONARS["apcs"]
+    echoes = FirstEchoes(np.ones(4, dtype=bool), np.full(4, 1.0), np.full(4, 1.0))
+    with pytest.raises(ValueError, match="'rng' is needed"):
+        sonar.read_echoes(world, echoes, None)
+    quiet = sonar.with_readout(range_noise=False).read_echoes(world, echoes, None)
+    assert (
+        quiet.left_m.tobytes()
+        == read_echoes_arrays(sonar.with_readout(range_noise=False), world, echoes, None)[
+            0
+        ].tobytes()
+    )
+    with pytest.raises(ValueError, match="a left and a right echo"):
+        sonar.read_echoes(world, FirstEchoes(np.ones(3, dtype=bool), np.ones(3), np.ones(3)), None)
