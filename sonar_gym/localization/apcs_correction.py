@@ -364,7 +364,7 @@ def corrected_pose(
         pose.as_array(), prior_covariance, wall, r, xi, sigma_r, sigma_xi
     )
     if status == OK and not (
-        np.all(np.isfinite(corrected)) and np.all(np.isfinite(corrected_covariance))
+        np.isfinite(corrected).all() and np.isfinite(corrected_covariance).all()
     ):
         status, corrected_covariance = NUMERICAL_FAILURE, prior_covariance
         message = "the correction overflowed"
@@ -372,9 +372,10 @@ def corrected_pose(
         return CorrectionResult(
             status, None, message, covariance=_readonly(prior_covariance), method=method
         )
+    corrected_covariance.setflags(write=False)  # the step's own new array: no copy needed
     return CorrectionResult(
         OK,
         Pose.from_array(corrected),
-        covariance=_readonly(corrected_covariance),
+        covariance=corrected_covariance,
         method=method,
     )

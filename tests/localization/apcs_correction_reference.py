@@ -1,7 +1,8 @@
 """The single maximum-likelihood step of Yamamoto et al. eqs (11)-(14) as
 :mod:`sonar_gym.localization.apcs_correction` wrote it with ``np.diag``, ``np.eye`` and the
-cosine and sine of ``theta + xi`` taken per use: the form its ``_paper_step`` replaced, kept as
-the tests' reference."""
+cosine and sine of ``theta + xi`` taken per use, and ``corrected_pose`` copying the step's
+covariance: the forms the module's ``_paper_step`` and ``corrected_pose`` replaced, kept as the
+tests' reference."""
 
 from __future__ import annotations
 
@@ -12,11 +13,17 @@ import numpy as np
 from sonar_gym.localization.apcs_correction import (
     _MIN_NORMAL_ALIGNMENT,
     HEADING_DEGENERATE,
+    NUMERICAL_FAILURE,
     PRIOR_ON_WALL_LINE,
+    CorrectionMethod,
+    CorrectionResult,
+    _linear_step,
+    _paper_step,
+    _readonly,
 )
 from sonar_gym.localization.apcs_walls import ZERO_LENGTH_M, WallVector
 from sonar_gym.localization.result import OK
-from sonar_gym.pose import FloatArray
+from sonar_gym.pose import FloatArray, Pose
 
 
 def paper_step_arrays(
@@ -77,3 +84,37 @@ def paper_step_arrays(
     )
     corrected_covariance = 0.5 * (corrected_covariance + corrected_covariance.T)
     return OK, corrected, corrected_covariance, ""
+
+
+def corrected_pose_copied(
+    pose: Pose,
+    prior_covariance: FloatArray,
+    wall: WallVector,
+    r: float,
+    xi: float,
+    sigma_r: float,
+    sigma_xi: float,
+    *,
+    method: CorrectionMethod = "paper",
+) -> CorrectionResult:
+    """:func:`~sonar_gym.localization.apcs_correction.corrected_pose` with the corrected
+    covariance copied into a read-only array."""
+    step = _paper_step if method == "paper" else _linear_step
+    status, corrected, corrected_covariance, message = step(
+        pose.as_array(), prior_covariance, wall, r, xi, sigma_r, sigma_xi
+    )
+    if status == OK and not (
+        np.all(np.isfinite(corrected)) and np.all(np.isfinite(corrected_covariance))
+    ):
+        status, corrected_covariance = NUMERICAL_FAILURE, prior_covariance
+        message = "the correction overflowed"
+    if status != OK:
+        return CorrectionResult(
+            status, None, message, covariance=_readonly(prior_covariance), method=method
+        )
+    return CorrectionResult(
+        OK,
+        Pose.from_array(corrected),
+        covariance=_readonly(corrected_covariance),
+        method=method,
+    )

@@ -11,12 +11,17 @@ import pytest
 
 from sonar_gym.localization.apcs_correction import (
     HEADING_DEGENERATE,
+    NUMERICAL_FAILURE,
     PRIOR_ON_WALL_LINE,
+    CorrectionResult,
     _paper_step,
+    corrected_pose,
+    validated_covariance,
 )
 from sonar_gym.localization.apcs_walls import WallVector
 from sonar_gym.localization.result import OK
-from tests.localization.apcs_correction_reference import paper_step_arrays
+from sonar_gym.pose import Pose
+from tests.localization.apcs_correction_reference import corrected_pose_copied, paper_step_arrays
 
 
 def _case(rng: np.random.Generator) -> tuple:
@@ -65,3 +70,31 @@ def test_paper_step_matches_the_array_form_on_axis_walls(theta: float, xi: float
         for position in ((0.5, 1.0), (0.5, -0.0), (1.0, 0.5), (-2.0, 3.0)):
             case = (np.array([*position, theta]), covariance, wall, 1.0, xi, 1e-4, 1e-3)
             assert _bits(_paper_step(*case)) == _bits(paper_step_arrays(*case))
+
+
+def _result_bits(result: CorrectionResult) -> bytes:
+    covariance = result.covariance
+    layout = (covariance.flags.writeable, covariance.flags.c_contiguous, covariance.dtype.str)
+    pose = None if result.pose is None else result.pose.as_array().tobytes()
+    fields = (result.status, pose, result.message, result.method)
+    return pickle.dumps((fields, covariance.tobytes(), layout))
+
+
+@pytest.mark.parametrize("method", ["paper", "linear"])
+def test_corrected_pose_matches_the_copying_form(method: str) -> None:
+    rng = np.random.default_rng(3)
+    statuses = set()
+    for _ in range(2000):
+        prior, covariance, wall, r, xi, sigma_r, sigma_xi = _case(rng)
+        if rng.random() < 0.05:
+            covariance = covariance / np.abs(covariance).max() * 1e308  # overflows
+        pose = Pose.from_array(prior)
+        with np.errstate(all="ignore"):
+            covariance = validated_covariance(covariance)
+            covariance.setflags(write=False)
+            case = (pose, covariance, wall, r, xi, sigma_r, sigma_xi)
+            got = corrected_pose(*case, method=method)  # type: ignore[arg-type]
+            expected = corrected_pose_copied(*case, method=method)  # type: ignore[arg-type]
+        assert _result_bits(got) == _result_bits(expected)
+        statuses.add(got.status)
+    assert NUMERICAL_FAILURE in statuses and OK in statuses
