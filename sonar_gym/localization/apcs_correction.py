@@ -98,10 +98,15 @@ def observe_wall(wall: DetectedWall | WallVector, pose: Pose) -> WallObservation
         raise ValueError(f"wall must be a DetectedWall or WallVector, got {type(wall).__name__}")
     if not isinstance(pose, Pose):
         raise ValueError(f"pose must be a Pose, got {type(pose).__name__}")
-    signed_distance = wall.signed_distance(pose.position)
-    outward = wall.normal
-    towards_line = -outward if signed_distance >= 0.0 else outward
-    bearing_world = math.atan2(towards_line[1], towards_line[0])
+    return observed_wall(wall, pose)
+
+
+def observed_wall(wall: WallVector, pose: Pose) -> WallObservation:
+    """:func:`observe_wall` of a wall vector and a pose, without the type checks."""
+    a, b, c = wall.line_coefficients  # (a, b) = (uy, -ux): the outward normal
+    signed_distance = a * pose.x + b * pose.y + c
+    # The normal from the robot towards the line: the inward one when on the free side.
+    bearing_world = math.atan2(-b, -a) if signed_distance >= 0.0 else math.atan2(b, a)
     return WallObservation(abs(signed_distance), wrap_angle(bearing_world - pose.theta))
 
 

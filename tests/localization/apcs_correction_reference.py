@@ -1,8 +1,9 @@
 """The single maximum-likelihood step of Yamamoto et al. eqs (11)-(14) as
 :mod:`sonar_gym.localization.apcs_correction` wrote it with ``np.diag``, ``np.eye`` and the
 cosine and sine of ``theta + xi`` taken per use, and ``corrected_pose`` copying the step's
-covariance: the forms the module's ``_paper_step`` and ``corrected_pose`` replaced, kept as the
-tests' reference."""
+covariance, and ``observe_wall`` through the wall's array normal: the forms the module's
+``_paper_step``, ``corrected_pose`` and ``observed_wall`` replaced, kept as the tests'
+reference."""
 
 from __future__ import annotations
 
@@ -17,13 +18,14 @@ from sonar_gym.localization.apcs_correction import (
     PRIOR_ON_WALL_LINE,
     CorrectionMethod,
     CorrectionResult,
+    WallObservation,
     _linear_step,
     _paper_step,
     _readonly,
 )
 from sonar_gym.localization.apcs_walls import ZERO_LENGTH_M, WallVector
 from sonar_gym.localization.result import OK
-from sonar_gym.pose import FloatArray, Pose
+from sonar_gym.pose import FloatArray, Pose, wrap_angle
 
 
 def paper_step_arrays(
@@ -118,3 +120,12 @@ def corrected_pose_copied(
         covariance=_readonly(corrected_covariance),
         method=method,
     )
+
+
+def observe_wall_arrays(wall: WallVector, pose: Pose) -> WallObservation:
+    """``(r, xi)`` of ``wall`` seen from ``pose`` (Fig. 8) through the wall's array normal."""
+    signed_distance = wall.signed_distance(pose.position)
+    outward = wall.normal
+    towards_line = -outward if signed_distance >= 0.0 else outward
+    bearing_world = math.atan2(towards_line[1], towards_line[0])
+    return WallObservation(abs(signed_distance), wrap_angle(bearing_world - pose.theta))

@@ -16,12 +16,17 @@ from sonar_gym.localization.apcs_correction import (
     CorrectionResult,
     _paper_step,
     corrected_pose,
+    observed_wall,
     validated_covariance,
 )
 from sonar_gym.localization.apcs_walls import WallVector
 from sonar_gym.localization.result import OK
 from sonar_gym.pose import Pose
-from tests.localization.apcs_correction_reference import corrected_pose_copied, paper_step_arrays
+from tests.localization.apcs_correction_reference import (
+    corrected_pose_copied,
+    observe_wall_arrays,
+    paper_step_arrays,
+)
 
 
 def _case(rng: np.random.Generator) -> tuple:
@@ -98,3 +103,21 @@ def test_corrected_pose_matches_the_copying_form(method: str) -> None:
         assert _result_bits(got) == _result_bits(expected)
         statuses.add(got.status)
     assert NUMERICAL_FAILURE in statuses and OK in statuses
+
+
+def test_observed_wall_matches_the_array_form() -> None:
+    rng = np.random.default_rng(5)
+    walls = [WallVector((0.0, 0.0), (5.0, 0.0)), WallVector((1.0, -0.0), (1.0, 4.0))]
+    walls += [WallVector((-0.0, 2.0), (-3.0, 2.0)), WallVector((1.0, 4.0), (1.0, -2.0))]
+    poses = [Pose(0.5, 0.0, 0.0), Pose(1.0, 1.0, -math.pi), Pose(-0.0, 2.0, math.pi / 2)]
+    for _ in range(5000):
+        prior, _, wall, *_ = _case(rng)
+        walls.append(wall)
+        poses.append(Pose.from_array(prior))
+    for wall, pose in zip(walls, poses[: len(walls)], strict=False):
+        got, expected = observed_wall(wall, pose), observe_wall_arrays(wall, pose)
+        assert pickle.dumps(got) == pickle.dumps(expected)
+    for wall in walls[:4]:
+        for pose in poses:
+            got, expected = observed_wall(wall, pose), observe_wall_arrays(wall, pose)
+            assert pickle.dumps(got) == pickle.dumps(expected)
