@@ -35,6 +35,7 @@ from sonar_gym.localization.apcs_correction import (
     information_matrix,
     information_vector,
     observe_wall,
+    observed_wall,
     validated_covariance,
 )
 from sonar_gym.localization.apcs_walls import (
@@ -212,7 +213,7 @@ def _match_and_correct(
             else f"no map wall matches ({reasons})"
         )
         return match, CorrectionResult(match.status, None, message, covariance=prior, method=method)
-    observation = observe_wall(detected, pose)
+    observation = observed_wall(detected.vector, pose)
     if observation.r_m <= 0.0:
         return match, CorrectionResult(
             PRIOR_ON_WALL_LINE,

@@ -98,10 +98,15 @@ def observe_wall(wall: DetectedWall | WallVector, pose: Pose) -> WallObservation
         raise ValueError(f"wall must be a DetectedWall or WallVector, got {type(wall).__name__}")
     if not isinstance(pose, Pose):
         raise ValueError(f"pose must be a Pose, got {type(pose).__name__}")
-    signed_distance = wall.signed_distance(pose.position)
-    outward = wall.normal
-    towards_line = -outward if signed_distance >= 0.0 else outward
-    bearing_world = math.atan2(towards_line[1], towards_line[0])
+    return observed_wall(wall, pose)
+
+
+def observed_wall(wall: WallVector, pose: Pose) -> WallObservation:
+    """:func:`observe_wall` of a wall vector and a pose, without the type checks."""
+    a, b, c = wall.line_coefficients  # (a, b) = (uy, -ux): the outward normal
+    signed_distance = a * pose.x + b * pose.y + c
+    # The normal from the robot towards the line: the inward one when on the free side.
+    bearing_world = math.atan2(-b, -a) if signed_distance >= 0.0 else math.atan2(b, a)
     return WallObservation(abs(signed_distance), wrap_angle(bearing_world - pose.theta))
 
 
@@ -218,7 +223,9 @@ def _paper_step(
 ) -> tuple[str, FloatArray, FloatArray, str]:
     a, b, c = wall.line_coefficients
     x, y, theta = prior
-    if abs(a * x + b * y + c) / math.hypot(a, b) <= ZERO_LENGTH_M:
+    normal_length = math.hypot(a, b)
+    distance_term = a * x + b * y + c
+    if abs(distance_term) / normal_length <= ZERO_LENGTH_M:
         return (
             PRIOR_ON_WALL_LINE,
             prior,
@@ -226,7 +233,9 @@ def _paper_step(
             ("the prior position lies on the wall line: eq. (10) has no slope there"),
         )
     u = theta + xi
-    if abs(a * math.cos(u) + b * math.sin(u)) / math.hypot(a, b) < _MIN_NORMAL_ALIGNMENT:
+    cos_u, sin_u = math.cos(u), math.sin(u)
+    normal_alignment = a * cos_u + b * sin_u
+    if abs(normal_alignment) / normal_length < _MIN_NORMAL_ALIGNMENT:
         return (
             HEADING_DEGENERATE,
             prior,
@@ -238,32 +247,31 @@ def _paper_step(
     # Sigma_f = (I - K J) Sigma_PA, identical in exact arithmetic to eqs (11)-(14) (see
     # information_vector / information_matrix) and accurate when the wall's information
     # dwarfs the prior's.
-    distance_term = a * x + b * y + c
     norm2 = a * a + b * b
-    normal_alignment = a * math.cos(u) + b * math.sin(u)
     constraint_jacobian = np.array(  # d(eq. 10, eq. 9) / d(x_A, y_A, theta_A)
         [[2.0 * a * distance_term, 2.0 * b * distance_term, 0.0], [0.0, 0.0, -normal_alignment]]
     )
-    constraint_covariance = np.diag(  # Sigma_su = J_z diag(sigma_r, sigma_xi) J_z^T
-        [4.0 * r * r * norm2**2 * sigma_r, normal_alignment**2 * sigma_xi]
+    constraint_covariance = np.array(  # Sigma_su = J_z diag(sigma_r, sigma_xi) J_z^T
+        [[4.0 * r * r * norm2**2 * sigma_r, 0.0], [0.0, normal_alignment**2 * sigma_xi]]
     )
-    constraint_residual = -np.array(  # P_su = -(eq. 10, eq. 9) at the prior
-        [
-            distance_term**2 - r * r * norm2,
-            b * math.cos(u) - a * math.sin(u),
-        ]
+    constraint_residual = np.array(  # P_su = -(eq. 10, eq. 9) at the prior
+        [-(distance_term**2 - r * r * norm2), -(b * cos_u - a * sin_u)]
     )
     gain = np.linalg.solve(
         constraint_jacobian @ covariance @ constraint_jacobian.T + constraint_covariance,
         constraint_jacobian @ covariance,
     ).T
     corrected = prior + gain @ constraint_residual  # eq. (11)
-    reduction = np.eye(3) - gain @ constraint_jacobian
+    reduction = _IDENTITY_3 - gain @ constraint_jacobian
     corrected_covariance = (  # eq. (12), Joseph form: symmetric and PSD by construction
         reduction @ covariance @ reduction.T + gain @ constraint_covariance @ gain.T
     )
     corrected_covariance = 0.5 * (corrected_covariance + corrected_covariance.T)
     return OK, corrected, corrected_covariance, ""
+
+
+_IDENTITY_3 = np.eye(3)
+_IDENTITY_3.flags.writeable = False
 
 
 def _linear_step(
@@ -361,7 +369,7 @@ def corrected_pose(
         pose.as_array(), prior_covariance, wall, r, xi, sigma_r, sigma_xi
     )
     if status == OK and not (
-        np.all(np.isfinite(corrected)) and np.all(np.isfinite(corrected_covariance))
+        np.isfinite(corrected).all() and np.isfinite(corrected_covariance).all()
     ):
         status, corrected_covariance = NUMERICAL_FAILURE, prior_covariance
         message = "the correction overflowed"
@@ -369,9 +377,10 @@ def corrected_pose(
         return CorrectionResult(
             status, None, message, covariance=_readonly(prior_covariance), method=method
         )
+    corrected_covariance.setflags(write=False)  # the step's own new array: no copy needed
     return CorrectionResult(
         OK,
         Pose.from_array(corrected),
-        covariance=_readonly(corrected_covariance),
+        covariance=corrected_covariance,
         method=method,
     )

@@ -20,6 +20,8 @@ three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
 3. :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
    reading.
 
+:func:`wrapped_angles` wraps a closed group's reflection directions before its fit.
+
 Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
 """
 
@@ -231,3 +233,13 @@ def newest_rows(
         directions[row] = wrap_to_pi(phi[k])
         valid[row] = True
     return points, directions, valid
+
+
+@compiled(_VECTOR_OUT, NUMBERS)  # type: ignore[misc]
+def wrapped_angles(angles: FloatArray) -> FloatArray:
+    """:func:`sonar_gym.pose.wrap_angles` of finite angles (radians) into (-pi, pi]: the
+    reflection directions of a closed ERP group after the frame moves have turned them."""
+    wrapped = np.empty(angles.shape[0])
+    for index in range(angles.shape[0]):
+        wrapped[index] = wrap_to_pi(angles[index])
+    return wrapped

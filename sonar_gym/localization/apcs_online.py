@@ -42,7 +42,7 @@ from sonar_gym.localization.apcs_correction import symmetrized, validated_covari
 from sonar_gym.localization.apcs_walls import WallMap, fit_group_points, newest_reflection_rows
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
-from sonar_gym.pose import FloatArray, Pose, wrap_angles
+from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.validation import checked_array, checked_positive
 
 SIDE_NAMES = ("left", "right")
@@ -337,7 +337,9 @@ class WallStream:
         indices = tuple(range(len(points)))
         if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
             return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, indices), points)
-        fit = fit_group_points(points, wrap_angles(directions), indices, self.params)
+        fit = fit_group_points(
+            points, apcs_kernels.wrapped_angles(np.array(directions)), indices, self.params
+        )
         return ClosedGroup(fit, points)
 
 

@@ -752,13 +752,14 @@ def fit_group_points(
     centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
-    eigenvalues, eigenvectors = np.linalg.eigh(scatter)
-    along = eigenvectors[:, 1]
-    residual_variance = float(max(eigenvalues[0], 0.0))
+    eigenvalues, eigenvectors = _symmetric_eigen(scatter)
+    residual_variance = max(eigenvalues[0], 0.0)
     if residual_variance >= params.variance_threshold_m2:
         return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
 
-    occupied_side = np.array([-along[1], along[0]])  # left of `along`
+    along = eigenvectors[:, 1]
+    along_x, along_y = along.tolist()
+    occupied_side = np.array([-along_y, along_x])  # left of `along`
     if directions is not None:
         towards_wall = np.array([np.cos(directions).sum(), np.sin(directions).sum()])
         flip = float(occupied_side @ towards_wall) < 0.0
@@ -766,15 +767,37 @@ def fit_group_points(
         flip = float((centred[-1] - centred[0]) @ along) < 0.0
     if flip:
         along = -along
+        along_x, along_y = -along_x, -along_y
 
-    positions_along = centred @ along
-    extent_start, extent_end = float(positions_along.min()), float(positions_along.max())
+    positions_along = (centred @ along).tolist()
+    extent_start, extent_end = min(positions_along), max(positions_along)
     if extent_end - extent_start <= ZERO_LENGTH_M:
         return WallFit(GROUP_ZERO_LENGTH, indices, residual_variance)
-    start = centroid + extent_start * along  # T_s, foot of the perpendicular from R_s
-    end = centroid + extent_end * along  # T_e, foot of the perpendicular from R_e
-    wall = DetectedWall(tuple(start.tolist()), tuple(end.tolist()), indices, residual_variance)
+    centroid_x, centroid_y = centroid.tolist()
+    start = (centroid_x + extent_start * along_x, centroid_y + extent_start * along_y)  # T_s
+    end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
+    wall = DetectedWall(start, end, indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)
+
+
+def _symmetric_eigen(scatter: FloatArray) -> tuple[list[float], FloatArray]:
+    """``np.linalg.eigh`` of a 2 x 2 float64 scatter matrix: eigenvalues (ascending, as floats)
+    and eigenvectors (columns).
+
+    A finite matrix goes straight to the LAPACK routine ``eigh`` calls (same bits, without its
+    argument checks and error state, ~4 us a call); one that overflowed goes through ``eigh``,
+    which raises its ``LinAlgError``.
+    """
+    (xx, xy), (_, yy) = scatter.tolist()
+    if not math.isfinite(xx + xy + yy):
+        eigenvalues, eigenvectors = np.linalg.eigh(scatter)
+        return eigenvalues.tolist(), eigenvectors
+    eigenvalues, eigenvectors = _EIGH_LOWER(scatter, signature="d->dd")
+    return eigenvalues.tolist(), eigenvectors
+
+
+_EIGH_LOWER = np.linalg._umath_linalg.eigh_lo  # type: ignore[attr-defined]
+"""The LAPACK ``syevd`` gufunc behind ``np.linalg.eigh`` (lower triangle)."""
 
 
 def fit_wall_groups(

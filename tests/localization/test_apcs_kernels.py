@@ -177,3 +177,22 @@ def test_the_erp_loops_take_any_root() -> None:
             ),
             rows,
         )
+
+
+def test_wrapped_angles_of_turned_directions() -> None:
+    rng = np.random.default_rng(20261203)
+    edges = [0.0, -0.0, math.pi, -math.pi, 3 * math.pi, -3 * math.pi, 2 * math.pi, 1e-300]
+    edges += [math.nextafter(math.pi, 0.0), math.nextafter(-math.pi, 0.0), 1e15, -1e15]
+    angles = np.concatenate([edges, rng.uniform(-10.0, 10.0, 20000), rng.normal(0.0, 1e3, 2000)])
+    assert np.array_equal(
+        apcs_kernels.wrapped_angles(angles).view(np.int64), wrap_angles(angles).view(np.int64)
+    )
+
+
+@fuzz_settings(300)
+@given(st.lists(st.floats(-1e12, 1e12), max_size=10))
+def test_wrapped_angles_of_any_angles(angles: list[float]) -> None:
+    values = np.array(angles, dtype=np.float64)
+    assert np.array_equal(
+        apcs_kernels.wrapped_angles(values).view(np.int64), wrap_angles(values).view(np.int64)
+    )
