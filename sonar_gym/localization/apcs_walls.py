@@ -782,22 +782,9 @@ def fit_group_points(
 
 def _symmetric_eigen(scatter: FloatArray) -> tuple[list[float], FloatArray]:
     """``np.linalg.eigh`` of a 2 x 2 float64 scatter matrix: eigenvalues (ascending, as floats)
-    and eigenvectors (columns).
-
-    A finite matrix goes straight to the LAPACK routine ``eigh`` calls (same bits, without its
-    argument checks and error state, ~4 us a call); one that overflowed goes through ``eigh``,
-    which raises its ``LinAlgError``.
-    """
-    (xx, xy), (_, yy) = scatter.tolist()
-    if not math.isfinite(xx + xy + yy):
-        eigenvalues, eigenvectors = np.linalg.eigh(scatter)
-        return eigenvalues.tolist(), eigenvectors
-    eigenvalues, eigenvectors = _EIGH_LOWER(scatter, signature="d->dd")
+    and eigenvectors (columns)."""
+    eigenvalues, eigenvectors = np.linalg.eigh(scatter)
     return eigenvalues.tolist(), eigenvectors
-
-
-_EIGH_LOWER = np.linalg._umath_linalg.eigh_lo  # type: ignore[attr-defined]
-"""The LAPACK ``syevd`` gufunc behind ``np.linalg.eigh`` (lower triangle)."""
 
 
 def fit_wall_groups(
