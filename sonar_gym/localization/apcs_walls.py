@@ -752,7 +752,8 @@ def fit_group_points(
     centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
-    eigenvalues, eigenvectors = _symmetric_eigen(scatter)
+    values, eigenvectors = np.linalg.eigh(scatter)
+    eigenvalues: list[float] = values.tolist()  # ascending
     residual_variance = max(eigenvalues[0], 0.0)
     if residual_variance >= params.variance_threshold_m2:
         return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
@@ -778,13 +779,6 @@ def fit_group_points(
     end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
     wall = DetectedWall(start, end, indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)
-
-
-def _symmetric_eigen(scatter: FloatArray) -> tuple[list[float], FloatArray]:
-    """``np.linalg.eigh`` of a 2 x 2 float64 scatter matrix: eigenvalues (ascending, as floats)
-    and eigenvectors (columns)."""
-    eigenvalues, eigenvectors = np.linalg.eigh(scatter)
-    return eigenvalues.tolist(), eigenvectors
 
 
 def fit_wall_groups(

@@ -31,13 +31,17 @@ from sonar_gym.sonar.acoustics import (
     SMALLEST_COSINE,
     TABLE_STEPS_PER_UNIT,
     PistonBeam,
-    speed_of_sound_mps,
-    wavenumber_per_m,
 )
 from sonar_gym.sonar.echo_tables import PATH_END_TOLERANCE, echo_tables
 from sonar_gym.sonar.echoes import EchoKind, edge_law_constants
 from sonar_gym.sonar.presets import preset as transducer_preset
-from sonar_gym.sonar.pulse_echo import FirstEchoes, PulseEchoSonar, WorldLike, concatenate_echoes
+from sonar_gym.sonar.pulse_echo import (
+    FirstEchoes,
+    PulseEchoSonar,
+    WorldLike,
+    air_at,
+    concatenate_echoes,
+)
 from sonar_gym.sonar.scan import Scan
 
 KIM_HALF_SWEEP_RAD = math.radians(45.0)
@@ -354,10 +358,7 @@ def _side_air(sonar: SideSonars, temperature_c: float, robot_radius_m: float) ->
         ):
             return answer
     transducer = sonar.transducer
-    speed = speed_of_sound_mps(temperature_c)
-    beam = PistonBeam.for_ka(
-        transducer.wavenumber_ka(speed), transducer.side_lobes, transducer.side_lobe_leakage
-    )
+    speed, wavenumber, beam = air_at(transducer, temperature_c)
     heard_constants = np.array(
         (
             max(transducer.min_range_m, 1e-9),
@@ -380,9 +381,7 @@ def _side_air(sonar: SideSonars, temperature_c: float, robot_radius_m: float) ->
     first_constants.flags.writeable = False
     answer = _SideAir(
         beam=beam,
-        edge_law=edge_law_constants(
-            sonar.edge_law, wavenumber_per_m(transducer.frequency_hz, speed)
-        ),
+        edge_law=edge_law_constants(sonar.edge_law, wavenumber),
         absorption_per_m=-transducer.absorption_db_per_m * math.log(10.0) / 10.0,
         heard_constants=heard_constants,
         first_constants=first_constants,
