@@ -518,6 +518,85 @@ def vote_mean(
     return count, pairwise_sum(votes_x) / count, pairwise_sum(votes_y) / count
 
 
+_HEADING_TEST = types.Tuple(
+    (types.boolean, types.float64, types.float64, types.float64, types.float64)
+)
+"""``(by heading, middle cos, middle sin, spread cos, spread sin)``: the heading test of
+:func:`candidate_pairs`."""
+_SMOOTHED_FIX = types.Tuple(
+    (
+        types.Array(types.int64, 3, "C"),
+        types.Array(types.int64, 3, "C"),
+        types.int64,
+        types.int64,
+        types.int64,
+        types.int64,
+        types.float64,
+        types.float64,
+    )
+)
+
+
+@compiled(  # type: ignore[misc]
+    _SMOOTHED_FIX,
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    NUMBERS,  # range_m
+    TABLE,  # anchors
+    INDEX_TABLE,  # direction_index
+    TABLE,  # free_distance
+    NUMBERS,  # cos_h
+    NUMBERS,  # sin_h
+    _HEADING_TEST,
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+)
+def smoothed_fix(
+    end_x: FloatArray,
+    end_y: FloatArray,
+    range_m: FloatArray,
+    anchors: FloatArray,
+    direction_index: np.ndarray,
+    free_distance: FloatArray,
+    cos_h: FloatArray,
+    sin_h: FloatArray,
+    heading_test: tuple[bool, float, float, float, float],
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+) -> tuple[np.ndarray, np.ndarray, int, int, int, int, float, float]:
+    """``(volume, score, heading, x, y, count, mean x, mean y)``: the whole vote of one fix
+    with the smoothed selection, in one call.
+
+    :func:`candidate_pairs` in the search ``circle`` (``heading_test`` gives its heading
+    arguments), :func:`vote_volume` over the ``window``, its :func:`smoothed_peak` (``x``,
+    ``y`` in window cells), and :func:`vote_mean` of the peak's heading over the peak cell
+    +- 1 (cells of the whole grid; outside the window nothing votes). ``count`` is 0, and the
+    means 0, when the peak scores 0 (no vote).
+    """
+    by_heading, middle_cos, middle_sin, spread_cos, spread_sin = heading_test
+    center_x, center_y, radius = circle
+    pair_j, pair_k = candidate_pairs(
+        end_x, end_y, anchors, center_x, center_y, radius,
+        by_heading, middle_cos, middle_sin, spread_cos, spread_sin,
+    )  # fmt: skip
+    volume = vote_volume(
+        pair_j, pair_k, direction_index, free_distance, range_m, end_x, end_y, anchors,
+        cos_h, sin_h, circle, grid_frame, window,
+    )  # fmt: skip
+    score, heading, x, y = smoothed_peak(volume)
+    if score.size == 0 or score[heading, x, y] == 0:
+        return volume, score, heading, x, y, 0, 0.0, 0.0
+    cell_x, cell_y = x + window[0], y + window[1]
+    count, mean_x, mean_y = vote_mean(
+        pair_j, pair_k, direction_index[heading], free_distance, range_m, end_x, end_y,
+        anchors, cos_h[heading], sin_h[heading], circle, grid_frame, window,
+        (cell_x - 1, cell_y - 1, cell_x + 1, cell_y + 1),
+    )  # fmt: skip
+    return volume, score, heading, x, y, count, mean_x, mean_y
+
+
 @compiled(types.float64, NUMBERS)  # type: ignore[misc]
 def heading_offset(headings: FloatArray) -> float:
     """The largest angle (rad) from the middle candidate ``headings[size // 2]`` to another:
