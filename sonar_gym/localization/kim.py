@@ -231,7 +231,9 @@ class _FreeDistanceTable:
         x_min, y_min, x_max, y_max = grid.bounds
         longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
         self.samples_m = end_clearance_m + step * np.arange(math.ceil(longest / step) + 1)
-        self.distance = np.zeros((direction_bins, self.centers.shape[0]))
+        # column-major: a vote looks up one cell under neighbouring headings, whose directions
+        # are neighbouring rows; this keeps them in one or two cache lines
+        self.distance = np.zeros((direction_bins, self.centers.shape[0]), order="F")
         self.filled = np.zeros(direction_bins, dtype=bool)
         self.complete = False
 
