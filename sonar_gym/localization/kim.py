@@ -62,6 +62,7 @@ import math
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -708,9 +709,10 @@ class _Choice:
 
     ``window_low``..``window_high`` (inclusive cell indices) bound the cells whose votes make the
     chosen peak; ``cell`` is the cell of the window with most raw votes; ``centre`` the
-    position used without refinement; ``score`` the selection score over (heading, ix, iy) of
-    the vote window (:class:`_VoteWindow`); ``vote_count`` and ``vote_mean`` the number and
-    mean position ({W}, metres) of the chosen heading's votes in the chosen cells.
+    position used without refinement; ``vote_count`` and ``vote_mean`` the number and mean
+    position ({W}, metres) of the chosen heading's votes in the chosen cells; ``volume`` the
+    raw votes over (heading, ix, iy) of the vote window (:class:`_VoteWindow`), scored by
+    ``selection``.
     """
 
     heading_index: int
@@ -718,9 +720,18 @@ class _Choice:
     window_low: tuple[int, int]
     window_high: tuple[int, int]
     centre: FloatArray
-    score: npt.NDArray[np.int64]
     vote_count: int
     vote_mean: tuple[float, float]
+    volume: npt.NDArray[np.int64]
+    selection: Selection
+
+    @cached_property
+    def score(self) -> npt.NDArray[np.int64]:
+        """The selection score over (heading, ix, iy) of the vote window: the raw votes, or
+        their 3x3 binomial smoothing (only the ambiguity test needs it whole)."""
+        if self.selection == "max":
+            return self.volume
+        return kim_kernels.binomial_smooth(self.volume)  # type: ignore[no-any-return]
 
     @property
     def best_score(self) -> int:
@@ -739,22 +750,20 @@ def _smoothed_choice(
     smoothing (window = the chosen cell +- 1), or None for the choice when nothing voted: one
     call of :func:`~sonar_gym.localization.kim_kernels.smoothed_fix`."""
     readings = votes_of.readings
-    volume, score, heading_index, local_x, local_y, count, mean_x, mean_y = (
-        kim_kernels.smoothed_fix(
-            readings.end_x,
-            readings.end_y,
-            readings.range_m,
-            votes_of.anchors,
-            votes_of.direction_index,
-            votes_of.table,
-            votes_of.cos_h,
-            votes_of.sin_h,
-            _pair_test(center, radius, headings)[1],
-            *votes_of.layout,
-        )
+    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = kim_kernels.smoothed_fix(
+        readings.end_x,
+        readings.end_y,
+        readings.range_m,
+        votes_of.anchors,
+        votes_of.direction_index,
+        votes_of.table,
+        votes_of.cos_h,
+        votes_of.sin_h,
+        _pair_test(center, radius, headings)[1],
+        *votes_of.layout,
     )
     # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
-    if score[heading_index, local_x, local_y] == 0:
+    if peak == 0:
         return volume, None
     nx, ny = grid.shape
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
@@ -765,7 +774,15 @@ def _smoothed_choice(
         [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
     )
     return volume, _Choice(
-        heading_index, (best_x, best_y), low, high, centre, score, count, (mean_x, mean_y)
+        heading_index,
+        (best_x, best_y),
+        low,
+        high,
+        centre,
+        count,
+        (mean_x, mean_y),
+        volume,
+        "smoothed",
     )
 
 
@@ -825,7 +842,7 @@ def _max_choice(
         (*low, *high),
     )
     return volume, _Choice(
-        heading_index, cell, low, high, centroid, volume, count, (mean_x, mean_y)
+        heading_index, cell, low, high, centroid, count, (mean_x, mean_y), volume, "max"
     )
 
 
