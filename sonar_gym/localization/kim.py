@@ -62,6 +62,7 @@ import math
 import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -231,7 +232,9 @@ class _FreeDistanceTable:
         x_min, y_min, x_max, y_max = grid.bounds
         longest = math.hypot(x_max - x_min, y_max - y_min) + 2.0 * step
         self.samples_m = end_clearance_m + step * np.arange(math.ceil(longest / step) + 1)
-        self.distance = np.zeros((direction_bins, self.centers.shape[0]))
+        # column-major: a vote looks up one cell under neighbouring headings, whose directions
+        # are neighbouring rows; this keeps them in one or two cache lines
+        self.distance = np.zeros((direction_bins, self.centers.shape[0]), order="F")
         self.filled = np.zeros(direction_bins, dtype=bool)
         self.complete = False
 
@@ -421,6 +424,27 @@ def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:
     return None if spread >= np.pi else (middle, spread)
 
 
+def _pair_test(
+    center: FloatArray | None, radius: float | None, headings: FloatArray
+) -> tuple[tuple[float, float, float], tuple[bool, float, float, float, float]]:
+    """The search circle ``(centre x, centre y, radius)`` ({W}, metres) and the heading test
+    ``(by heading, middle cos, middle sin, spread cos, spread sin)`` of
+    :func:`~sonar_gym.localization.kim_kernels.candidate_pairs`; without a search circle an
+    infinite one and no heading test, which keep every pair."""
+    circle = _search_circle(center, radius)
+    if center is None or radius is None:
+        return circle, (False, 1.0, 0.0, 1.0, 0.0)
+    spread = _heading_spread(headings)
+    middle, angle = (0.0, 0.0) if spread is None else spread
+    return circle, (
+        spread is not None,
+        math.cos(middle),
+        math.sin(middle),
+        math.cos(angle),
+        math.sin(angle),
+    )
+
+
 def _candidate_pairs(
     readings: _Readings,
     anchors: FloatArray,
@@ -433,24 +457,9 @@ def _candidate_pairs(
     ``(J, K)`` product, so votes and their sums are unchanged); every pair without a search
     circle. The tests are those of :func:`~sonar_gym.localization.kim_kernels.candidate_pairs`.
     """
-    n_readings, n_anchors = readings.range_m.size, anchors.shape[0]
-    if center is None or radius is None:
-        pair_j, pair_k = np.divmod(np.arange(n_readings * n_anchors), n_anchors)
-        return pair_j, pair_k
-    spread = _heading_spread(headings)
-    middle, angle = (0.0, 0.0) if spread is None else spread
+    circle, heading_test = _pair_test(center, radius, headings)
     return kim_kernels.candidate_pairs(  # type: ignore[no-any-return]
-        readings.end_x,
-        readings.end_y,
-        anchors,
-        float(center[0]),
-        float(center[1]),
-        float(radius),
-        spread is not None,
-        math.cos(middle),
-        math.sin(middle),
-        math.cos(angle),
-        math.sin(angle),
+        readings.end_x, readings.end_y, anchors, *circle, *heading_test
     )
 
 
@@ -506,12 +515,16 @@ def _vote_layout(
     """The compiled vote loops' ``(circle, grid_frame, window)``
     (:mod:`~sonar_gym.localization.kim_kernels`): the search circle (an infinite radius
     without one), the grid's origin and cell size, and the window's cells."""
-    if center is None or radius is None:
-        circle = (0.0, 0.0, math.inf)
-    else:
-        circle = (float(center[0]), float(center[1]), float(radius))
     (x0, y0), size = grid.origin_m, grid.cell_size_m
-    return circle, (float(x0), float(y0), float(size)), window.cells
+    return _search_circle(center, radius), (float(x0), float(y0), float(size)), window.cells
+
+
+def _search_circle(center: FloatArray | None, radius: float | None) -> tuple[float, float, float]:
+    """``(centre x, centre y, radius)`` of the search circle ({W}, metres); without one an
+    infinite circle, which every vote lies in."""
+    if center is None or radius is None:
+        return 0.0, 0.0, math.inf
+    return float(center[0]), float(center[1]), float(radius)
 
 
 def _failure(status: str, message: str) -> VoteLocalization:
@@ -617,33 +630,26 @@ def vote_localize(
 
     # Vote volume over (heading, ix, iy) of the vote window.
     window = _vote_window(grid, center, radius)
-    pairs = _candidate_pairs(readings, anchors, center, radius, headings)
-    if pairs[0].size == 0 or window.shape[0] * window.shape[1] == 0:
-        return _failure(
-            NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
-        )
+    if window.shape[0] * window.shape[1] == 0:
+        return _failure(NO_VOTES, _NOTHING_VOTED)
     direction_index = _direction_index(headings, readings, direction_bins)
-    table = table_cache.columns(direction_index.ravel())
-    cos_h, sin_h = np.cos(headings), np.sin(headings)
-    vote_layout = _vote_layout(grid, window, center, radius)
-    volume = kim_kernels.vote_volume(
-        *pairs,
-        direction_index,
-        table,
-        readings.range_m,
-        readings.end_x,
-        readings.end_y,
+    votes_of = _VoteInputs(
+        readings,
         anchors,
-        cos_h,
-        sin_h,
-        *vote_layout,
+        direction_index,
+        table_cache.columns(direction_index.ravel()),
+        np.cos(headings),
+        np.sin(headings),
+        _vote_layout(grid, window, center, radius),
     )
+    volume: npt.NDArray[np.int64] | None
+    if selection == "smoothed":
+        volume, choice = _smoothed_choice(grid, votes_of, window, center, radius, headings)
+    else:
+        volume, choice = _max_choice(grid, votes_of, window, center, radius, headings)
+    if volume is None or choice is None:
+        return _failure(NO_VOTES, _NOTHING_VOTED)
     low_x, low_y = window.low
-    choice = _choose(grid, volume, selection, window)
-    if choice is None:
-        return _failure(
-            NO_VOTES, "no unobstructed range vector voted inside the grid / search circle"
-        )
     heading = float(headings[choice.heading_index])
     vote_map = window.full(grid, volume[choice.heading_index]) if return_vote_map else None
     votes = int(volume[choice.heading_index, choice.cell[0] - low_x, choice.cell[1] - low_y])
@@ -664,23 +670,10 @@ def vote_localize(
             )
 
     x, y = float(choice.centre[0]), float(choice.centre[1])
-    if refine == "vote_mean":  # the mean of the chosen heading's votes in the chosen cells
-        chosen = choice.heading_index
-        count, mean_x, mean_y = kim_kernels.vote_mean(
-            *pairs,
-            direction_index[chosen],
-            table,
-            readings.range_m,
-            readings.end_x,
-            readings.end_y,
-            anchors,
-            float(cos_h[chosen]),
-            float(sin_h[chosen]),
-            *vote_layout,
-            (*choice.window_low, *choice.window_high),
-        )
-        if count:  # sum / count: np.mean's own arithmetic (one pairwise sum, one division)
-            x, y = mean_x, mean_y
+    # the mean of the chosen heading's votes in the chosen cells: np.mean's own arithmetic
+    # (one pairwise sum, one division)
+    if refine == "vote_mean" and choice.vote_count:
+        x, y = choice.vote_mean
     pose = Pose.unchecked(x, y, heading)
     return VoteLocalization(
         status=OK,
@@ -692,14 +685,34 @@ def vote_localize(
     )
 
 
+_NOTHING_VOTED = "no unobstructed range vector voted inside the grid / search circle"
+
+
+@dataclass(frozen=True)
+class _VoteInputs:
+    """What every vote loop of one fix reads: the readings, the anchors, the quantised beam
+    directions ``(h, J)``, the free-distance table, the cosines and sines of the candidate
+    headings, and :func:`_vote_layout`."""
+
+    readings: _Readings
+    anchors: FloatArray
+    direction_index: npt.NDArray[np.intp]
+    table: FloatArray
+    cos_h: FloatArray
+    sin_h: FloatArray
+    layout: tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]
+
+
 @dataclass(frozen=True)
 class _Choice:
     """The chosen heading and cells.
 
     ``window_low``..``window_high`` (inclusive cell indices) bound the cells whose votes make the
     chosen peak; ``cell`` is the cell of the window with most raw votes; ``centre`` the
-    position used without refinement; ``score`` the selection score over (heading, ix, iy) of
-    the vote window (:class:`_VoteWindow`).
+    position used without refinement; ``vote_count`` and ``vote_mean`` the number and mean
+    position ({W}, metres) of the chosen heading's votes in the chosen cells; ``volume`` the
+    raw votes over (heading, ix, iy) of the vote window (:class:`_VoteWindow`), scored by
+    ``selection``.
     """
 
     heading_index: int
@@ -707,55 +720,130 @@ class _Choice:
     window_low: tuple[int, int]
     window_high: tuple[int, int]
     centre: FloatArray
-    score: npt.NDArray[np.int64]
+    vote_count: int
+    vote_mean: tuple[float, float]
+    volume: npt.NDArray[np.int64]
+    selection: Selection
+
+    @cached_property
+    def score(self) -> npt.NDArray[np.int64]:
+        """The selection score over (heading, ix, iy) of the vote window: the raw votes, or
+        their 3x3 binomial smoothing (only the ambiguity test needs it whole)."""
+        if self.selection == "max":
+            return self.volume
+        return kim_kernels.binomial_smooth(self.volume)  # type: ignore[no-any-return]
 
     @property
     def best_score(self) -> int:
         return int(self.score[self.heading_index].max())
 
 
-def _choose(
+def _smoothed_choice(
     grid: OccupancyGrid,
-    volume: npt.NDArray[np.int64],
-    selection: str,
+    votes_of: _VoteInputs,
     window: _VoteWindow,
-) -> _Choice | None:
-    """Pick the heading and cell from the vote volume ``(heading, ix, iy)`` of ``window``, or
-    None when it holds no vote.
-
-    ``"smoothed"``: maximum of the 3x3 binomial smoothing, window = the chosen cell +- 1.
-    ``"max"``: raw maximum; ties go to the heading with most tied cells, then to the tied cell
-    nearest the centroid of the tied cells (the centroid is the unrefined position).
-    Returned cells are indices of the whole grid; ``score`` covers ``window`` only.
-    """
-    nx, ny = grid.shape
-    offset = np.array(window.low)
-    if selection == "max":
-        if not volume.any():
-            return None
-        tied = np.argwhere(volume == volume.max())
-        heading_index = int(np.argmax(np.bincount(tied[:, 0], minlength=volume.shape[0])))
-        cells = tied[tied[:, 0] == heading_index, 1:] + offset
-        centres = grid.cell_to_world(cells)
-        centroid = centres.mean(axis=0)
-        nearest = cells[int(np.argmin(np.sum((centres - centroid) ** 2, axis=1)))]
-        cell = (int(nearest[0]), int(nearest[1]))
-        low = (max(cell[0] - 1, 0), max(cell[1] - 1, 0))
-        high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
-        return _Choice(heading_index, cell, low, high, centroid, volume)
+    center: FloatArray | None,
+    radius: float | None,
+    headings: FloatArray,
+) -> tuple[npt.NDArray[np.int64], _Choice | None]:
+    """The vote volume ``(heading, ix, iy)`` of ``window`` and the maximum of its 3x3 binomial
+    smoothing (window = the chosen cell +- 1), or None for the choice when nothing voted: one
+    call of :func:`~sonar_gym.localization.kim_kernels.smoothed_fix`."""
+    readings = votes_of.readings
+    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = kim_kernels.smoothed_fix(
+        readings.end_x,
+        readings.end_y,
+        readings.range_m,
+        votes_of.anchors,
+        votes_of.direction_index,
+        votes_of.table,
+        votes_of.cos_h,
+        votes_of.sin_h,
+        _pair_test(center, radius, headings)[1],
+        *votes_of.layout,
+    )
     # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
-    score, heading_index, local_x, local_y = kim_kernels.smoothed_peak(volume)
-    if score[heading_index, local_x, local_y] == 0:
-        return None
+    if peak == 0:
+        return volume, None
+    nx, ny = grid.shape
     best_x, best_y = local_x + window.low[0], local_y + window.low[1]
-    cell = (best_x, best_y)
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
     x0, y0 = grid.origin_m  # the centre of the cell, as OccupancyGrid.cell_to_world
     centre = np.array(
         [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
     )
-    return _Choice(heading_index, cell, low, high, centre, score)
+    return volume, _Choice(
+        heading_index,
+        (best_x, best_y),
+        low,
+        high,
+        centre,
+        count,
+        (mean_x, mean_y),
+        volume,
+        "smoothed",
+    )
+
+
+def _max_choice(
+    grid: OccupancyGrid,
+    votes_of: _VoteInputs,
+    window: _VoteWindow,
+    center: FloatArray | None,
+    radius: float | None,
+    headings: FloatArray,
+) -> tuple[npt.NDArray[np.int64] | None, _Choice | None]:
+    """The vote volume ``(heading, ix, iy)`` of ``window`` (None when no pair can vote) and its
+    raw maximum, or None for the choice when nothing voted.
+
+    Ties go to the heading with most tied cells, then to the tied cell nearest the centroid of
+    the tied cells (the centroid is the unrefined position); window = that cell +- 1.
+    """
+    readings = votes_of.readings
+    pairs = _candidate_pairs(readings, votes_of.anchors, center, radius, headings)
+    if pairs[0].size == 0:
+        return None, None
+    volume = kim_kernels.vote_volume(
+        *pairs,
+        votes_of.direction_index,
+        votes_of.table,
+        readings.range_m,
+        readings.end_x,
+        readings.end_y,
+        votes_of.anchors,
+        votes_of.cos_h,
+        votes_of.sin_h,
+        *votes_of.layout,
+    )
+    if not volume.any():
+        return volume, None
+    nx, ny = grid.shape
+    tied = np.argwhere(volume == volume.max())
+    heading_index = int(np.argmax(np.bincount(tied[:, 0], minlength=volume.shape[0])))
+    cells = tied[tied[:, 0] == heading_index, 1:] + np.array(window.low)
+    centres = grid.cell_to_world(cells)
+    centroid = centres.mean(axis=0)
+    nearest = cells[int(np.argmin(np.sum((centres - centroid) ** 2, axis=1)))]
+    cell = (int(nearest[0]), int(nearest[1]))
+    low = (max(cell[0] - 1, 0), max(cell[1] - 1, 0))
+    high = (min(cell[0] + 1, nx - 1), min(cell[1] + 1, ny - 1))
+    count, mean_x, mean_y = kim_kernels.vote_mean(
+        *pairs,
+        votes_of.direction_index[heading_index],
+        votes_of.table,
+        readings.range_m,
+        readings.end_x,
+        readings.end_y,
+        votes_of.anchors,
+        float(votes_of.cos_h[heading_index]),
+        float(votes_of.sin_h[heading_index]),
+        *votes_of.layout,
+        (*low, *high),
+    )
+    return volume, _Choice(
+        heading_index, cell, low, high, centroid, count, (mean_x, mean_y), volume, "max"
+    )
 
 
 def _rival_score(

@@ -416,7 +416,42 @@ def votes_in_cells(
     return votes_x[:count].copy(), votes_y[:count].copy()
 
 
-@compiled(types.Array(types.int64, 3, "C"), types.Array(types.int64, 3, "A", readonly=True))  # type: ignore[misc]
+_VOLUME = types.Array(types.int64, 3, "A", readonly=True)
+"""``(h, nx, ny)`` integer votes per heading and cell."""
+_LAYER = types.Array(types.int64, 2, "C")
+
+
+def _smooth_layer(
+    volume: np.ndarray, layer: int, along_x: np.ndarray, smoothed: np.ndarray
+) -> None:
+    """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of ``volume[layer]`` into ``smoothed`` (``(nx, ny)``),
+    zero outside the layer (integers: exact in any order); ``along_x`` is ``(nx, ny)``
+    scratch."""
+    _, nx, ny = volume.shape
+    for ix in range(nx):
+        for iy in range(ny):
+            total = 2 * volume[layer, ix, iy]
+            if ix > 0:
+                total += volume[layer, ix - 1, iy]
+            if ix < nx - 1:
+                total += volume[layer, ix + 1, iy]
+            along_x[ix, iy] = total
+    for ix in range(nx):
+        for iy in range(ny):
+            total = 2 * along_x[ix, iy]
+            if iy > 0:
+                total += along_x[ix, iy - 1]
+            if iy < ny - 1:
+                total += along_x[ix, iy + 1]
+            smoothed[ix, iy] = total
+
+
+_smooth_layer_compiled = compiled(types.none, _VOLUME, types.int64, _LAYER, _LAYER, inline=True)(
+    _smooth_layer
+)
+
+
+@compiled(types.Array(types.int64, 3, "C"), _VOLUME)  # type: ignore[misc]
 def binomial_smooth(volume: np.ndarray) -> np.ndarray:
     """3x3 ``[1 2 1]^T [1 2 1]`` smoothing of each ``(nx, ny)`` layer of ``(h, nx, ny)`` integer
     votes, zero outside the layer (integers: exact in any order)."""
@@ -424,65 +459,28 @@ def binomial_smooth(volume: np.ndarray) -> np.ndarray:
     along_x = np.empty((nx, ny), dtype=np.int64)
     smoothed = np.empty((n_layers, nx, ny), dtype=np.int64)
     for layer in range(n_layers):
-        for ix in range(nx):
-            for iy in range(ny):
-                total = 2 * volume[layer, ix, iy]
-                if ix > 0:
-                    total += volume[layer, ix - 1, iy]
-                if ix < nx - 1:
-                    total += volume[layer, ix + 1, iy]
-                along_x[ix, iy] = total
-        for ix in range(nx):
-            for iy in range(ny):
-                total = 2 * along_x[ix, iy]
-                if iy > 0:
-                    total += along_x[ix, iy - 1]
-                if iy < ny - 1:
-                    total += along_x[ix, iy + 1]
-                smoothed[layer, ix, iy] = total
+        _smooth_layer_compiled(volume, layer, along_x, smoothed[layer])
     return smoothed
-    # Row by row, the borders outside the inner loops: these then have no branch.
+
+
+@compiled(types.UniTuple(types.int64, 4), _VOLUME)  # type: ignore[misc]
+def smoothed_maximum(volume: np.ndarray) -> tuple[int, int, int, int]:
+    """``(score, heading, x, y)``: the largest :func:`binomial_smooth` score of ``(h, nx, ny)``
+    votes and the first cell holding it in C order (``np.argmax``'s tie rule), a layer at a
+    time without storing the smoothed volume; ``(0, 0, 0, 0)`` for an empty volume."""
+    n_layers, nx, ny = volume.shape
+    along_x = np.empty((nx, ny), dtype=np.int64)
+    smoothed = np.empty((nx, ny), dtype=np.int64)
+    best, best_heading, best_x, best_y = -1, 0, 0, 0  # every score is >= 0
     for layer in range(n_layers):
+        _smooth_layer_compiled(volume, layer, along_x, smoothed)
         for ix in range(nx):
             for iy in range(ny):
-                along_x[ix, iy] = 2 * volume[layer, ix, iy]
-            if ix > 0:
-                for iy in range(ny):
-                    along_x[ix, iy] += volume[layer, ix - 1, iy]
-            if ix < nx - 1:
-                for iy in range(ny):
-                    along_x[ix, iy] += volume[layer, ix + 1, iy]
-        for ix in range(nx):
-            if ny == 1:
-                smoothed[layer, ix, 0] = 2 * along_x[ix, 0]
-                continue
-            smoothed[layer, ix, 0] = 2 * along_x[ix, 0] + along_x[ix, 1]
-            for iy in range(1, ny - 1):
-                smoothed[layer, ix, iy] = (
-                    along_x[ix, iy - 1] + 2 * along_x[ix, iy] + along_x[ix, iy + 1]
-                )
-            smoothed[layer, ix, ny - 1] = along_x[ix, ny - 2] + 2 * along_x[ix, ny - 1]
-    return smoothed
-
-
-_PEAK = types.Tuple((types.Array(types.int64, 3, "C"), types.int64, types.int64, types.int64))
-
-
-@compiled(_PEAK, types.Array(types.int64, 3, "A", readonly=True))  # type: ignore[misc]
-def smoothed_peak(volume: np.ndarray) -> tuple[np.ndarray, int, int, int]:
-    """``(score, heading, x, y)``: the :func:`binomial_smooth` score of ``(h, nx, ny)`` votes and
-    the first of its maxima in C order (``np.argmax``'s tie rule); ``(0, 0, 0)`` for an empty
-    volume."""
-    score = binomial_smooth(volume)
-    _, nx, ny = score.shape
-    flat = score.ravel()
-    best = 0
-    for index in range(1, flat.size):
-        if flat[index] > flat[best]:
-            best = index
-    heading, rest = divmod(best, nx * ny) if flat.size else (0, 0)
-    x, y = divmod(rest, ny) if flat.size else (0, 0)
-    return score, heading, x, y
+                if smoothed[ix, iy] > best:
+                    best, best_heading, best_x, best_y = smoothed[ix, iy], layer, ix, iy
+    if best < 0:
+        return 0, 0, 0, 0
+    return best, best_heading, best_x, best_y
 
 
 @compiled(  # type: ignore[misc]
@@ -516,6 +514,85 @@ def vote_mean(
     if count == 0:
         return 0, 0.0, 0.0
     return count, pairwise_sum(votes_x) / count, pairwise_sum(votes_y) / count
+
+
+_HEADING_TEST = types.Tuple(
+    (types.boolean, types.float64, types.float64, types.float64, types.float64)
+)
+"""``(by heading, middle cos, middle sin, spread cos, spread sin)``: the heading test of
+:func:`candidate_pairs`."""
+_SMOOTHED_FIX = types.Tuple(
+    (
+        types.Array(types.int64, 3, "C"),
+        types.int64,
+        types.int64,
+        types.int64,
+        types.int64,
+        types.int64,
+        types.float64,
+        types.float64,
+    )
+)
+
+
+@compiled(  # type: ignore[misc]
+    _SMOOTHED_FIX,
+    NUMBERS,  # end_x
+    NUMBERS,  # end_y
+    NUMBERS,  # range_m
+    TABLE,  # anchors
+    INDEX_TABLE,  # direction_index
+    TABLE,  # free_distance
+    NUMBERS,  # cos_h
+    NUMBERS,  # sin_h
+    _HEADING_TEST,
+    _CIRCLE,
+    _GRID_FRAME,
+    _CELLS,  # window
+)
+def smoothed_fix(
+    end_x: FloatArray,
+    end_y: FloatArray,
+    range_m: FloatArray,
+    anchors: FloatArray,
+    direction_index: np.ndarray,
+    free_distance: FloatArray,
+    cos_h: FloatArray,
+    sin_h: FloatArray,
+    heading_test: tuple[bool, float, float, float, float],
+    circle: tuple[float, float, float],
+    grid_frame: tuple[float, float, float],
+    window: tuple[int, int, int, int],
+) -> tuple[np.ndarray, int, int, int, int, int, float, float]:
+    """``(volume, score, heading, x, y, count, mean x, mean y)``: the whole vote of one fix
+    with the smoothed selection, in one call.
+
+    :func:`candidate_pairs` in the search ``circle`` (``heading_test`` gives its heading
+    arguments), :func:`vote_volume` over the ``window``, its :func:`smoothed_maximum`
+    (``score`` at ``heading`` and window cell ``x``, ``y``), and :func:`vote_mean` of the
+    peak's heading over the peak cell +- 1 (cells of the whole grid; outside the window
+    nothing votes). ``count`` is 0, and the means 0, when the peak scores 0 (no vote).
+    """
+    by_heading, middle_cos, middle_sin, spread_cos, spread_sin = heading_test
+    center_x, center_y, radius = circle
+    pair_j, pair_k = candidate_pairs(
+        end_x, end_y, anchors, center_x, center_y, radius,
+        by_heading, middle_cos, middle_sin, spread_cos, spread_sin,
+    )  # fmt: skip
+    volume = vote_volume(
+        pair_j, pair_k, direction_index, free_distance, range_m, end_x, end_y, anchors,
+        cos_h, sin_h, circle, grid_frame, window,
+    )  # fmt: skip
+    score, heading, x, y = smoothed_maximum(volume)
+    if score == 0:
+        return volume, score, heading, x, y, 0, 0.0, 0.0
+    cell_x, cell_y = x + window[0], y + window[1]
+    count, mean_x, mean_y = vote_mean(
+        pair_j, pair_k, direction_index[heading], free_distance, range_m, end_x, end_y,
+        anchors, cos_h[heading], sin_h[heading], circle, grid_frame, window,
+        (cell_x - 1, cell_y - 1, cell_x + 1, cell_y + 1),
+    )  # fmt: skip
+    return volume, score, heading, x, y, count, mean_x, mean_y
 
 
 @compiled(types.float64, NUMBERS)  # type: ignore[misc]

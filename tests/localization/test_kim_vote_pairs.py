@@ -42,11 +42,14 @@ def test_pre_selected_pairs_give_the_same_result_as_the_full_product(
     truth = Pose(0.93, 0.71, 0.4)
     sweeps = noisy_sweeps(truth, MOVES[:count], np.random.default_rng(7))
     prior = Pose(truth.x + 0.04, truth.y - 0.03, truth.theta + math.radians(2.0))
+    # the raw maximum: its pairs come from _candidate_pairs (the smoothed selection selects
+    # its pairs inside one compiled call, checked in test_kim_smoothed_fix.py)
     arguments = dict(
         search_center=prior,
         search_radius=radius,
         heading_window_rad=math.radians(10.0),
         anchor=anchor,
+        selection="max",
     )
     fast = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
     monkeypatch.setattr(kim, "_candidate_pairs", _all_pairs)
