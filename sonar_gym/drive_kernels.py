@@ -1,6 +1,6 @@
 """Compiled loops of driving: a run of commands' random draws, the plan of a route's commands
-from the estimate, and the drive of commands where no physics is needed (numba,
-:mod:`sonar_gym.compiled`).
+from the estimate, and the drive of commands where no physics is needed, alone or with the EKF
+prediction over its encoder increments (numba, :mod:`sonar_gym.compiled`).
 
 numba's ``Generator`` draws from the caller's bit generator with numpy's own algorithms, so
 the loops take the same numbers, in the same order, as
@@ -18,6 +18,7 @@ import numpy as np
 from numba import types
 
 from sonar_gym.compiled import INDICES, NUMBERS, TABLE, compiled, wrap_angle
+from sonar_gym.odometry_kernels import predict_commands
 from sonar_gym.path_clearance import arc_is_clear
 from sonar_gym.pose import FloatArray
 
@@ -326,20 +327,7 @@ command's true pose and path length; returns the first command that is not clear
 none)."""
 
 
-@compiled(  # type: ignore[misc]
-    types.Tuple((_MOTIONS, types.int64)),
-    TABLE,  # commands_m
-    NUMBERS,  # draws
-    NUMBERS,  # noise
-    types.float64,  # wheel_base_m
-    types.int64,  # substeps
-    types.int64,  # integration
-    types.UniTuple(types.float64, 3),  # odometry
-    types.UniTuple(types.float64, 3),  # start
-    types.float64,  # robot_radius_m
-    *_SHAPES,
-)
-def drive_commands(
+def _drive_commands(
     commands_m: FloatArray,
     draws: FloatArray,
     noise: FloatArray,
@@ -353,24 +341,6 @@ def drive_commands(
     kinds: np.ndarray,
     shapes: FloatArray,
 ) -> tuple[FloatArray, int]:
-    """:meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` of each of the ``(K, 2)``
-    commanded increments ``commands_m`` (``(d_l, d_r)``, metres), as far as no physics is
-    needed.
-
-    Per command: the draws of ``drive`` (``draws``: ``6 K`` numbers, two standard normals then
-    four uniforms per command, in the order :func:`draw_commands` draws them); the encoder
-    increments and the ground travel of :class:`~sonar_gym.odometry.OdometryConfig`
-    (``noise``: its five fields in their order, then the robot's ``max_substep_m`` and
-    ``max_substep_rad``); the physics substeps (``substeps``, or if 0 enough that no wheel
-    travels more than ``max_substep_m`` and the heading turns by at most ``max_substep_rad``
-    per substep); the odometry integrated over them from ``odometry`` (``(x, y, theta)``,
-    {W}; ``integration`` a code :data:`EULER`, :data:`MIDPOINT` or :data:`ARC`); then the
-    true motion from ``start`` while it is clear (:data:`clear_arcs`).
-
-    Returns the ``(K, MOTION_COLUMNS)`` motion table (columns :data:`ENCODER` ...) and the
-    first command that needs the physics (``K`` if none); that command's and the later ones'
-    true poses and path lengths are not written.
-    """
     encoder_std, scale_left, scale_right = noise[0], noise[1], noise[2]
     slip_probability, slip_fraction = noise[3], noise[4]
     max_substep_m, max_substep_rad = noise[5], noise[6]
@@ -406,3 +376,135 @@ def drive_commands(
         motions, 0, start, wheel_base_m, robot_radius_m, bounds, kinds, shapes
     )
     return motions, blocked
+
+
+_DRIVE_ARGUMENTS = (
+    TABLE,  # commands_m
+    NUMBERS,  # draws
+    NUMBERS,  # noise
+    types.float64,  # wheel_base_m
+    types.int64,  # substeps
+    types.int64,  # integration
+    types.UniTuple(types.float64, 3),  # odometry
+    types.UniTuple(types.float64, 3),  # start
+    types.float64,  # robot_radius_m
+    *_SHAPES,
+)
+_DRIVE = types.Tuple((_MOTIONS, types.int64))
+_drive_commands_compiled = compiled(_DRIVE, *_DRIVE_ARGUMENTS, inline=True)(_drive_commands)
+
+
+@compiled(_DRIVE, *_DRIVE_ARGUMENTS)  # type: ignore[misc]
+def drive_commands(
+    commands_m: FloatArray,
+    draws: FloatArray,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+) -> tuple[FloatArray, int]:
+    """:meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` of each of the ``(K, 2)``
+    commanded increments ``commands_m`` (``(d_l, d_r)``, metres), as far as no physics is
+    needed.
+
+    Per command: the draws of ``drive`` (``draws``: ``6 K`` numbers, two standard normals then
+    four uniforms per command, in the order :func:`draw_commands` draws them); the encoder
+    increments and the ground travel of :class:`~sonar_gym.odometry.OdometryConfig`
+    (``noise``: its five fields in their order, then the robot's ``max_substep_m`` and
+    ``max_substep_rad``); the physics substeps (``substeps``, or if 0 enough that no wheel
+    travels more than ``max_substep_m`` and the heading turns by at most ``max_substep_rad``
+    per substep); the odometry integrated over them from ``odometry`` (``(x, y, theta)``,
+    {W}; ``integration`` a code :data:`EULER`, :data:`MIDPOINT` or :data:`ARC`); then the
+    true motion from ``start`` while it is clear (:data:`clear_arcs`).
+
+    Returns the ``(K, MOTION_COLUMNS)`` motion table (columns :data:`ENCODER` ...) and the
+    first command that needs the physics (``K`` if none); that command's and the later ones'
+    true poses and path lengths are not written.
+    """
+    return _drive_commands_compiled(
+        commands_m,
+        draws,
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+    )
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            _MOTIONS,
+            types.int64,
+            types.UniTuple(types.float64, 3),
+            types.Array(types.float64, 2, "C"),
+        )
+    ),
+    *_DRIVE_ARGUMENTS,
+    types.UniTuple(types.float64, 3),  # estimate
+    TABLE,  # covariance
+    types.float64,  # variance_per_m
+)
+def drive_and_predict(
+    commands_m: FloatArray,
+    draws: FloatArray,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+    estimate: tuple[float, float, float],
+    covariance: FloatArray,
+    variance_per_m: float,
+) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
+    """:func:`drive_commands`, then the EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) over
+    the commands' encoder increments from ``estimate`` (``(x, y, theta)``, {W}) and its
+    ``covariance``: :func:`sonar_gym.odometry_kernels.predict_commands` with the paper's
+    Jacobians, ``V`` of ``variance_per_m`` m^2 per metre rolled and no scale variance.
+
+    Returns the motion table, the first command that needs the physics, the predicted pose
+    after the last command (heading wrapped to (-pi, pi]) and its 3x3 covariance.
+    """
+    motions, blocked = _drive_commands_compiled(
+        commands_m,
+        draws,
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+    )
+    predicted, predicted_covariance = predict_commands(
+        estimate,
+        covariance,
+        motions[:, ENCODER : ENCODER + 2],
+        wheel_base_m,
+        variance_per_m,
+        0.0,
+        False,
+    )
+    last = predicted.shape[0] - 1
+    end = (predicted[last, 0], predicted[last, 1], predicted[last, 2])
+    return motions, blocked, end, predicted_covariance

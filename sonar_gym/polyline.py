@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from sonar_gym.odometry import predict_over_motion, propagate_covariance
+from sonar_gym.odometry import propagate_covariance
 from sonar_gym.pose import FloatArray, Pose, vector_norm
-from sonar_gym.robot import DifferentialDriveRobot, MotionResult
+from sonar_gym.robot import ENCODER_COLUMNS, DifferentialDriveRobot, MotionResult, move_commands
 from sonar_gym.world import World
 
 ROUTE_CLEARANCE_M = 0.03
@@ -248,15 +248,17 @@ def follow_route(
     :func:`sonar_gym.odometry.predict_over_motion` with ``V`` of ``variance_per_m`` m^2 per
     metre rolled).
     """
-    wheel_base = robot.wheel_base_for(world)
+    wheel_base = float(robot.wheel_base_for(world))
+    variance = float(variance_per_m)
+    covariance = np.asarray(covariance, dtype=np.float64)
     rolled: list[float] = []
     for target in route.targets_between(*span_m):
-        plan = robot.plan_move(world, target, from_pose=estimate)
-        increments = robot.drive_commands(world, plan, rng).encoder_m
-        estimate, covariance, _ = predict_over_motion(
-            estimate, covariance, increments, wheel_base, variance_per_m
+        plan = np.array(move_commands(estimate, target, wheel_base), dtype=np.float64)
+        motions, estimate, covariance = robot.drive_and_predict(
+            world, plan, rng, estimate, covariance, variance
         )
-        rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments.tolist()]
+        increments = motions[:, ENCODER_COLUMNS].tolist()
+        rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments]
     return FollowedLeg(estimate, covariance, tuple(rolled))
 
 

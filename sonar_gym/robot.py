@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -145,7 +146,7 @@ class CommandRun:
     @property
     def encoder_m(self) -> FloatArray:
         """``(K, 2)`` the encoder increments ``(left, right)``, metres."""
-        return self.motions[:, _ENCODER]
+        return self.motions[:, ENCODER_COLUMNS]
 
     def result(self, command: int) -> MotionResult:
         """Command ``command``'s :class:`MotionResult`."""
@@ -169,8 +170,9 @@ class CommandRun:
         )
 
 
-# the motion table's columns of each quantity
-_ENCODER = slice(drive_kernels.ENCODER, drive_kernels.ENCODER + 2)
+ENCODER_COLUMNS = slice(drive_kernels.ENCODER, drive_kernels.ENCODER + 2)
+"""The motion table's columns of the encoder increments ``(left, right)``, metres."""
+# its columns of the other quantities
 _GROUND = slice(drive_kernels.GROUND, drive_kernels.GROUND + 2)
 _ODOMETRY = slice(drive_kernels.ODOMETRY, drive_kernels.ODOMETRY + 3)
 _TRUE_POSE = slice(drive_kernels.TRUE_POSE, drive_kernels.TRUE_POSE + 3)
@@ -278,7 +280,7 @@ class DifferentialDriveRobot:
         """:meth:`drive` each ``(d_left, d_right)`` of ``commands_m`` (metres) in turn.
 
         The wheels (draws, encoder noise, slip, substeps, odometry) run in one compiled loop
-        (:func:`sonar_gym.drive_kernels.wheel_commands`); so does the true motion while each
+        (:func:`sonar_gym.drive_kernels.drive_commands`); so does the true motion while each
         command's arc is clear of the static shapes (:func:`sonar_gym.drive_kernels.clear_arcs`,
         where pymunk would impose the arc exactly). A command that may touch a shape goes
         through pymunk (:meth:`World.move_robot`). The body is placed at the end of a clear
@@ -295,21 +297,76 @@ class DifferentialDriveRobot:
                 f"argument 'rng' must be a numpy.random.Generator; got {type(rng).__name__}"
             )
         fixed_substeps = 0 if substeps is None else _checked_substeps(substeps)
-        count = len(commands)
-        if count == 0:
+        if len(commands) == 0:
             return CommandRun(np.empty((0, drive_kernels.MOTION_COLUMNS)), np.zeros(0, dtype=bool))
-        wheel_base = float(self.wheel_base_for(world))
-        noise = self.noise
+        motions, collided, pose = self.drive_commands_unchecked(
+            world, commands, rng, fixed_substeps
+        )
+        return CommandRun(motions, collided, pose, self.odometry_pose)
+
+    def drive_commands_unchecked(
+        self,
+        world: World,
+        commands_m: FloatArray,
+        rng: np.random.Generator,
+        substeps: int = 0,
+    ) -> tuple[FloatArray, np.ndarray, Pose]:
+        """:meth:`drive_commands` on checked arguments: ``(K, 2)`` finite float64 increments
+        (metres, ``K >= 1``), a ``Generator`` and ``substeps`` (0: picked per command).
+
+        Returns the motion table (:attr:`CommandRun.motions`), the ``(K,)`` collisions and the
+        true pose after the last command.
+        """
         start = world.robot_pose
-        odometry = start if self.odometry_pose is None else self.odometry_pose
-        draws = [
-            rng.standard_normal(2) if slot % 2 == 0 else rng.random(4) for slot in range(2 * count)
-        ]
-        table = world.static_shape_table
-        radius = float(world.robot_radius)
         motions, blocked = drive_kernels.drive_commands(
-            commands,
-            np.concatenate(draws),
+            *self._wheel_arguments(world, commands_m, rng, substeps, start)
+        )
+        collided, pose = self._physics_after(world, motions, blocked, start)
+        return motions, collided, pose
+
+    def drive_and_predict(
+        self,
+        world: World,
+        commands_m: FloatArray,
+        rng: np.random.Generator,
+        estimate: Pose,
+        covariance: FloatArray,
+        variance_per_m: float,
+    ) -> tuple[FloatArray, Pose, FloatArray]:
+        """:meth:`drive_commands_unchecked` (substeps picked per command), and the EKF
+        prediction over its encoder increments from ``estimate`` and its float64 3x3
+        ``covariance`` (:func:`sonar_gym.odometry.predict_over_motion`, paper Jacobians, ``V``
+        of ``variance_per_m`` m^2 per metre rolled) in the same compiled call
+        (:func:`sonar_gym.drive_kernels.drive_and_predict`).
+
+        Returns the motion table, the predicted pose after the last command and its covariance.
+        """
+        start = world.robot_pose
+        motions, blocked, predicted, predicted_covariance = drive_kernels.drive_and_predict(
+            *self._wheel_arguments(world, commands_m, rng, 0, start),
+            (estimate.x, estimate.y, estimate.theta),
+            covariance,
+            variance_per_m,
+        )
+        self._physics_after(world, motions, blocked, start)
+        return motions, Pose.unchecked(*predicted), predicted_covariance
+
+    def _wheel_arguments(
+        self,
+        world: World,
+        commands_m: FloatArray,
+        rng: np.random.Generator,
+        substeps: int,
+        start: Pose,
+    ) -> tuple[Any, ...]:
+        """The arguments of :func:`sonar_gym.drive_kernels.drive_commands` for ``commands_m``
+        from the true pose ``start``, drawing each command's numbers from ``rng``."""
+        noise = self.noise
+        odometry = start if self.odometry_pose is None else self.odometry_pose
+        table = world.static_shape_table
+        return (
+            commands_m,
+            _command_draws(rng, len(commands_m)),
             np.array(
                 (
                     noise.encoder_std_m_per_sqrt_m,
@@ -322,16 +379,24 @@ class DifferentialDriveRobot:
                 ),
                 dtype=np.float64,
             ),
-            wheel_base,
-            fixed_substeps,
+            float(self.wheel_base_for(world)),
+            substeps,
             INTEGRATIONS.index(self.odometry_integration),
             (odometry.x, odometry.y, odometry.theta),
             (start.x, start.y, start.theta),
-            radius,
+            float(world.robot_radius),
             table.bounds,
             table.kinds,
             table.shapes,
         )
+
+    def _physics_after(
+        self, world: World, motions: FloatArray, blocked: int, start: Pose
+    ) -> tuple[np.ndarray, Pose]:
+        """Complete the motion table ``motions`` of a drive from ``start`` whose commands from
+        ``blocked`` on need the physics: place the body, move it through pymunk where a command
+        may touch a shape, set the odometry. Returns the collisions and the final true pose."""
+        count = len(motions)
         collided = np.zeros(count, dtype=bool)
         pose, first = start, 0
         while True:
@@ -340,6 +405,9 @@ class DifferentialDriveRobot:
                 world.place_robot_on_clear_path(pose)
             if blocked == count:
                 break
+            wheel_base = float(self.wheel_base_for(world))
+            radius = float(world.robot_radius)
+            table = world.static_shape_table
             left, right = motions[blocked, _GROUND].tolist()
             substeps_here = int(motions[blocked, drive_kernels.SUBSTEPS])
             outcome = world.move_robot(
@@ -354,7 +422,7 @@ class DifferentialDriveRobot:
                 motions, first, (pose.x, pose.y, pose.theta), wheel_base, radius, *table.arrays
             )
         self.odometry_pose = Pose.unchecked(*motions[-1, _ODOMETRY].tolist())
-        return CommandRun(motions, collided, pose, self.odometry_pose)
+        return collided, pose
 
     # --- convenience commands -----------------------------------------------------------
 
@@ -413,19 +481,40 @@ class DifferentialDriveRobot:
         else:
             tx, ty = np.asarray(target, dtype=np.float64).reshape(2)
             target_xy, target_heading = (float(tx), float(ty)), None
-        wheel_base = self.wheel_base_for(world)
-        dx, dy = target_xy[0] - belief.x, target_xy[1] - belief.y
-        distance = math.hypot(dx, dy)
-        commands: list[tuple[float, float]] = []
-        heading = belief.theta
-        if distance > 1e-9:
-            bearing = math.atan2(dy, dx)
-            commands.append(_turn_in_place(angle_difference(bearing, heading), wheel_base))
-            commands.append((distance, distance))
-            heading = bearing
-        if target_heading is not None:
-            commands.append(_turn_in_place(angle_difference(target_heading, heading), wheel_base))
-        return commands or [(0.0, 0.0)]
+        return move_commands(belief, target_xy, self.wheel_base_for(world), target_heading)
+
+
+def move_commands(
+    belief: Pose,
+    target_xy: tuple[float, float],
+    wheel_base_m: float,
+    target_heading: float | None = None,
+) -> list[tuple[float, float]]:
+    """:meth:`DifferentialDriveRobot.plan_move` from ``belief`` ({W}) to the point
+    ``target_xy`` (Python floats, metres), then to ``target_heading`` (radians) if not None,
+    for a wheel base of ``wheel_base_m`` metres."""
+    dx, dy = target_xy[0] - belief.x, target_xy[1] - belief.y
+    distance = math.hypot(dx, dy)
+    commands: list[tuple[float, float]] = []
+    heading = belief.theta
+    if distance > 1e-9:
+        bearing = math.atan2(dy, dx)
+        commands.append(_turn_in_place(angle_difference(bearing, heading), wheel_base_m))
+        commands.append((distance, distance))
+        heading = bearing
+    if target_heading is not None:
+        commands.append(_turn_in_place(angle_difference(target_heading, heading), wheel_base_m))
+    return commands or [(0.0, 0.0)]
+
+
+def _command_draws(rng: np.random.Generator, count: int) -> FloatArray:
+    """The ``6 count`` numbers of ``count`` :meth:`DifferentialDriveRobot.drive` commands:
+    per command two standard normals, then four uniforms, drawn from ``rng`` in that order."""
+    draws = np.empty((count, 6))
+    for command in draws:
+        rng.standard_normal(out=command[:2])
+        rng.random(out=command[2:])
+    return draws.reshape(-1)
 
 
 def _turn_in_place(angle_rad: float, wheel_base_m: float) -> tuple[float, float]:
@@ -445,9 +534,11 @@ def _checked_substeps(substeps: int) -> int:
 __all__ = [
     "CommandRun",
     "DifferentialDriveRobot",
+    "ENCODER_COLUMNS",
     "INTEGRATIONS",
     "MotionResult",
     "OdometryConfig",
     "OdometryNoise",
+    "move_commands",
     "unicycle_step",
 ]

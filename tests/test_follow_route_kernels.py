@@ -1,0 +1,131 @@
+""":func:`sonar_gym.polyline.follow_route` (each target's drive and EKF prediction in one
+compiled call, :func:`sonar_gym.drive_kernels.drive_and_predict`) against the public robot and
+odometry calls it replaced (:mod:`tests.follow_route_reference`), bit for bit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sonar_gym import drive_kernels, odometry_kernels
+from sonar_gym.odometry import OdometryConfig
+from sonar_gym.polyline import Route, follow_route
+from sonar_gym.pose import Pose
+from sonar_gym.robot import DifferentialDriveRobot, _command_draws
+from sonar_gym.world import World
+from tests.follow_route_reference import follow_route_reference
+from tests.test_drive_command_kernels import ROOM
+
+
+def _episode(seed: int) -> tuple[World, DifferentialDriveRobot, np.random.Generator]:
+    world = World(ROOM)
+    world.set_robot_pose(Pose(-0.5, -0.2, 0.4))
+    robot = DifferentialDriveRobot(
+        OdometryConfig(slip_probability_per_m=0.3, scale_error_left=0.01),
+        odometry_pose=Pose(-0.48, -0.21, 0.38) if seed % 2 else None,
+    )
+    return world, robot, np.random.default_rng(seed)
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_following_a_route_is_the_plan_drive_and_prediction_of_each_target(
+    seed: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    moves = 0
+    move_robot = World.move_robot
+
+    def counted_move(world: World, *args: object) -> object:
+        nonlocal moves
+        moves += 1
+        return move_robot(world, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(World, "move_robot", counted_move)
+    draw = np.random.default_rng(100 + seed)
+    # corners anywhere in the room (through walls and obstacles, so some commands need pymunk),
+    # a repeated one (a target the estimate already stands on) and the start itself
+    corners = draw.uniform((-1.9, -1.4), (1.9, 1.4), (6, 2))
+    corners = np.vstack([[(-0.5, -0.2)], corners[:3], corners[2:3], corners[3:]])
+    route = Route.through(corners)
+    fast, reference = _episode(seed), _episode(seed)
+    estimates = [Pose(-0.5, -0.2, 0.4)] * 2
+    covariances = [np.diag([1e-4, 2e-4, 1e-3])] * 2
+    stations = np.sort(draw.uniform(0.0, route.length_m + 0.5, 8)).tolist()
+    for start, stop in zip([0.0, *stations], stations, strict=False):
+        legs = []
+        for index, ((world, robot, rng), follow) in enumerate(
+            zip((fast, reference), (follow_route, follow_route_reference), strict=True)
+        ):
+            leg = follow(
+                robot,
+                world,
+                route,
+                (start, stop),
+                estimates[index],
+                covariances[index],
+                2.5e-5,
+                rng,
+            )
+            estimates[index], covariances[index] = leg.estimate, leg.covariance
+            legs.append(leg)
+        assert legs[0].estimate == legs[1].estimate
+        assert np.array_equal(legs[0].covariance, legs[1].covariance)
+        assert legs[0].rolled_m == legs[1].rolled_m
+        assert fast[0].robot_pose == reference[0].robot_pose
+        assert fast[1].odometry_pose == reference[1].odometry_pose
+        assert fast[2].bit_generator.state == reference[2].bit_generator.state
+    assert moves > 0, "some commands must go through pymunk"
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_fused_call_is_the_drive_then_the_prediction(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    count = int(rng.integers(1, 6))
+    commands = rng.uniform(-1.0, 1.0, (count, 2))
+    commands[rng.random(count) < 0.3] = 0.0
+    draws = _command_draws(rng, count)
+    noise = np.array([0.005, 0.01, -0.002, 0.3, 0.2, 0.02, math.radians(3.0)])
+    world = World(ROOM)
+    common = (
+        commands,
+        draws,
+        noise,
+        0.37,
+        0,
+        1,
+        tuple(rng.uniform(-1.0, 1.0, 3).tolist()),
+        (-0.5, -0.2, 0.4),
+        world.robot_radius,
+        *world.static_shape_table.arrays,
+    )
+    estimate = tuple(rng.uniform(-1.0, 1.0, 3).tolist())
+    root = rng.standard_normal((3, 3))
+    covariance = root @ root.T
+    motions, blocked, end, predicted_covariance = drive_kernels.drive_and_predict(
+        *common, estimate, covariance, 3e-5
+    )
+    expected_motions, expected_blocked = drive_kernels.drive_commands(*common)
+    poses, expected_covariance = odometry_kernels.predict_commands(
+        estimate, covariance, expected_motions[:, :2], 0.37, 3e-5, 0.0, False
+    )
+    assert blocked == expected_blocked
+    # the true poses and path lengths of the commands from the blocked one on are not written
+    written = drive_kernels.TRUE_POSE
+    assert np.array_equal(motions[:, :written], expected_motions[:, :written])
+    assert np.array_equal(motions[:blocked], expected_motions[:blocked])
+    assert end == tuple(poses[-1].tolist())
+    assert np.array_equal(predicted_covariance, expected_covariance)
+
+
+def test_the_draws_of_a_run_are_drives_draws_in_its_order() -> None:
+    fast, reference = np.random.default_rng(7), np.random.default_rng(7)
+    for count in (1, 2, 3, 50):
+        expected = np.concatenate(
+            [
+                reference.standard_normal(2) if slot % 2 == 0 else reference.random(4)
+                for slot in range(2 * count)
+            ]
+        )
+        assert np.array_equal(_command_draws(fast, count), expected)
+        assert fast.bit_generator.state == reference.bit_generator.state
