@@ -70,6 +70,8 @@ HEADING_STD_SCALE_RAD = math.radians(15.0)
 """Covariance feature: ``sqrt(P_thth) / 15 deg`` (clipped to 1)."""
 DISTANCE_SCALE_M = 2.0
 """Feature: distance driven since the last accepted fix / 2 m (clipped to 1)."""
+_STD_SCALES = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD)
+"""The scales of ``sqrt(P_xx)``, ``sqrt(P_yy)``, ``sqrt(P_thth)`` in the observation."""
 MAX_MAP_CELLS = 4_000_000
 """Largest voting map the env builds: cells of the scenario's bounds (100 m x 100 m of 5 cm)."""
 _RUNNING = "running"
@@ -583,17 +585,16 @@ class SweepLocalizationEnv(SonarEnv):
         estimate = episode.estimate
         low, high = self._bounds
         variances = episode.covariance.diagonal().tolist()
-        scales = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD)
         # The scalar features around the range bins, each run in declaration order.
         observation.write_from(
             "estimate_xy",
             [
                 *ScaledPosition.float_values((estimate.x, estimate.y), low, high),
                 *Heading.values(estimate.theta),
-                *(
+                *[
                     min(max(math.sqrt(max(variance, 0.0)) / scale, 0.0), 1.0)
-                    for variance, scale in zip(variances, scales, strict=True)
-                ),
+                    for variance, scale in zip(variances, _STD_SCALES, strict=True)
+                ],
                 min(episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0),
                 min(episode.progress_m / max(episode.route.length_m, 1e-9), 1.0),
             ],
