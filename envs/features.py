@@ -93,13 +93,19 @@ class ScaledPosition(Feature):
         Args:
             position, low, high: ``(size,)`` in the same frame and unit (metres in {W}).
         """
+        return np.array(ScaledPosition.float_values(position, low, high), dtype=np.float64)
+
+    @staticmethod
+    def float_values(
+        position: npt.ArrayLike, low: npt.ArrayLike, high: npt.ArrayLike
+    ) -> list[float]:
+        """:meth:`values` as Python floats."""
         # On Python floats: numpy's six calls on two coordinates cost more than the arithmetic,
         # which rounds the same, step by step; min and max clip as np.clip does (NaN stays).
-        scaled = [
+        return [
             min(max(2.0 * (p - lo) / (hi - lo) - 1.0, -1.0), 1.0)
             for p, lo, hi in zip(_floats(position), _floats(low), _floats(high), strict=True)
         ]
-        return np.array(scaled, dtype=np.float64)
 
     @staticmethod
     def centred_values(
@@ -259,6 +265,18 @@ class ObservationWriter:
 
     def __setitem__(self, name: str, values: npt.ArrayLike | float) -> None:
         self.vector[self._layout[name]] = values
+
+    def write_from(self, name: str, values: Sequence[float]) -> None:
+        """Write ``values`` from the first entry of feature ``name`` on, into it and the
+        features after it: a run of features filled in one assignment."""
+        start = self._layout[name].start
+        stop = start + len(values)
+        if stop > len(self.vector):
+            raise ValueError(
+                f"{len(values)} values from feature {name!r} (entry {start}) overrun the "
+                f"vector of {len(self.vector)}"
+            )
+        self.vector[start:stop] = values
 
     def one_hot(self, name: str, index: int) -> None:
         """Set entry ``index`` of feature ``name`` to 1 (a one-hot group)."""

@@ -70,6 +70,8 @@ HEADING_STD_SCALE_RAD = math.radians(15.0)
 """Covariance feature: ``sqrt(P_thth) / 15 deg`` (clipped to 1)."""
 DISTANCE_SCALE_M = 2.0
 """Feature: distance driven since the last accepted fix / 2 m (clipped to 1)."""
+_STD_SCALES = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD)
+"""The scales of ``sqrt(P_xx)``, ``sqrt(P_yy)``, ``sqrt(P_thth)`` in the observation."""
 MAX_MAP_CELLS = 4_000_000
 """Largest voting map the env builds: cells of the scenario's bounds (100 m x 100 m of 5 cm)."""
 _RUNNING = "running"
@@ -581,26 +583,23 @@ class SweepLocalizationEnv(SonarEnv):
         episode = self._require_episode()
         observation = self.observation_spec.writer()
         estimate = episode.estimate
-        (x_min, y_min), (x_max, y_max) = self._bounds
-        observation["estimate_xy"] = ScaledPosition.values(
-            (estimate.x, estimate.y), (x_min, y_min), (x_max, y_max)
-        )
-        observation["estimate_heading"] = Heading.values(estimate.theta)
+        low, high = self._bounds
         variances = episode.covariance.diagonal().tolist()
-        scales = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD)
-        observation["estimate_std"] = [
-            min(max(math.sqrt(max(variance, 0.0)) / scale, 0.0), 1.0)
-            for variance, scale in zip(variances, scales, strict=True)
-        ]
-        observation["distance_since_fix"] = min(
-            episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0
-        )
-        observation["route_progress"] = min(
-            episode.progress_m / max(episode.route.length_m, 1e-9), 1.0
+        # The scalar features around the range bins, each run in declaration order.
+        observation.write_from(
+            "estimate_xy",
+            [
+                *ScaledPosition.float_values((estimate.x, estimate.y), low, high),
+                *Heading.values(estimate.theta),
+                *[
+                    min(max(math.sqrt(max(variance, 0.0)) / scale, 0.0), 1.0)
+                    for variance, scale in zip(variances, _STD_SCALES, strict=True)
+                ],
+                min(episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0),
+                min(episode.progress_m / max(episode.route.length_m, 1e-9), 1.0),
+            ],
         )
         observation["last_sweep_ranges"] = self._sweep_bins.values(episode.last_ranges)
-        observation["last_sweep_sector"] = Heading.values(SECTOR_CENTRES_RAD[episode.last_sector])
-        observation["last_fix_ok"] = float(episode.last_fix_ok)
         station_x, station_y = self._next_station_point(episode)
         ahead_x, ahead_y = station_x - estimate.x, station_y - estimate.y
         bearing = (
@@ -608,10 +607,17 @@ class SweepLocalizationEnv(SonarEnv):
             if ahead_x != 0.0 or ahead_y != 0.0
             else 0.0
         )
-        observation["route_heading"] = Heading.values(bearing)
         remaining = len(episode.decision_stations_m) - episode.decisions
-        observation["steps_remaining"] = remaining / len(episode.decision_stations_m)
-        return np.clip(observation.vector, -1.0, 1.0)
+        observation.write_from(
+            "last_sweep_sector",
+            [
+                *Heading.values(SECTOR_CENTRES_RAD[episode.last_sector]),
+                float(episode.last_fix_ok),
+                *Heading.values(bearing),
+                remaining / len(episode.decision_stations_m),
+            ],
+        )
+        return observation.vector.clip(-1.0, 1.0)
 
     def _next_station_point(self, episode: _Episode) -> tuple[float, float]:
         stations = episode.decision_stations_m

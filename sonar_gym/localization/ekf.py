@@ -49,6 +49,9 @@ from sonar_gym.pose import FloatArray, Pose, wrap_angle
 
 Integration = Literal["paper", "midpoint"]
 INTEGRATIONS: tuple[str, ...] = ("paper", "midpoint")
+_IDENTITY = np.eye(3)
+"""``I`` over ``[x, y, theta]``; its first rows are the observation ``H`` of a fix."""
+_IDENTITY.flags.writeable = False
 
 __all__ = [
     "INTEGRATIONS",
@@ -357,7 +360,7 @@ def ekf_update_unchecked(
     """
     prior, noise = covariance, measurement_covariance
     rows = noise.shape[0]
-    observation = np.eye(3)[:rows]
+    observation = _IDENTITY[:rows]
     innovation = np.array(
         [
             measured_pose.x - pose.x,
@@ -366,17 +369,22 @@ def ekf_update_unchecked(
         ]
     )[:rows]
     innovation_covariance = observation @ prior @ observation.T + noise
-    try:
-        inverse = np.linalg.inv(innovation_covariance)
-        if not np.all(np.isfinite(inverse)):
-            raise np.linalg.LinAlgError
-    except np.linalg.LinAlgError:
-        inverse = np.linalg.pinv(innovation_covariance)
-    gain = prior @ observation.T @ inverse
-    state = pose.as_array() + gain @ innovation
-    correction = np.eye(3) - gain @ observation
+    gain = prior @ observation.T @ _inverse_or_pseudo_inverse(innovation_covariance)
+    dx, dy, dtheta = (gain @ innovation).tolist()
+    correction = _IDENTITY - gain @ observation
     if joseph_form:
         posterior = correction @ prior @ correction.T + gain @ noise @ gain.T
     else:
         posterior = correction @ prior
-    return Pose.from_array(state), _symmetrised(posterior)
+    return Pose(pose.x + dx, pose.y + dy, pose.theta + dtheta), _symmetrised(posterior)
+
+
+def _inverse_or_pseudo_inverse(matrix: FloatArray) -> FloatArray:
+    """``np.linalg.inv(matrix)``, or its pseudo-inverse where that fails or is not finite."""
+    try:
+        inverse = np.linalg.inv(matrix)
+    except np.linalg.LinAlgError:
+        return np.linalg.pinv(matrix)  # type: ignore[return-value]
+    if all(map(math.isfinite, inverse.ravel().tolist())):
+        return inverse  # type: ignore[return-value]
+    return np.linalg.pinv(matrix)  # type: ignore[return-value]

@@ -267,30 +267,28 @@ def echo_candidates(
         n_specular,
         tables.has_t_junctions,
     )
+    kept = rel.take(keep, axis=0)  # the rows of rel at keep, gathered once as keep narrows
     if footprint_center is not None and footprint_radius_m > 0.0:
         fx, fy = float(footprint_center[0]), float(footprint_center[1])
         if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
-            outside = (
-                np.hypot(rel[keep, 0] + (px - fx), rel[keep, 1] + (py - fy)) >= footprint_radius_m
-            )
-            keep = keep[outside]
-    keep = keep[
-        _unoccluded(
-            tables,
-            mapped[tables.occlusion_rows].reshape(-1, 3),
-            rel.take(keep, axis=0),
-            ranges.take(keep),
-            centre_distance,
-            occluders,
-        )
-    ]
-    keep = keep[ranges.take(keep).argsort(kind="stable")]
-    path_lengths = ranges.take(keep)
+            outside = np.hypot(kept[:, 0] + (px - fx), kept[:, 1] + (py - fy)) >= footprint_radius_m
+            keep, kept = keep[outside], kept[outside]
+    clear = _unoccluded(
+        tables,
+        mapped[tables.occlusion_rows].reshape(-1, 3),
+        kept,
+        ranges.take(keep),
+        centre_distance,
+        occluders,
+    )
+    keep, directions, path_lengths, kept_amplitudes = kernels.nearest_first(
+        keep, clear, kept, ranges, amplitudes
+    )
     return EchoCandidates(
         position=np.array((px, py)),
-        directions=rel.take(keep, axis=0)[:, :2] / path_lengths[:, None],
+        directions=directions,
         path_lengths=path_lengths,
-        amplitudes=amplitudes.take(keep),
+        amplitudes=kept_amplitudes,
         _primitive_indices=keep,
         _concave=concave,
         _tables=tables,

@@ -361,3 +361,71 @@ def passing_candidates(
         row = 5 * n_candidates + occluder
         occluders[occluder] = tested[row] >= inclusive_bounds[row - 2 * n_candidates]
     return keep[:n_kept].copy(), occluders
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.int64, 1, "C"),
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+        )
+    ),
+    INDICES,  # keep
+    FLAGS,  # clear
+    TABLE,  # kept
+    NUMBERS,  # ranges
+    NUMBERS,  # amplitudes
+)
+def nearest_first(
+    keep: np.ndarray,
+    clear: np.ndarray,
+    kept: FloatArray,
+    ranges: FloatArray,
+    amplitudes: FloatArray,
+) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+    """The last step of :func:`sonar_gym.sonar.echoes.echo_candidates`: the candidates
+    ``keep[clear]`` ordered nearest first, as ``argsort(kind="stable")`` orders their ranges
+    (ties in their order, NaN last), and ``(indices, (K, 2) unit directions, path lengths,
+    amplitudes)`` of them.
+
+    Args:
+        keep: ``(P,)`` candidate indices.
+        clear: ``(P,)`` which of them to keep.
+        kept: ``(P, >= 2)`` each one's offset ``rel`` from the sensor ({W}, metres).
+        ranges, amplitudes: per candidate index (metres, 1/m).
+    """
+    n_clear = 0
+    for place in range(keep.shape[0]):
+        if clear[place]:
+            n_clear += 1
+    order = np.empty(n_clear, dtype=np.int64)  # places in keep, nearest first
+    n_sorted = 0
+    for place in range(keep.shape[0]):
+        if not clear[place]:
+            continue
+        distance = ranges[keep[place]]
+        slot = n_sorted
+        while slot > 0:
+            before = ranges[keep[order[slot - 1]]]
+            if not (distance < before or (before != before and distance == distance)):
+                break
+            order[slot] = order[slot - 1]
+            slot -= 1
+        order[slot] = place
+        n_sorted += 1
+    indices = np.empty(n_clear, dtype=np.int64)
+    directions = np.empty((n_clear, 2))
+    path_lengths = np.empty(n_clear)
+    kept_amplitudes = np.empty(n_clear)
+    for rank in range(n_clear):
+        place = order[rank]
+        candidate = keep[place]
+        path_length = ranges[candidate]
+        indices[rank] = candidate
+        directions[rank, 0] = kept[place, 0] / path_length
+        directions[rank, 1] = kept[place, 1] / path_length
+        path_lengths[rank] = path_length
+        kept_amplitudes[rank] = amplitudes[candidate]
+    return indices, directions, path_lengths, kept_amplitudes

@@ -116,15 +116,19 @@ class SweptSonar(PulseEchoSonar):
     ) -> Scan:
         """One sweep from the robot at ``pose`` ({W}) about ``sector_center`` (radians, {R})."""
         angles, directions = self._grid(sector_center)
-        sensor_xy = pose.transform_point(world.scenario.robot.sensor_offset)
+        # pose.transform_point of the offset, on floats: the same arithmetic
+        offset_x, offset_y = world.scenario.robot.sensor_offset
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        sensor_xy = np.array(
+            (pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
+        )
         ranges, amplitudes = self.ping(world, pose, sensor_xy, directions, rng)
         transducer = self.transducer
-        duration = (angles[-1] - angles[0]) / transducer.pan_speed_rad_s + len(
+        first, last = float(angles[0]), float(angles[-1])
+        duration = (last - first) / transducer.pan_speed_rad_s + len(
             angles
         ) * transducer.listen_time_s
-        return Scan(
-            angles=angles.copy(), ranges=ranges, amplitudes=amplitudes, duration_s=float(duration)
-        )
+        return Scan(angles=angles.copy(), ranges=ranges, amplitudes=amplitudes, duration_s=duration)
 
 
 @functools.lru_cache(maxsize=256)

@@ -216,3 +216,12 @@ def test_the_feature_types_are_registered_by_their_kind() -> None:
         kind: kind for kind in FEATURE_TYPES
     }
     assert {"scaled_position", "heading", "range_bins", "scanned_bins"} <= set(FEATURE_TYPES)
+
+
+def test_write_from_fills_a_run_of_features_and_refuses_an_overrun() -> None:
+    spec = ObservationSpec([Feature("a", 2), Feature("b"), Feature("c", 3)])
+    observation = spec.writer()
+    observation.write_from("b", [0.25, -0.5, 0.5, 1.0])
+    assert observation.vector.tolist() == [0.0, 0.0, 0.25, -0.5, 0.5, 1.0]
+    with pytest.raises(ValueError, match="overrun"):
+        observation.write_from("c", [0.0] * 4)
