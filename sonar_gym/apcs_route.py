@@ -323,8 +323,8 @@ class APCSRoute:
         consumed = result.consumed
         kept = [index for index in samples if index < consumed]
         if consumed < len(commanded):  # a correction: the rest was planned from the old estimate
-            self.world.set_robot_pose(Pose(*motion.true_poses[consumed - 1]))
-            self.robot.odometry_pose = Pose(*motion.odometry_poses[consumed - 1])
+            self.world.set_robot_pose(Pose.unchecked(*motion.true_poses[consumed - 1].tolist()))
+            self.robot.odometry_pose = Pose.unchecked(*motion.odometry_poses[consumed - 1].tolist())
             plan.draws.rewind(self.motion_rng, consumed)
             self.sensor_rng.bit_generator.state = sensor_state
             if kept and echoes is not None:  # the draws of the kept readings, in their order
@@ -369,7 +369,9 @@ class APCSRoute:
         summary.dropped_groups += sum(result.dropped.values())
         for wall in result.walls:
             truth = (
-                Pose(*true_poses[wall.command_index]) if wall.command_index >= 0 else self.true_pose
+                Pose.unchecked(*true_poses[wall.command_index].tolist())
+                if wall.command_index >= 0
+                else self.true_pose
             )
             summary.detected[wall.side] += 1
             if wall.match.matched:

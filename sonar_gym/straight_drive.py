@@ -199,7 +199,7 @@ def drive_commands(
             world, ground[first:], ground_turn[first:], true_poses[first:]
         )
         if free > first:  # the path to it was shown clear of every static shape
-            world.place_robot_on_clear_path(Pose(*true_poses[free - 1]))
+            world.place_robot_on_clear_path(Pose.unchecked(*true_poses[free - 1].tolist()))
         if free == count:
             break
         draws.rewind(rng, free)
@@ -218,7 +218,7 @@ def drive_commands(
         odometry_theta_after,
         (odometry.x, odometry.y),
     )
-    robot.odometry_pose = Pose(*odometry_poses[-1])
+    robot.odometry_pose = Pose.unchecked(*odometry_poses[-1].tolist())
     return StraightRun(
         encoder[:, 0].copy(), encoder[:, 1].copy(), true_poses, odometry_poses, collided
     )

@@ -196,6 +196,7 @@ class WallStream:
     def __init__(self, side: str, params: APCSParameters = DEFAULT_PARAMETERS) -> None:
         self.side = _check_side(side)
         self.params = params
+        self._beam_offset_rad = BEAM_OFFSET_RAD[self.side]
         self._previous: tuple[tuple[float, float], float, float] | None = None
         self._group_points: list[tuple[float, float]] = []
         self._group_directions: list[float] = []
@@ -265,24 +266,33 @@ class WallStream:
         Returns:
             The verdicts of the groups this reading closed.
         """
-        # Plain floats: this runs once per reading, where numpy's per-call cost dominates.
         sensor_x, sensor_y = sensor_xy
-        direction = heading_rad + BEAM_OFFSET_RAD[self.side]
-        self._previous = ((float(sensor_x), float(sensor_y)), direction, float(range_m))
+        self._previous = (
+            (float(sensor_x), float(sensor_y)),
+            heading_rad + self._beam_offset_rad,
+            float(range_m),
+        )
         if erp is None:
             return []
         (point_x, point_y), phi = erp
-        point = (float(point_x), float(point_y))
-        closed: list[ClosedGroup] = []
-        if self._group_points:
-            last_x, last_y = self._group_points[-1]
-            step_x, step_y = point[0] - last_x, point[1] - last_y
+        return list(self._accept_erp(float(point_x), float(point_y), float(phi)))
+
+    def _accept_erp(self, point_x: float, point_y: float, phi: float) -> tuple[ClosedGroup, ...]:
+        """Add one ERP (plain floats, metres and radians) to the open group; returns the
+        verdicts of the groups it closed. The reading itself is stored by the caller."""
+        # Plain floats: this runs once per reading, where numpy's per-call cost dominates.
+        group_points = self._group_points
+        closed: tuple[ClosedGroup, ...] = ()
+        if group_points:
+            last_x, last_y = group_points[-1]
+            step_x, step_y = point_x - last_x, point_y - last_y
             if step_x * step_x + step_y * step_y > self.params.grouping_distance_squared_m2:
-                closed.append(self._close())
-        self._group_points.append(point)
-        self._group_directions.append(float(phi))
-        if len(self._group_points) >= self.params.max_group_size:
-            closed.append(self._close())
+                closed = (self._close(),)
+                group_points = self._group_points
+        group_points.append((point_x, point_y))
+        self._group_directions.append(phi)
+        if len(group_points) >= self.params.max_group_size:
+            closed = (*closed, self._close())
         return closed
 
     def add(
@@ -531,9 +541,10 @@ class APCSTracker:
                 points, phis, valid = self.streams[side]._pending(
                     sensor_xy, rows[:, 2], ranges[side][first_sample:]
                 )
+                # Flat lists of floats (x0, y0, x1, ...): no list per row to allocate.
                 pending[side] = (
-                    sensor_xy.tolist(),
-                    points.tolist(),
+                    sensor_xy.ravel().tolist(),
+                    points.ravel().tolist(),
                     phis.tolist(),
                     valid.tolist(),
                 )
@@ -542,20 +553,26 @@ class APCSTracker:
             while event < len(events) and not corrected and sample_list[events[event][0]] < limit:
                 m, side = events[event]
                 event += 1
-                sensor_xy, points, phis, valid = pending[side]
+                sensor_coordinates, erp_coordinates, erp_phis, erp_valid = pending[side]
                 row = m - first_sample
-                erp = (points[row], phis[row]) if valid[row] else None
-                if erp is not None:
-                    result.erps.append((erp[0][0], erp[0][1], side))
-                groups = self.streams[side].accept(
-                    sensor_xy[row], headings[row], range_lists[side][m], erp
+                stream = self.streams[side]
+                # WallStream.accept on plain floats
+                stream._previous = (
+                    (sensor_coordinates[2 * row], sensor_coordinates[2 * row + 1]),
+                    headings[row] + stream._beam_offset_rad,
+                    range_lists[side][m],
                 )
+                if not erp_valid[row]:
+                    continue
+                point_x, point_y = erp_coordinates[2 * row], erp_coordinates[2 * row + 1]
+                result.erps.append((point_x, point_y, side))
+                groups = stream._accept_erp(point_x, point_y, erp_phis[row])
                 if groups:
                     command = sample_list[m]
                     # Only a verified wall reads the estimate (most closed groups are dropped);
                     # the end of the run sets it in any case.
                     if any(group.fit.wall is not None for group in groups):
-                        self.estimate = Pose(*poses[command + 1])
+                        self.estimate = Pose.unchecked(*poses[command + 1].tolist())
                         self.covariance = covariances[command + 1]
                     corrected = self.handle_groups(side, groups, command, result)
             if corrected:
@@ -578,7 +595,7 @@ class APCSTracker:
             result.consumed = limit
             result.estimated_path = result.estimated_path[:limit]
         if limit:
-            self.estimate = Pose(*poses[limit])
+            self.estimate = Pose.unchecked(*poses[limit].tolist())
             self.covariance = covariances[limit].copy()
         return result
 

@@ -334,3 +334,30 @@ def test_closed_groups_get_fit_wall_groups_verdict(readings: int) -> None:
         expected = fit_wall_group(erps, range(len(group.points)))
         assert group.fit.status == expected.status
         assert group.fit.erp_indices == expected.erp_indices
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_stream_groups_are_group_erps_of_its_erps(seed: int) -> None:
+    """Reading by reading, the closed groups split the ERP sequence as group_erps does: at
+    every jump beyond the grouping distance and at the largest group size."""
+    from sonar_gym.localization.apcs import group_erps
+
+    rng = np.random.default_rng(seed)
+    stream = WallStream("left")
+    erps: list[np.ndarray] = []
+    groups = []
+    base_range = 1.0
+    for k in range(120):
+        if rng.random() < 0.08:  # a step in the wall: a discontinuity of the ERPs
+            base_range = float(rng.uniform(0.5, 2.0))
+        range_m = math.nan if rng.random() < 0.05 else base_range + rng.normal(0.0, 0.002)
+        erp, closed = stream.add([0.03 * k, 0.0], 0.0, range_m)
+        if erp is not None:
+            erps.append(erp)
+        groups += closed
+    groups += stream.flush()
+    expected = group_erps(np.array(erps))
+    assert len(expected) > 3
+    assert [len(group.points) for group in groups] == [len(group) for group in expected]
+    for group, indices in zip(groups, expected, strict=True):
+        assert np.array_equal(group.points, np.array(erps)[list(indices)])
