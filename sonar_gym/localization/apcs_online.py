@@ -267,15 +267,19 @@ class WallStream:
             The verdicts of the groups this reading closed.
         """
         sensor_x, sensor_y = sensor_xy
-        self._previous = (
-            (float(sensor_x), float(sensor_y)),
-            heading_rad + self._beam_offset_rad,
-            float(range_m),
-        )
+        self._remember(float(sensor_x), float(sensor_y), float(heading_rad), float(range_m))
         if erp is None:
             return []
         (point_x, point_y), phi = erp
         return list(self._accept_erp(float(point_x), float(point_y), float(phi)))
+
+    def _remember(
+        self, sensor_x: float, sensor_y: float, heading_rad: float, range_m: float
+    ) -> None:
+        """Store the latest reading (plain floats: sensor position and robot heading in the
+        frame of the estimate, metres and radians; range in metres), which the next
+        :meth:`pending_erps` pairs with."""
+        self._previous = ((sensor_x, sensor_y), heading_rad + self._beam_offset_rad, range_m)
 
     def _accept_erp(self, point_x: float, point_y: float, phi: float) -> tuple[ClosedGroup, ...]:
         """Add one ERP (plain floats, metres and radians) to the open group; returns the
@@ -557,9 +561,10 @@ class APCSTracker:
                 row = m - first_sample
                 stream = self.streams[side]
                 # WallStream.accept on plain floats
-                stream._previous = (
-                    (sensor_coordinates[2 * row], sensor_coordinates[2 * row + 1]),
-                    headings[row] + stream._beam_offset_rad,
+                stream._remember(
+                    sensor_coordinates[2 * row],
+                    sensor_coordinates[2 * row + 1],
+                    headings[row],
                     range_lists[side][m],
                 )
                 if not erp_valid[row]:
