@@ -174,7 +174,7 @@ def unoccluded(
 ) -> np.ndarray:
     """``(paths,)`` which paths no occluding segment crosses and no circle cuts.
 
-    The tests of :func:`sonar_gym.sonar.echoes._unoccluded`, path by path.
+    The tests of :func:`sonar_gym.sonar.echoes._unoccluded_nearest_first`, path by path.
 
     Args:
         products: ``(3 S + C, paths)`` the occlusion map times each path (crossing
