@@ -505,6 +505,7 @@ class SweepLocalizationEnv(SonarEnv):
         scanned: list[tuple[Sweep, Pose]] = []
         duration_s = 0.0
         offset = episode.world.scenario.robot.sensor_offset
+        grid = self.sonar.sweep_grid(SECTOR_CENTRES_RAD[sector])
         for index in range(n_sweeps):
             if index > 0 and episode.progress_m < next_station_m:
                 self._drive_to(
@@ -513,14 +514,14 @@ class SweepLocalizationEnv(SonarEnv):
             # the first sweep is taken where the robot stood at the decision
             true_pose = first_truth if index == 0 else episode.world.robot_pose
             with self._timed("sensing"):
-                scan = self.sonar.sweep(
-                    episode.world, true_pose, self.np_random, SECTOR_CENTRES_RAD[sector]
+                angles, ranges, _, sweep_duration_s = self.sonar.sweep_readings(
+                    episode.world, true_pose, self.np_random, grid
                 )
-            duration_s += scan.duration_s
+            duration_s += sweep_duration_s
             odometry = _relative_pose(first_estimate, episode.estimate)
-            sweeps.append(Sweep.unchecked(scan.angles, scan.ranges, offset, odometry))
+            sweeps.append(Sweep.unchecked(angles, ranges, offset, odometry))
             scanned.append((sweeps[-1], true_pose))
-            episode.last_ranges = scan.ranges / self.sonar.transducer.max_range_m
+        episode.last_ranges = sweeps[-1].ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector
         episode.scanned = tuple(scanned)
         with self._timed("localization"):

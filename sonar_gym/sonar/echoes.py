@@ -220,13 +220,11 @@ def echo_candidates(
     """
     tables = echo_tables(geometry, _PLANE, _CYLINDER, _EDGE)
     px, py = float(position[0]), float(position[1])
-    n_specular = tables.n_segments + tables.n_circles
 
     # The map's product holds every quantity affine in the position, and gets the ranges and
     # amplitudes written into its rows for them: from first_test_row on it is then every
     # per-candidate test, two comparisons in all.
     mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
-    rel = mapped[tables.rel_rows].reshape(-1, 3)  # (rel_x, rel_y, 1) per candidate
     # Ranges (planes and vertices |rel|, a cylinder its centre distance minus its radius,
     # written into the map's ranges rows), the cylinders' offsets moved to their echo points,
     # and the on-axis laws of the module docstring, candidate by candidate.
@@ -237,52 +235,40 @@ def echo_candidates(
         tables.radius,
         edge_law_constants(edge_law, wavenumber),
     )
-    ranges = mapped[tables.ranges_rows]
-    amplitudes = mapped[tables.amplitudes_rows]
-    absorbs = absorption_db_per_m > 0.0
-    if not absorbs and receiver_gain is None:
-        amplitudes[:] = on_axis
-    else:
-        if absorbs:
-            # 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10)
-            absorption = np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
-            if receiver_gain is None:
-                np.multiply(on_axis, absorption, out=amplitudes)
-            else:
-                on_axis = on_axis * absorption
-        if receiver_gain is not None:
-            np.multiply(on_axis, receiver_gain.gain(safe), out=amplitudes)
+    # Air absorption 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10) and the receiver's gain
+    # as factors here; the amplitudes, their products, are written by the tests' loop below.
+    absorption = (
+        np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
+        if absorption_db_per_m > 0.0
+        else _NO_FACTORS
+    )
+    gain = _NO_FACTORS if receiver_gain is None else receiver_gain.gain(safe)
 
     # The tests, as rows of `mapped` against bounds: strictly, the foot inside the segment
     # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
     # minimum range and the threshold (a candidate is valid if it passes all five), then
-    # which segments and circles may occlude.
-    keep, occluders = kernels.passing_candidates(
-        mapped[tables.first_test_row :],
+    # which segments and circles may occlude; then the robot's footprint.
+    footprint = _NO_FOOTPRINT
+    if footprint_center is not None and footprint_radius_m > 0.0:
+        fx, fy = float(footprint_center[0]), float(footprint_center[1])
+        if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
+            footprint = np.array((px - fx, py - fy, footprint_radius_m))
+    keep, kept, occluders = kernels.audible_candidates(
+        mapped,
+        tables.search_layout,
+        on_axis,
+        absorption,
+        gain,
         tables.strict_bounds,
         tables.inclusive_bounds(max(min_range_m, 1e-9), detection_threshold),
         concave,
         tables.twin,
         tables.twin_comes_last,
-        n_specular,
         tables.has_t_junctions,
+        footprint,
     )
-    kept = rel.take(keep, axis=0)  # the rows of rel at keep, gathered once as keep narrows
-    if footprint_center is not None and footprint_radius_m > 0.0:
-        fx, fy = float(footprint_center[0]), float(footprint_center[1])
-        if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
-            outside = np.hypot(kept[:, 0] + (px - fx), kept[:, 1] + (py - fy)) >= footprint_radius_m
-            keep, kept = keep[outside], kept[outside]
-    clear = _unoccluded(
-        tables,
-        mapped[tables.occlusion_rows].reshape(-1, 3),
-        kept,
-        ranges.take(keep),
-        centre_distance,
-        occluders,
-    )
-    keep, directions, path_lengths, kept_amplitudes = kernels.nearest_first(
-        keep, clear, kept, ranges, amplitudes
+    keep, directions, path_lengths, kept_amplitudes = _unoccluded_nearest_first(
+        tables, mapped, keep, kept, centre_distance, occluders
     )
     return EchoCandidates(
         position=np.array((px, py)),
@@ -296,15 +282,17 @@ def echo_candidates(
     )
 
 
-def _unoccluded(
+def _unoccluded_nearest_first(
     tables: EchoTables,
-    matrix: FloatArray,
-    rel: FloatArray,
-    ranges: FloatArray,
+    mapped: FloatArray,
+    keep: np.ndarray,
+    kept: FloatArray,
     centre_distance: FloatArray,
     occluders: np.ndarray,
-) -> np.ndarray:
-    """Which paths ``p -> p + rel`` cross no occluding segment and enter no circle before their end.
+) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+    """The candidates ``keep`` whose paths ``p -> p + rel`` cross no occluding segment and
+    enter no circle before their end, nearest first: ``(indices, (K, 2) unit directions, path
+    lengths, amplitudes)``.
 
     Segments: ``p + u rel = a + v d`` gives ``u = ((a - p) x d) / (rel x d)`` and
     ``v = ((a - p) x rel) / (rel x d)``; a crossing with ``0 <= u <= 1 - tol`` and
@@ -312,20 +300,32 @@ def _unoccluded(
     the path's line nearest the centre, ``u* = (c - p).rel / |rel|^2``, blocks if it lies on
     the path (``0 <= u* <= 1 - tol``) and inside the circle. (Beyond the path's end the nearest
     point of the path is its end, an echo point on another surface, never inside a circle; the
-    reflecting cylinder itself has ``u* > 1``.) The products are numpy's; the tests run path
-    by path in :func:`sonar_gym.sonar.kernels.unoccluded`.
+    reflecting cylinder itself has ``u* > 1``.) The products are numpy's; the tests and the
+    ordering run path by path in :func:`sonar_gym.sonar.kernels.clear_nearest_first`.
 
     Args:
-        matrix: ``(3 S + C, 3)``, the occlusion map of ``tables`` at the sensor position
-            (:class:`~sonar_gym.sonar.echo_tables.EchoTables`).
-        rel: ``(K, 3)`` rows ``(rel_x, rel_y, 1)``.
-        ranges: ``(K,)`` path lengths ``|rel|``.
+        mapped: the search map's product at the sensor, its ranges and amplitudes rows written.
+        keep: ``(K,)`` candidate indices; ``kept``: ``(K, 3)`` their rows ``(rel_x, rel_y, 1)``.
         centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
         occluders: ``(S + C,)`` which segments may occlude, then True for every circle.
     """
-    if len(rel) == 0:
-        return np.zeros(0, dtype=bool)
-    products = np.dot(matrix, rel.T)  # (3 S + C, K)
-    return kernels.unoccluded(
-        products, ranges, centre_distance, tables.radius_sq, occluders, _PATH_CENTRE
+    matrix = mapped[tables.occlusion_rows].reshape(-1, 3)  # the occlusion map at the sensor
+    return kernels.clear_nearest_first(  # type: ignore[no-any-return]
+        np.dot(matrix, kept.T),  # (3 S + C, K)
+        keep,
+        kept,
+        mapped[tables.ranges_rows],
+        mapped[tables.amplitudes_rows],
+        centre_distance,
+        tables.radius_sq,
+        occluders,
+        _PATH_CENTRE,
     )
+
+
+_NO_FACTORS = np.empty(0)
+"""No absorption or gain factors: the amplitudes are the on-axis ones."""
+_NO_FACTORS.flags.writeable = False
+_NO_FOOTPRINT = np.empty(0)
+"""No footprint test (:func:`sonar_gym.sonar.kernels.audible_candidates`)."""
+_NO_FOOTPRINT.flags.writeable = False

@@ -174,7 +174,7 @@ def unoccluded(
 ) -> np.ndarray:
     """``(paths,)`` which paths no occluding segment crosses and no circle cuts.
 
-    The tests of :func:`sonar_gym.sonar.echoes._unoccluded`, path by path.
+    The tests of :func:`sonar_gym.sonar.echoes._unoccluded_nearest_first`, path by path.
 
     Args:
         products: ``(3 S + C, paths)`` the occlusion map times each path (crossing
@@ -429,3 +429,145 @@ def nearest_first(
         path_lengths[rank] = path_length
         kept_amplitudes[rank] = amplitudes[candidate]
     return indices, directions, path_lengths, kept_amplitudes
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.int64, 1, "C"),
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.boolean, 1, "C"),
+        )
+    ),
+    types.Array(types.float64, 1, "C"),  # mapped (amplitudes written)
+    INDICES,  # layout
+    NUMBERS,  # on_axis
+    NUMBERS,  # absorption
+    NUMBERS,  # gain
+    NUMBERS,  # strict_bounds
+    NUMBERS,  # inclusive_bounds
+    FLAGS,  # concave
+    INDICES,  # twin
+    FLAGS,  # twin_comes_last
+    types.boolean,  # has_t_junctions
+    NUMBERS,  # footprint
+)
+def audible_candidates(
+    mapped: FloatArray,
+    layout: np.ndarray,
+    on_axis: FloatArray,
+    absorption: FloatArray,
+    gain: FloatArray,
+    strict_bounds: FloatArray,
+    inclusive_bounds: FloatArray,
+    concave: np.ndarray,
+    twin: np.ndarray,
+    twin_comes_last: np.ndarray,
+    has_t_junctions: bool,
+    footprint: FloatArray,
+) -> tuple[np.ndarray, FloatArray, np.ndarray]:
+    """The middle of :func:`sonar_gym.sonar.echoes.echo_candidates`: the amplitudes, the
+    per-candidate tests and the robot's footprint, candidate by candidate: ``(indices of the
+    candidates that pass, (P, 3) their rows (rel_x, rel_y, 1), (S + C,) which primitives may
+    occlude)``.
+
+    ``mapped`` is the search map's product at the sensor after :func:`on_axis_echoes`; each
+    candidate's amplitude, ``on_axis x absorption x gain`` in that order (1/m), is written into
+    its amplitudes row, then :func:`passing_candidates` tests the rows from the first test row
+    on.
+
+    Args:
+        layout: :func:`on_axis_echoes`' ``(S, C, W, V, first ranges row, ...)``.
+        on_axis: ``(N,)`` on-axis amplitudes before air and gain (1/m).
+        absorption, gain: ``(N,)`` air absorption and receiver gain factors, each empty when
+            it is 1.
+        strict_bounds, inclusive_bounds, concave, twin, twin_comes_last, has_t_junctions:
+            those of :func:`passing_candidates`.
+        footprint: ``(p_x - f_x, p_y - f_y, radius)``, the sensor's offset from the robot's
+            footprint centre and its radius (metres, {W}): echo points with
+            ``hypot(rel + offset) < radius`` are dropped; empty: no footprint test.
+    """
+    n_segments, n_circles, n_vertices = layout[0], layout[1], layout[3]
+    n_specular = n_segments + n_circles
+    n_candidates = n_specular + n_vertices
+    ranges_start = layout[4]
+    amplitudes_start = ranges_start + n_candidates
+    for candidate in range(n_candidates):
+        amplitude = on_axis[candidate]
+        if absorption.shape[0] > 0:
+            amplitude = amplitude * absorption[candidate]
+        if gain.shape[0] > 0:
+            amplitude = amplitude * gain[candidate]
+        mapped[amplitudes_start + candidate] = amplitude
+    passing, occluders = passing_candidates(
+        mapped[ranges_start - 3 * n_candidates :],
+        strict_bounds,
+        inclusive_bounds,
+        concave,
+        twin,
+        twin_comes_last,
+        n_specular,
+        has_t_junctions,
+    )
+    keep = np.empty(passing.shape[0], dtype=np.int64)
+    kept = np.empty((passing.shape[0], 3))
+    n_kept = 0
+    for candidate in passing:
+        rel_x, rel_y = mapped[3 * candidate], mapped[3 * candidate + 1]
+        inside = footprint.shape[0] > 0 and not (
+            np.hypot(rel_x + footprint[0], rel_y + footprint[1]) >= footprint[2]
+        )
+        if inside:  # the echo point lies on the robot's body
+            continue
+        keep[n_kept] = candidate
+        kept[n_kept, 0], kept[n_kept, 1] = rel_x, rel_y
+        kept[n_kept, 2] = mapped[3 * candidate + 2]
+        n_kept += 1
+    return keep[:n_kept].copy(), kept[:n_kept].copy(), occluders
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple(
+        (
+            types.Array(types.int64, 1, "C"),
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.float64, 1, "C"),
+            types.Array(types.float64, 1, "C"),
+        )
+    ),
+    TABLE,  # products
+    INDICES,  # keep
+    TABLE,  # kept
+    NUMBERS,  # ranges
+    NUMBERS,  # amplitudes
+    NUMBERS,  # centre_distance
+    NUMBERS,  # radius_sq
+    FLAGS,  # occluders
+    types.float64,  # path_centre
+)
+def clear_nearest_first(
+    products: FloatArray,
+    keep: np.ndarray,
+    kept: FloatArray,
+    ranges: FloatArray,
+    amplitudes: FloatArray,
+    centre_distance: FloatArray,
+    radius_sq: FloatArray,
+    occluders: np.ndarray,
+    path_centre: float,
+) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+    """The end of :func:`sonar_gym.sonar.echoes.echo_candidates`: :func:`unoccluded` of the
+    paths to ``keep``, then :func:`nearest_first` of the clear ones.
+
+    Args:
+        products: ``(3 S + C, P)`` the occlusion map times ``kept.T`` (see :func:`unoccluded`).
+        keep: ``(P,)`` candidate indices; ``kept``: ``(P, 3)`` their rows ``(rel_x, rel_y, 1)``
+            ({W}, metres).
+        ranges, amplitudes: per candidate index (metres, 1/m).
+        centre_distance, radius_sq, occluders, path_centre: those of :func:`unoccluded`.
+    """
+    kept_ranges = np.empty(keep.shape[0])
+    for place in range(keep.shape[0]):
+        kept_ranges[place] = ranges[keep[place]]
+    clear = unoccluded(products, kept_ranges, centre_distance, radius_sq, occluders, path_centre)
+    return nearest_first(keep, clear, kept, ranges, amplitudes)  # type: ignore[no-any-return]

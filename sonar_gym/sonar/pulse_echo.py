@@ -431,29 +431,15 @@ def _main_lobe_readings(
     c, s = math.cos(frame_heading_rad), math.sin(frame_heading_rad)
     # np.dot: the products first_echoes takes with @, through one call layer less.
     in_frame = np.dot(np.array(((c, s), (-s, c))), candidates.directions.T)  # (2, candidates)
-    jitter = readout.range_noise and transducer.range_noise_std_m > 0.0
+    jitter, jitter_s, delay, period, constants = _readout_steps(
+        transducer, true_speed_mps, assumed_speed_mps, readout
+    )
     normals = _NO_NORMALS  # one standard normal per ping, drawn alike on both paths
     if jitter:
         if rng is None:
             raise ValueError("argument 'rng' is needed: the readout adds range noise")
         normals = rng.standard_normal(n)
-    jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps if jitter else 0.0
-    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
-    period = transducer.timer_period_s if readout.quantisation else 0.0
     if n >= 2 and n_candidates >= 2:  # there numpy's products round as the loop's fma
-        constants = (
-            float(TABLE_STEPS_PER_UNIT),
-            2.0 / true_speed_mps,
-            transducer.echo_rise_time_s * threshold if delay else 0.0,
-            jitter_s,
-            1.0 / period if period > 0.0 else 0.0,
-            period,
-            assumed_speed_mps / 2.0,
-            transducer.max_range_m,
-            threshold,
-            1.0 / TABLE_STEPS_PER_UNIT,
-            SMALLEST_COSINE,
-        )
         compiled = kernels.main_lobe_readings(
             beam_directions,
             in_frame,
@@ -463,7 +449,7 @@ def _main_lobe_readings(
             path_lengths,
             beam.cells,
             normals,
-            np.array(constants),
+            constants,
         )
         return compiled[0], compiled[1]
     limits = beam.main_lobe_cos_limits(
@@ -493,6 +479,53 @@ def _main_lobe_readings(
     masked = np.where(valid, readings, _DROPOUT_READING)
     return masked[0], masked[1]
 
+
+def _readout_steps(
+    transducer: Transducer, true_speed_mps: float, assumed_speed_mps: float, readout: Readout
+) -> tuple[bool, float, bool, float, FloatArray]:
+    """Which readout steps apply and their constants: ``(whether readings jitter, the jitter in
+    seconds per standard normal (0 without), whether weak echoes are delayed, the counter's
+    period in seconds (0 without a counter), the constants of
+    :func:`sonar_gym.sonar.kernels.main_lobe_readings`)``.
+
+    Remembered for the last transducer object, speeds and readout: every ping of a pan or sweep
+    asks again, and the answer depends on nothing else.
+    """
+    key = (true_speed_mps, assumed_speed_mps, readout)
+    if _LAST_READOUT_STEPS:
+        last_transducer, last_key, answer = _LAST_READOUT_STEPS[0]
+        if last_transducer is transducer and last_key == key:
+            return answer
+    threshold = transducer.detection_threshold
+    jitter = readout.range_noise and transducer.range_noise_std_m > 0.0
+    jitter_s = 2.0 * transducer.range_noise_std_m / true_speed_mps if jitter else 0.0
+    delay = readout.crossing_delay and transducer.echo_rise_time_s > 0.0
+    period = transducer.timer_period_s if readout.quantisation else 0.0
+    constants = np.array(
+        (
+            float(TABLE_STEPS_PER_UNIT),
+            2.0 / true_speed_mps,
+            transducer.echo_rise_time_s * threshold if delay else 0.0,
+            jitter_s,
+            1.0 / period if period > 0.0 else 0.0,
+            period,
+            assumed_speed_mps / 2.0,
+            transducer.max_range_m,
+            threshold,
+            1.0 / TABLE_STEPS_PER_UNIT,
+            SMALLEST_COSINE,
+        )
+    )
+    constants.flags.writeable = False
+    answer = (jitter, jitter_s, delay, period, constants)
+    _LAST_READOUT_STEPS[:] = [(transducer, key, answer)]
+    return answer
+
+
+_LAST_READOUT_STEPS: list[
+    tuple[Transducer, tuple[float, float, Readout], tuple[bool, float, bool, float, FloatArray]]
+] = []
+"""The last transducer, speeds and readout asked of :func:`_readout_steps` and its answer."""
 
 _NO_NORMALS = np.empty(0)
 _NO_NORMALS.flags.writeable = False

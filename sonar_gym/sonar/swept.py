@@ -98,9 +98,11 @@ class SweptSonar(PulseEchoSonar):
 
     def sweep_angles(self, sector_center: float = 0.0) -> FloatArray:
         """Ping angles in {R}, radians: from ``center - half`` to ``center + half`` inclusive."""
-        return self._grid(sector_center)[0].copy()
+        return self.sweep_grid(sector_center)[0].copy()
 
-    def _grid(self, sector_center: float) -> tuple[FloatArray, FloatArray]:
+    def sweep_grid(self, sector_center: float = 0.0) -> tuple[FloatArray, FloatArray]:
+        """``(angles, unit directions)`` of the pings of a sweep about ``sector_center``
+        (radians, {R}), read-only and shared (:meth:`sweep_readings` takes them)."""
         if not math.isfinite(sector_center):
             raise ValueError(
                 f"argument 'sector_center' must be a finite angle in radians; got {sector_center!r}"
@@ -115,7 +117,23 @@ class SweptSonar(PulseEchoSonar):
         sector_center: float = 0.0,
     ) -> Scan:
         """One sweep from the robot at ``pose`` ({W}) about ``sector_center`` (radians, {R})."""
-        angles, directions = self._grid(sector_center)
+        angles, ranges, amplitudes, duration = self.sweep_readings(
+            world, pose, rng, self.sweep_grid(sector_center)
+        )
+        return Scan(angles=angles.copy(), ranges=ranges, amplitudes=amplitudes, duration_s=duration)
+
+    def sweep_readings(
+        self,
+        world: WorldLike,
+        pose: Pose,
+        rng: np.random.Generator | None,
+        grid: tuple[FloatArray, FloatArray],
+    ) -> tuple[FloatArray, FloatArray, FloatArray, float]:
+        """:meth:`sweep` as ``(angles, ranges, amplitudes, duration_s)`` without the
+        :class:`Scan`, for a ``grid`` of :meth:`sweep_grid`: the angles are the grid's own
+        read-only array (radians, {R}), the ranges (metres, NaN = dropout) and amplitudes
+        (1/m) new arrays."""
+        angles, directions = grid
         # pose.transform_point of the offset, on floats: the same arithmetic
         offset_x, offset_y = world.scenario.robot.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
@@ -128,7 +146,7 @@ class SweptSonar(PulseEchoSonar):
         duration = (last - first) / transducer.pan_speed_rad_s + len(
             angles
         ) * transducer.listen_time_s
-        return Scan(angles=angles.copy(), ranges=ranges, amplitudes=amplitudes, duration_s=duration)
+        return angles, ranges, amplitudes, duration
 
 
 @functools.lru_cache(maxsize=256)

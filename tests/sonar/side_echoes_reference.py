@@ -150,7 +150,7 @@ def side_first_echoes_arrays(
         limits = beam.main_lobe_cos_limits(threshold / amplitudes[inside])
         heard[inside] = cosines[inside] >= limits
 
-    # Occlusion (echo_candidates' _unoccluded), only for the paths a beam hears.
+    # Occlusion (echo_candidates' _unoccluded_nearest_first), only for the paths a beam hears.
     sensor_rows, candidate_rows = np.nonzero(heard)
     if len(sensor_rows):
         occluders = (facing & ~tables.encloses)[sensor_rows]  # (H, S)

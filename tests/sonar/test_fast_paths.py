@@ -100,6 +100,47 @@ def test_fused_main_lobe_readout_reads_what_first_echoes_then_readings_read(
     assert compared == 32 and detected > 0
 
 
+def test_the_remembered_readout_steps_follow_each_change_of_readout_and_speeds() -> None:
+    """One transducer object, its readout and speeds changing from ping to ping: the fused
+    readout's remembered constants are those of each ping's own readout and speeds."""
+    world = _world("kim_arena")
+    rng = np.random.default_rng(3)
+    sonar = RotatingSonar.preset("srf04")
+    transducer = sonar.transducer
+    _, directions = _pan_grid(-math.pi, math.pi, math.radians(5.0))
+    pose = world.sample_free_pose(rng, clearance=0.05)
+    candidates = sonar.candidates(world, pose, pose.position)
+    # from one ping to the next, one of readout, true and assumed speed changes alone
+    first, *others = READOUTS
+    changes = [(first, 340.0, 330.0), (first, 346.0, 330.0), (first, 346.0, 343.2)]
+    changes += [(readout, 346.0, 343.2) for readout in others]
+    changes += [(others[-1], 340.0, 343.2), (others[-1], 340.0, 330.0)]
+    for readout, true_speed, assumed_speed in changes:
+        beam = PistonBeam.for_ka(
+            transducer.wavenumber_ka(true_speed), False, transducer.side_lobe_leakage
+        )
+        seed = int(rng.integers(1 << 30))
+        fused = pulse_echo._main_lobe_readings(
+            candidates,
+            directions,
+            beam,
+            transducer,
+            true_speed,
+            assumed_speed,
+            readout,
+            np.random.default_rng(seed),
+            pose.theta,
+        )
+        echoes = pulse_echo.first_echoes(
+            candidates, directions, beam, transducer.detection_threshold, pose.theta
+        )
+        plain = pulse_echo.echo_readings(
+            echoes, transducer, true_speed, assumed_speed, readout, np.random.default_rng(seed)
+        )
+        np.testing.assert_array_equal(fused[0], plain[0])
+        np.testing.assert_array_equal(fused[1], plain[1])
+
+
 @pytest.mark.parametrize("n_pings", [1, 2, 3, 19, 60])
 @pytest.mark.parametrize("scenario", SCENARIOS)
 def test_a_ping_of_any_count_reads_what_first_echoes_then_readings_read(

@@ -52,6 +52,25 @@ def test_sweep_matches_a_pan_over_the_same_angles() -> None:
     )
 
 
+@pytest.mark.parametrize("sector", [0.0, math.pi / 2.0, -math.pi / 2.0, math.pi])
+def test_sweep_readings_are_the_sweep_without_its_scan(sector: float) -> None:
+    test_world = cluttered_room()
+    sweep = SweptSonar.kim()
+    grid = sweep.sweep_grid(sector)
+    for seed, pose in enumerate([Pose(0.3, 0.4, 1.0), Pose(-0.2, 0.1, -2.5), Pose(0.0, 0.0, 0.0)]):
+        scan = sweep.sweep(test_world, pose, np.random.default_rng(seed), sector)
+        angles, ranges, amplitudes, duration = sweep.sweep_readings(
+            test_world, pose, np.random.default_rng(seed), grid
+        )
+        assert angles is grid[0] and not angles.flags.writeable
+        np.testing.assert_array_equal(angles, scan.angles)
+        np.testing.assert_array_equal(ranges, scan.ranges)
+        np.testing.assert_array_equal(amplitudes, scan.amplitudes)
+        assert duration == scan.duration_s
+    with pytest.raises(ValueError, match="sector_center"):
+        sweep.sweep_grid(math.nan)
+
+
 def test_sweep_sees_the_wall_ahead_at_its_perpendicular_distance() -> None:
     test_world = world(room={"min": [-1.0, -1.0], "max": [1.5, 1.0]}, robot={"radius": 0.1})
     scan = SweptSonar.kim(readout=IDEAL_READOUT).sweep(test_world, Pose(0.0, 0.0, 0.0), None)
