@@ -243,6 +243,23 @@ class ObservationSpec:
         """This spec with ``features`` appended (a task that observes more than its base)."""
         return ObservationSpec((*self.features, *features))
 
+    def run(self, names: Sequence[str]) -> slice:
+        """The slice of the vector that the features ``names`` fill, which must follow each
+        other in this order (:meth:`ObservationWriter.write_run` fills it at once)."""
+        if not names:
+            raise ValueError("argument 'names' must name at least one feature; got none")
+        unknown = [name for name in names if name not in self.layout]
+        if unknown:
+            raise ValueError(f"argument 'names' names no feature of this spec: {unknown}")
+        places = [self.layout[name] for name in names]
+        for before, after, name in zip(places, places[1:], names[1:], strict=False):
+            if after.start != before.stop:
+                raise ValueError(
+                    f"argument 'names' must list consecutive features; {name!r} does not "
+                    f"follow {names[names.index(name) - 1]!r}"
+                )
+        return slice(places[0].start, places[-1].stop)
+
     def writer(self) -> ObservationWriter:
         """A writer over a fresh zero vector."""
         return ObservationWriter(self)
@@ -266,17 +283,13 @@ class ObservationWriter:
     def __setitem__(self, name: str, values: npt.ArrayLike | float) -> None:
         self.vector[self._layout[name]] = values
 
-    def write_from(self, name: str, values: Sequence[float]) -> None:
-        """Write ``values`` from the first entry of feature ``name`` on, into it and the
-        features after it: a run of features filled in one assignment."""
-        start = self._layout[name].start
-        stop = start + len(values)
-        if stop > len(self.vector):
-            raise ValueError(
-                f"{len(values)} values from feature {name!r} (entry {start}) overrun the "
-                f"vector of {len(self.vector)}"
-            )
-        self.vector[start:stop] = values
+    def write_run(self, run: slice, values: Sequence[float]) -> None:
+        """Fill a run of consecutive features (:meth:`ObservationSpec.run`) in one assignment,
+        ``values`` in the features' order."""
+        size = run.stop - run.start
+        if len(values) != size:
+            raise ValueError(f"a run of {size} entries got {len(values)} values")
+        self.vector[run] = values
 
     def one_hot(self, name: str, index: int) -> None:
         """Set entry ``index`` of feature ``name`` to 1 (a one-hot group)."""

@@ -378,6 +378,19 @@ class SweepLocalizationEnv(SonarEnv):
                 ]
             )
         )
+        # the scalar features on either side of the range bins, each written in one go
+        self._belief_run = self.observation_spec.run(
+            (
+                "estimate_xy",
+                "estimate_heading",
+                "estimate_std",
+                "distance_since_fix",
+                "route_progress",
+            )
+        )
+        self._status_run = self.observation_spec.run(
+            ("last_sweep_sector", "last_fix_ok", "route_heading", "steps_remaining")
+        )
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self._scenario, temperature_c=config.temperature_c)
@@ -586,9 +599,8 @@ class SweepLocalizationEnv(SonarEnv):
         estimate = episode.estimate
         low, high = self._bounds
         variances = episode.covariance.diagonal().tolist()
-        # The scalar features around the range bins, each run in declaration order.
-        observation.write_from(
-            "estimate_xy",
+        observation.write_run(
+            self._belief_run,
             [
                 *ScaledPosition.float_values((estimate.x, estimate.y), low, high),
                 *Heading.values(estimate.theta),
@@ -609,8 +621,8 @@ class SweepLocalizationEnv(SonarEnv):
             else 0.0
         )
         remaining = len(episode.decision_stations_m) - episode.decisions
-        observation.write_from(
-            "last_sweep_sector",
+        observation.write_run(
+            self._status_run,
             [
                 *Heading.values(SECTOR_CENTRES_RAD[episode.last_sector]),
                 float(episode.last_fix_ok),

@@ -218,10 +218,27 @@ def test_the_feature_types_are_registered_by_their_kind() -> None:
     assert {"scaled_position", "heading", "range_bins", "scanned_bins"} <= set(FEATURE_TYPES)
 
 
-def test_write_from_fills_a_run_of_features_and_refuses_an_overrun() -> None:
+def test_a_run_of_consecutive_features_is_filled_at_once() -> None:
     spec = ObservationSpec([Feature("a", 2), Feature("b"), Feature("c", 3)])
+    run = spec.run(("b", "c"))
+    assert run == slice(2, 6)
     observation = spec.writer()
-    observation.write_from("b", [0.25, -0.5, 0.5, 1.0])
+    observation.write_run(run, [0.25, -0.5, 0.5, 1.0])
     assert observation.vector.tolist() == [0.0, 0.0, 0.25, -0.5, 0.5, 1.0]
-    with pytest.raises(ValueError, match="overrun"):
-        observation.write_from("c", [0.0] * 4)
+    with pytest.raises(ValueError, match="a run of 4 entries got 3 values"):
+        observation.write_run(run, [0.0] * 3)
+
+
+@pytest.mark.parametrize(
+    ("names", "message"),
+    [
+        (("a", "c"), "'c' does not follow 'a'"),
+        (("c", "b"), "'b' does not follow 'c'"),
+        (("b", "z"), r"names no feature of this spec: \['z'\]"),
+        ((), "at least one feature"),
+    ],
+)
+def test_a_run_must_name_consecutive_features(names: tuple[str, ...], message: str) -> None:
+    spec = ObservationSpec([Feature("a", 2), Feature("b"), Feature("c", 3)])
+    with pytest.raises(ValueError, match=message):
+        spec.run(names)
