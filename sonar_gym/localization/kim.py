@@ -110,6 +110,7 @@ __all__ = [
     "proportional_encoder_noise",
     "sweep_end_points",
     "vote_localize",
+    "vote_localize_unchecked",
 ]
 
 EMPTY_SWEEP = "empty_sweep"
@@ -160,6 +161,8 @@ Anchor = Literal["cell_center", "obstacle_point"]
 _ANCHORS = ("cell_center", "obstacle_point")
 _SELECTIONS = ("smoothed", "max")
 _REFINEMENTS = ("vote_mean", "cell_center")
+Centre = tuple[float, float]
+"""``(x, y)`` of the search circle's centre, {W}, metres."""
 _CHUNK_ELEMENTS = 2_000_000
 """Upper bound on the elements of one vectorised block (keeps memory to tens of MB)."""
 
@@ -197,11 +200,14 @@ def heading_candidates_around(
         raise ValueError(f"heading_step_rad must be a finite angle > 0 rad, got {step_rad!r}")
     if not (math.isfinite(float(window_rad)) and window_rad >= 0.0):
         raise ValueError(f"heading_window_rad must be a finite angle >= 0 rad, got {window_rad!r}")
+    return _headings_around(float(prior_heading_rad), float(window_rad), float(step_rad))
+
+
+def _headings_around(prior_heading_rad: float, window_rad: float, step_rad: float) -> FloatArray:
+    """:func:`heading_candidates_around` of checked floats (rad)."""
     count = math.floor(window_rad / step_rad + 1e-9)
     count = min(count, math.ceil(math.pi / step_rad))
-    return kim_kernels.heading_grid(  # type: ignore[no-any-return]
-        float(prior_heading_rad), float(step_rad), count
-    )
+    return kim_kernels.heading_grid(prior_heading_rad, step_rad, count)  # type: ignore[no-any-return]
 
 
 # -- the unobstructed-ray table ---------------------------------------------------------------
@@ -325,18 +331,18 @@ def _check_sweeps(sweeps: Sequence[Sweep] | Sweep) -> list[Sweep]:
 
 def _check_center(
     search_center: Pose | npt.ArrayLike | None,
-) -> tuple[FloatArray | None, float | None]:
+) -> tuple[Centre | None, float | None]:
     """``(position, prior heading or None)`` of the search centre."""
     if search_center is None:
         return None, None
     if isinstance(search_center, Pose):
-        return search_center.position, search_center.theta
+        return (search_center.x, search_center.y), search_center.theta
     values = np.asarray(search_center, dtype=np.float64)
     if values.shape not in ((2,), (3,)) or not np.all(np.isfinite(values)):
         raise ValueError(
             f"search_center must be a Pose or a finite (x, y[, theta]), got {search_center!r}"
         )
-    return values[:2].copy(), (float(values[2]) if values.size == 3 else None)
+    return (float(values[0]), float(values[1])), (float(values[2]) if values.size == 3 else None)
 
 
 def _resolve_headings(
@@ -425,7 +431,7 @@ def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:
 
 
 def _pair_test(
-    center: FloatArray | None, radius: float | None, headings: FloatArray
+    center: Centre | None, radius: float | None, headings: FloatArray
 ) -> tuple[tuple[float, float, float], tuple[bool, float, float, float, float]]:
     """The search circle ``(centre x, centre y, radius)`` ({W}, metres) and the heading test
     ``(by heading, middle cos, middle sin, spread cos, spread sin)`` of
@@ -448,7 +454,7 @@ def _pair_test(
 def _candidate_pairs(
     readings: _Readings,
     anchors: FloatArray,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
@@ -491,9 +497,7 @@ class _VoteWindow:
         return x, y, x + wx - 1, y + wy - 1
 
 
-def _vote_window(
-    grid: OccupancyGrid, center: FloatArray | None, radius: float | None
-) -> _VoteWindow:
+def _vote_window(grid: OccupancyGrid, center: Centre | None, radius: float | None) -> _VoteWindow:
     """The :class:`_VoteWindow` of a search circle (the whole grid without one)."""
     nx, ny = grid.shape
     if center is None or radius is None:
@@ -510,7 +514,7 @@ def _vote_window(
 
 
 def _vote_layout(
-    grid: OccupancyGrid, window: _VoteWindow, center: FloatArray | None, radius: float | None
+    grid: OccupancyGrid, window: _VoteWindow, center: Centre | None, radius: float | None
 ) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]:
     """The compiled vote loops' ``(circle, grid_frame, window)``
     (:mod:`~sonar_gym.localization.kim_kernels`): the search circle (an infinite radius
@@ -519,7 +523,7 @@ def _vote_layout(
     return _search_circle(center, radius), (float(x0), float(y0), float(size)), window.cells
 
 
-def _search_circle(center: FloatArray | None, radius: float | None) -> tuple[float, float, float]:
+def _search_circle(center: Centre | None, radius: float | None) -> tuple[float, float, float]:
     """``(centre x, centre y, radius)`` of the search circle ({W}, metres); without one an
     infinite circle, which every vote lies in."""
     if center is None or radius is None:
@@ -618,8 +622,81 @@ def vote_localize(
     headings = _resolve_headings(
         heading_candidates, prior_heading, heading_step_rad, heading_window_rad
     )
-    direction_bins = int(direction_bins)
+    return _vote(
+        grid,
+        sweep_list,
+        headings,
+        center,
+        radius,
+        max_range_m,
+        clearance,
+        int(direction_bins),
+        selection,
+        refine,
+        anchor,
+        ambiguity_ratio,
+        (ambiguity_distance_m, ambiguity_heading_rad),
+        return_vote_map,
+    )
 
+
+def vote_localize_unchecked(
+    grid: OccupancyGrid,
+    sweeps: Sequence[Sweep],
+    search_center: Pose,
+    search_radius: float,
+    *,
+    heading_step_rad: float,
+    heading_window_rad: float,
+    max_range_m: float,
+    anchor: Anchor,
+) -> VoteLocalization:
+    """``vote_localize(grid, sweeps, search_center=..., search_radius=..., heading_step_rad=...,
+    heading_window_rad=..., max_range_m=..., anchor=..., return_vote_map=False)`` without the
+    argument checks, the other arguments at their defaults.
+
+    For callers that build the arguments from their own checked state (the EKF loop of
+    :mod:`~sonar_gym.localization.kim_fix`): finite floats (metres, radians), a step and a
+    radius > 0, a window >= 0, a list of :class:`Sweep` whose first odometry is the identity.
+    Anything else is the caller's error.
+    """
+    headings = _headings_around(search_center.theta, heading_window_rad, heading_step_rad)
+    return _vote(
+        grid,
+        sweeps,
+        headings,
+        (search_center.x, search_center.y),
+        search_radius,
+        max_range_m,
+        grid.cell_size_m,
+        360,
+        "smoothed",
+        "vote_mean",
+        anchor,
+        None,
+        (0.15, math.radians(10.0)),
+        False,
+    )
+
+
+def _vote(
+    grid: OccupancyGrid,
+    sweep_list: Sequence[Sweep],
+    headings: FloatArray,
+    center: Centre | None,
+    radius: float | None,
+    max_range_m: float | None,
+    clearance: float,
+    direction_bins: int,
+    selection: Selection,
+    refine: Refinement,
+    anchor: Anchor,
+    ambiguity_ratio: float | None,
+    ambiguity_reach: tuple[float, float],
+    return_vote_map: bool,
+) -> VoteLocalization:
+    """:func:`vote_localize` of checked arguments: ``clearance`` is ``end_clearance_m``
+    resolved, ``ambiguity_reach`` is ``(ambiguity_distance_m, ambiguity_heading_rad)``."""
     readings = _gather_readings(sweep_list, max_range_m)
     if readings.range_m.size == 0:
         return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
@@ -655,9 +732,7 @@ def vote_localize(
     votes = int(volume[choice.heading_index, choice.cell[0] - low_x, choice.cell[1] - low_y])
 
     if ambiguity_ratio is not None:
-        rival = _rival_score(
-            grid, choice, window, headings, ambiguity_distance_m, ambiguity_heading_rad
-        )
+        rival = _rival_score(grid, choice, window, headings, *ambiguity_reach)
         if rival >= float(ambiguity_ratio) * choice.best_score:
             return VoteLocalization(
                 status=AMBIGUOUS,
@@ -742,7 +817,7 @@ def _smoothed_choice(
     grid: OccupancyGrid,
     votes_of: _VoteInputs,
     window: _VoteWindow,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.int64], _Choice | None]:
@@ -790,7 +865,7 @@ def _max_choice(
     grid: OccupancyGrid,
     votes_of: _VoteInputs,
     window: _VoteWindow,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.int64] | None, _Choice | None]:
