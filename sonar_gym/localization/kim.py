@@ -390,21 +390,21 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
     loops around numpy's ``cos`` and ``sin`` of the beams)."""
     angles = np.concatenate([sweep.angles for sweep in sweeps])
     ranges = np.concatenate([sweep.ranges for sweep in sweeps])
-    counts = np.array([sweep.ranges.size for sweep in sweeps], dtype=np.int64)
+    counts = np.array([sweep.ranges.size for sweep in sweeps])
     # heading and sensor position of each sweep, in the first sweep's frame
-    headings, sensor_x, sensor_y = np.empty((3, len(sweeps)))
-    for index, sweep in enumerate(sweeps):
+    frames = []
+    for sweep in sweeps:
         pose = sweep.odometry
         offset_x, offset_y = sweep.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
-        headings[index] = pose.theta
-        sensor_x[index] = pose.x + c * offset_x - s * offset_y
-        sensor_y[index] = pose.y + s * offset_x + c * offset_y
-    beam, ranges, sweep_of = kim_kernels.echo_beams(
-        angles, ranges, counts, headings, math.inf if max_range_m is None else float(max_range_m)
-    )
-    end_x, end_y, length = kim_kernels.end_points(
-        ranges, sweep_of, sensor_x, sensor_y, np.cos(beam), np.sin(beam)
+        frames.append(
+            (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
+        )
+    sweep_frames = np.array(frames)
+    max_range = math.inf if max_range_m is None else float(max_range_m)
+    beam = kim_kernels.echo_beams(angles, ranges, counts, sweep_frames, max_range)
+    end_x, end_y, length = kim_kernels.echo_end_points(
+        ranges, counts, sweep_frames, np.cos(beam), np.sin(beam), max_range
     )
     return _Readings(end_x, end_y, beam, length)
 

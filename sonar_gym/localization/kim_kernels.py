@@ -32,96 +32,94 @@ from sonar_gym.compiled import (
 )
 from sonar_gym.pose import FloatArray
 
-_BEAMS = types.Tuple(
-    (
-        types.Array(types.float64, 1, "C"),
-        types.Array(types.float64, 1, "C"),
-        types.Array(types.int64, 1, "C"),
-    )
-)
+
+def _has_echo(range_m: float, max_range: float) -> bool:
+    """Whether a reading returned an echo: a finite range (metres) below ``max_range``."""
+    return bool(np.isfinite(range_m)) and range_m < max_range
+
+
+_has_echo_compiled = compiled(types.boolean, types.float64, types.float64, inline=True)(_has_echo)
 
 
 @compiled(  # type: ignore[misc]
-    _BEAMS,
+    types.Array(types.float64, 1, "C"),
     NUMBERS,  # angles
     NUMBERS,  # ranges
     INDICES,  # counts
-    NUMBERS,  # sweep_headings
+    TABLE,  # sweep_frames
     types.float64,  # max_range
 )
 def echo_beams(
     angles: FloatArray,
     ranges: FloatArray,
     counts: np.ndarray,
-    sweep_headings: FloatArray,
+    sweep_frames: FloatArray,
     max_range: float,
-) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """``(beam, range, sweep)`` of the readings with an echo: a finite range below
-    ``max_range``, in reading order.
+) -> FloatArray:
+    """The beam of each reading with an echo (a finite range below ``max_range``), in reading
+    order: ``sweep heading + angle`` (rad, the first sweep's robot frame), the array form's one
+    addition.
 
     Args:
         angles, ranges: every sweep's beam angles (rad, its own robot frame) and ranges
             (metres), concatenated; ``counts[i]`` readings belong to sweep ``i``.
-        sweep_headings: heading of each sweep in the first sweep's robot frame (rad).
+        sweep_frames: ``(sweeps, 3)``: each sweep's heading (rad) and sensor position
+            (metres) in the first sweep's robot frame; the heading is used here.
         max_range: readings at or beyond it count as no echo (metres; inf: none).
-
-    Returns:
-        beam: ``sweep heading + angle`` (rad, the first sweep's robot frame), the array
-            form's one addition; range: the reading's range (metres); sweep: its sweep.
     """
     beam = np.empty(ranges.size)
-    kept_range = np.empty(ranges.size)
-    sweep_of = np.empty(ranges.size, dtype=np.int64)
     count = 0
     reading = 0
     for sweep in range(counts.size):
         for _ in range(counts[sweep]):
-            value = ranges[reading]
-            if np.isfinite(value) and value < max_range:
-                beam[count] = sweep_headings[sweep] + angles[reading]
-                kept_range[count] = value
-                sweep_of[count] = sweep
+            if _has_echo_compiled(ranges[reading], max_range):
+                beam[count] = sweep_frames[sweep, 0] + angles[reading]
                 count += 1
             reading += 1
-    return beam[:count].copy(), kept_range[:count].copy(), sweep_of[:count].copy()
-
-
-_END_POINTS = types.UniTuple(types.Array(types.float64, 1, "C"), 3)
+    return beam[:count].copy()
 
 
 @compiled(  # type: ignore[misc]
-    _END_POINTS,
+    types.Array(types.float64, 2, "C"),
     NUMBERS,  # ranges
-    INDICES,  # sweep_of
-    NUMBERS,  # sensor_x
-    NUMBERS,  # sensor_y
+    INDICES,  # counts
+    TABLE,  # sweep_frames
     NUMBERS,  # beam_cos
     NUMBERS,  # beam_sin
+    types.float64,  # max_range
 )
-def end_points(
+def echo_end_points(
     ranges: FloatArray,
-    sweep_of: np.ndarray,
-    sensor_x: FloatArray,
-    sensor_y: FloatArray,
+    counts: np.ndarray,
+    sweep_frames: FloatArray,
     beam_cos: FloatArray,
     beam_sin: FloatArray,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(end x, end y, length)`` of each reading (metres, the first sweep's robot frame):
-    ``end = sensor + range (cos, sin)`` and ``length = sqrt(dx^2 + dy^2)`` of ``end - sensor``,
-    the array form's steps in its order (``beam_cos``, ``beam_sin``: numpy's of the beams;
-    ``sensor_x[i]``, ``sensor_y[i]``: the sensor of sweep ``i``)."""
-    end_x = np.empty(ranges.size)
-    end_y = np.empty(ranges.size)
-    length = np.empty(ranges.size)
-    for reading in range(ranges.size):
-        from_x, from_y = sensor_x[sweep_of[reading]], sensor_y[sweep_of[reading]]
-        to_x = from_x + ranges[reading] * beam_cos[reading]
-        to_y = from_y + ranges[reading] * beam_sin[reading]
-        run_x, run_y = to_x - from_x, to_y - from_y
-        end_x[reading] = to_x
-        end_y[reading] = to_y
-        length[reading] = math.sqrt(run_x * run_x + run_y * run_y)
-    return end_x, end_y, length
+    max_range: float,
+) -> FloatArray:
+    """``(3, J)`` rows end x, end y and length of each reading with an echo (metres, the first
+    sweep's robot frame), in the order of :func:`echo_beams`: ``end = sensor + range (cos,
+    sin)`` and ``length = sqrt(dx^2 + dy^2)`` of ``end - sensor``, the array form's steps in its
+    order (``beam_cos``, ``beam_sin``: numpy's of :func:`echo_beams`; ``ranges``, ``counts``,
+    ``sweep_frames``, ``max_range``: its arguments, ``sweep_frames[i, 1:]`` the sensor of sweep
+    ``i``)."""
+    rows = np.empty((3, beam_cos.size))
+    count = 0
+    reading = 0
+    for sweep in range(counts.size):
+        from_x, from_y = sweep_frames[sweep, 1], sweep_frames[sweep, 2]
+        for _ in range(counts[sweep]):
+            reading_range = ranges[reading]
+            reading += 1
+            if not _has_echo_compiled(reading_range, max_range):
+                continue
+            to_x = from_x + reading_range * beam_cos[count]
+            to_y = from_y + reading_range * beam_sin[count]
+            run_x, run_y = to_x - from_x, to_y - from_y
+            rows[0, count] = to_x
+            rows[1, count] = to_y
+            rows[2, count] = math.sqrt(run_x * run_x + run_y * run_y)
+            count += 1
+    return rows
 
 
 @compiled(  # type: ignore[misc]
