@@ -301,7 +301,9 @@ _TABLES: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, float], _FreeD
 def _free_distance_table(
     grid: OccupancyGrid, direction_bins: int, end_clearance_m: float
 ) -> _FreeDistanceTable:
-    tables = _TABLES.setdefault(grid, {})
+    tables = _TABLES.get(grid)
+    if tables is None:
+        tables = _TABLES[grid] = {}
     key = (direction_bins, end_clearance_m)
     if key not in tables:
         tables[key] = _FreeDistanceTable(grid, direction_bins, end_clearance_m)
@@ -369,7 +371,7 @@ def _resolve_headings(
 # -- voting -------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _Readings:
     """All valid readings moved into the first sweep's robot frame."""
 
@@ -469,7 +471,7 @@ def _candidate_pairs(
     )
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _VoteWindow:
     """The block of grid cells ``low .. low + shape - 1`` that holds every counted vote.
 
@@ -744,7 +746,7 @@ def _vote(
                 vote_map=vote_map,
             )
 
-    x, y = float(choice.centre[0]), float(choice.centre[1])
+    x, y = choice.centre
     # the mean of the chosen heading's votes in the chosen cells: np.mean's own arithmetic
     # (one pairwise sum, one division)
     if refine == "vote_mean" and choice.vote_count:
@@ -763,7 +765,7 @@ def _vote(
 _NOTHING_VOTED = "no unobstructed range vector voted inside the grid / search circle"
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _VoteInputs:
     """What every vote loop of one fix reads: the readings, the anchors, the quantised beam
     directions ``(h, J)``, the free-distance table, the cosines and sines of the candidate
@@ -778,7 +780,7 @@ class _VoteInputs:
     layout: tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]
 
 
-@dataclass(frozen=True)
+@dataclass
 class _Choice:
     """The chosen heading and cells.
 
@@ -794,7 +796,7 @@ class _Choice:
     cell: tuple[int, int]
     window_low: tuple[int, int]
     window_high: tuple[int, int]
-    centre: FloatArray
+    centre: tuple[float, float]
     vote_count: int
     vote_mean: tuple[float, float]
     volume: npt.NDArray[np.int64]
@@ -845,9 +847,7 @@ def _smoothed_choice(
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
     x0, y0 = grid.origin_m  # the centre of the cell, as OccupancyGrid.cell_to_world
-    centre = np.array(
-        [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
-    )
+    centre = (x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m)
     return volume, _Choice(
         heading_index,
         (best_x, best_y),
@@ -917,7 +917,15 @@ def _max_choice(
         (*low, *high),
     )
     return volume, _Choice(
-        heading_index, cell, low, high, centroid, count, (mean_x, mean_y), volume, "max"
+        heading_index,
+        cell,
+        low,
+        high,
+        (float(centroid[0]), float(centroid[1])),
+        count,
+        (mean_x, mean_y),
+        volume,
+        "max",
     )
 
 
