@@ -163,8 +163,6 @@ _SELECTIONS = ("smoothed", "max")
 _REFINEMENTS = ("vote_mean", "cell_center")
 Centre = tuple[float, float]
 """``(x, y)`` of the search circle's centre, {W}, metres."""
-_CHUNK_ELEMENTS = 2_000_000
-"""Upper bound on the elements of one vectorised block (keeps memory to tens of MB)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -254,43 +252,26 @@ class _FreeDistanceTable:
             return self.distance
         missing = np.unique(direction_indices[~self.filled[direction_indices]])
         if missing.size:
-            per_direction = max(1, self.centers.shape[0] * self.samples_m.size)
-            chunk = max(1, _CHUNK_ELEMENTS // per_direction)
-            for start in range(0, missing.size, chunk):
-                block = missing[start : start + chunk]
-                self.distance[block] = self._trace(block)
+            self.distance[missing] = self._trace(missing)
             self.filled[missing] = True
             self.complete = bool(self.filled.all())
         return self.distance
 
     def _trace(self, directions: npt.NDArray[np.intp]) -> FloatArray:
-        """March back from every cell centre in the given directions, a block of samples at a
-        time, keeping only the rays not yet blocked."""
-        nx, ny = self.blocked_cells.shape[0] - 2, self.blocked_cells.shape[1] - 2
+        """March back from every cell centre in the given directions, every half cell
+        (:func:`~sonar_gym.localization.kim_kernels.free_distances`)."""
         x0, y0 = self.origin_m
         cell_size = self.cell_size_m
         angles = 2.0 * np.pi * directions / self.direction_bins
-        back_x = np.repeat(-np.cos(angles), self.centers.shape[0])
-        back_y = np.repeat(-np.sin(angles), self.centers.shape[0])
-        start_x = np.tile((self.centers[:, 0] - x0) / cell_size, directions.size)
-        start_y = np.tile((self.centers[:, 1] - y0) / cell_size, directions.size)
-        samples = self.samples_m / cell_size
-        distance = np.full(back_x.size, self.samples_m[-1])
-        pending = np.arange(back_x.size)
-        block = 8
-        for first in range(0, samples.size, block):
-            steps = samples[first : first + block]
-            cell_x = np.floor(start_x[pending, None] + steps[None, :] * back_x[pending, None])
-            cell_y = np.floor(start_y[pending, None] + steps[None, :] * back_y[pending, None])
-            cell_x = np.clip(cell_x, -1, nx).astype(np.intp) + 1
-            cell_y = np.clip(cell_y, -1, ny).astype(np.intp) + 1
-            blocked = self.blocked_cells[cell_x, cell_y]
-            hit = blocked.any(axis=1)
-            distance[pending[hit]] = self.samples_m[first + np.argmax(blocked[hit], axis=1)]
-            pending = pending[~hit]
-            if pending.size == 0:
-                break
-        return distance.reshape(directions.size, self.centers.shape[0])
+        return kim_kernels.free_distances(  # type: ignore[no-any-return]
+            -np.cos(angles),
+            -np.sin(angles),
+            (self.centers[:, 0] - x0) / cell_size,
+            (self.centers[:, 1] - y0) / cell_size,
+            self.samples_m / cell_size,
+            self.samples_m,
+            self.blocked_cells,
+        )
 
 
 _TABLES: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, float], _FreeDistanceTable]] = (

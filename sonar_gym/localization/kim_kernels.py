@@ -1,13 +1,16 @@
-"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the readings with an echo and
-their end points, the quantised beam directions, the (reading, anchor) pairs that can vote
-inside the search circle, the vote volume, and the votes of one heading in a window.
+"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the free distances of the
+unobstructed-ray table, the readings with an echo and their end points, the quantised beam
+directions, the (reading, anchor) pairs that can vote inside the search circle, the vote
+volume, and the votes of one heading in a window.
 
 They do the arithmetic of the array forms they replace element by element, in the same order
-(kept as references in ``tests/localization/test_kim_fast_paths.py`` and
-``test_kim_reading_kernels.py``), so readings, votes, counts and positions are the same bits;
-the array forms paid numpy's per-call cost on a few dozen readings, a few hundred pairs and a
-few thousand votes per fix. The trigonometry stays in numpy (its ``cos`` and ``sin`` of arrays
-round differently from libm's): callers pass cosines and sines in.
+(kept as references in ``tests/localization/test_kim_fast_paths.py``,
+``test_kim_reading_kernels.py`` and ``kim_free_distance_reference.py``), so distances,
+readings, votes, counts and positions are the same bits; the array forms paid numpy's per-call
+cost on a few dozen readings, a few hundred pairs and a few thousand votes per fix, and traced
+the table's rays in blocks of samples over every pending ray. The trigonometry stays in numpy
+(its ``cos`` and ``sin`` of arrays round differently from libm's): callers pass cosines and
+sines in.
 
 Frames: readings' end points are in the first sweep's robot frame (metres); anchors, search
 centre, grid origin and vote positions ``t = a - R(heading) e`` in the map frame {W} (metres).
@@ -591,6 +594,58 @@ def smoothed_fix(
         (cell_x - 1, cell_y - 1, cell_x + 1, cell_y + 1),
     )  # fmt: skip
     return volume, score, heading, x, y, count, mean_x, mean_y
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 2, "C"),
+    NUMBERS,  # back_x
+    NUMBERS,  # back_y
+    NUMBERS,  # start_x
+    NUMBERS,  # start_y
+    NUMBERS,  # samples
+    NUMBERS,  # samples_m
+    types.Array(types.boolean, 2, "A", readonly=True),  # blocked_cells
+)
+def free_distances(
+    back_x: FloatArray,
+    back_y: FloatArray,
+    start_x: FloatArray,
+    start_y: FloatArray,
+    samples: FloatArray,
+    samples_m: FloatArray,
+    blocked_cells: np.ndarray,
+) -> FloatArray:
+    """``(directions, cells)`` free distance (metres) behind each occupied cell per direction:
+    the first of ``samples_m`` at which the ray traced back from the cell meets a blocked cell,
+    the last sample when none does.
+
+    Sample ``i`` of cell ``k`` traced along direction ``d`` lies in the grid cell
+    ``floor(start + samples[i] back)`` per axis, clipped to ``[-1, n]`` and shifted by one into
+    ``blocked_cells`` (``(nx + 2, ny + 2)``, a blocked border for everything off the grid), the
+    array form's steps in its order.
+
+    Args:
+        back_x, back_y: numpy's ``-cos``, ``-sin`` of each direction.
+        start_x, start_y: each occupied cell's centre in cell units from the grid origin.
+        samples: the sample distances in cell units; ``samples_m``: the same in metres.
+        blocked_cells: occupied cells and the border.
+    """
+    n_x, n_y = blocked_cells.shape[0] - 2, blocked_cells.shape[1] - 2
+    last = samples_m[samples_m.size - 1]
+    distance = np.empty((back_x.size, start_x.size))
+    for direction in range(back_x.size):
+        step_x, step_y = back_x[direction], back_y[direction]
+        for cell in range(start_x.size):
+            from_x, from_y = start_x[cell], start_y[cell]
+            found = last
+            for sample in range(samples.size):
+                cell_x = min(max(math.floor(from_x + samples[sample] * step_x), -1.0), n_x)
+                cell_y = min(max(math.floor(from_y + samples[sample] * step_y), -1.0), n_y)
+                if blocked_cells[int(cell_x) + 1, int(cell_y) + 1]:
+                    found = samples_m[sample]
+                    break
+            distance[direction, cell] = found
+    return distance
 
 
 @compiled(types.float64, NUMBERS)  # type: ignore[misc]
