@@ -142,7 +142,13 @@ def direction_indices(
     for heading in range(headings.size):
         for reading in range(beams.size):
             turns = (headings[heading] + beams[reading]) * bins_per_radian
-            indices[heading, reading] = int(np.rint(turns)) % direction_bins
+            index = int(np.rint(turns))
+            # the floor modulo: an index at most one turn below 0 needs no integer division
+            if index < 0:
+                index += direction_bins
+            if not 0 <= index < direction_bins:
+                index %= direction_bins
+            indices[heading, reading] = index
     return indices
 
 
