@@ -57,7 +57,7 @@ def vote_around_estimate(
         max_range_m: readings at or beyond this range count as no echo, metres.
         anchor: where a range vector ends in an occupied cell (see ``vote_localize``).
     """
-    position_spread = math.sqrt(max(largest_position_variance(covariance), 0.0))
+    position_spread = math.sqrt(max(float(np.linalg.eigvalsh(covariance[:2, :2])[-1]), 0.0))
     radius = _clipped(
         3.0 * position_spread + grid.cell_size_m, MIN_SEARCH_RADIUS_M, MAX_SEARCH_RADIUS_M
     )
@@ -76,69 +76,6 @@ def vote_around_estimate(
         max_range_m=max_range_m,
         anchor=anchor,
     )
-
-
-_EPS = 2.0**-53
-"""LAPACK's ``dlamch('E')``: the relative machine precision of float64."""
-_UNSCALED_RANGE = (1e-100, 1e100)
-"""Magnitudes of the largest entry for which LAPACK's ``dsyevd`` and ``dsterf`` scale nothing
-(they scale below about 1e-122 and above about 1e146)."""
-
-
-def largest_position_variance(covariance: FloatArray) -> float:
-    """``np.linalg.eigvalsh(covariance[:2, :2])[-1]``: the largest eigenvalue of the position
-    block (m^2), the same bits in Python floats.
-
-    numpy's ``eigvalsh`` is LAPACK's ``dsyevd`` on the lower triangle, eigenvalues only. On a
-    2x2 ``[[a, b], [b, c]]`` whose largest entry's magnitude lies in :data:`_UNSCALED_RANGE`
-    nothing is scaled, the tridiagonal form is ``d = (a, c)``, ``e = b``, and ``dsterf`` either
-    splits the matrix (eigenvalues ``a``, ``c``) or solves it with ``dlae2``
-    (:func:`_dlae2`), then sorts ascending; this follows those steps. Any other matrix (tiny,
-    huge or not finite) goes to ``np.linalg.eigvalsh`` itself.
-    """
-    a, b, c = float(covariance[0, 0]), float(covariance[1, 0]), float(covariance[1, 1])
-    low, high = _UNSCALED_RANGE
-    if not low <= max(abs(a), abs(b), abs(c)) <= high:
-        return float(np.linalg.eigvalsh(covariance[:2, :2])[-1])
-    # dsterf: a negligible off-diagonal splits the matrix into two 1x1 blocks
-    if abs(b) <= (math.sqrt(abs(a)) * math.sqrt(abs(c))) * _EPS:
-        return _last_sorted(a, c)
-    squared_b = b * b
-    if squared_b <= _EPS * _EPS * abs(a * c):
-        return _last_sorted(a, c)
-    # dsterf iterates from the end with the smaller diagonal entry (QL from a, QR from c)
-    # (QR from c: d becomes (rt2, rt1); QL from a: (rt1, rt2))
-    if abs(c) < abs(a):
-        rt1, rt2 = _dlae2(c, math.sqrt(squared_b), a)
-        return _last_sorted(rt2, rt1)
-    rt1, rt2 = _dlae2(a, math.sqrt(squared_b), c)
-    return _last_sorted(rt1, rt2)
-
-
-def _last_sorted(first: float, second: float) -> float:
-    """The last of ``(first, second)`` sorted ascending by LAPACK's ``dlasrt`` (an insertion
-    sort: swapped only when ``second < first``)."""
-    return first if second < first else second
-
-
-def _dlae2(a: float, b: float, c: float) -> tuple[float, float]:
-    """LAPACK's ``dlae2``: the eigenvalues ``(rt1, rt2)`` of ``[[a, b], [b, c]]``, ``rt1`` the
-    larger in magnitude, in its steps and order."""
-    total, difference = a + c, a - c
-    abs_difference, abs_twice_b = abs(difference), abs(b + b)
-    larger, smaller = (a, c) if abs(a) > abs(c) else (c, a)
-    if abs_difference > abs_twice_b:
-        ratio = abs_twice_b / abs_difference
-        root = abs_difference * math.sqrt(1.0 + ratio * ratio)
-    elif abs_difference < abs_twice_b:
-        ratio = abs_difference / abs_twice_b
-        root = abs_twice_b * math.sqrt(1.0 + ratio * ratio)
-    else:
-        root = abs_twice_b * math.sqrt(2.0)
-    if total == 0.0:
-        return 0.5 * root, -0.5 * root
-    rt1 = 0.5 * (total - root) if total < 0.0 else 0.5 * (total + root)
-    return rt1, (larger / rt1) * smaller - (b / rt1) * b
 
 
 def _clipped(value: float, low: float, high: float) -> float:
@@ -196,6 +133,5 @@ __all__ = [
     "MIN_SEARCH_RADIUS_M",
     "fix_covariance",
     "innovation_accepted",
-    "largest_position_variance",
     "vote_around_estimate",
 ]
