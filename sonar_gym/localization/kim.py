@@ -110,6 +110,7 @@ __all__ = [
     "proportional_encoder_noise",
     "sweep_end_points",
     "vote_localize",
+    "vote_localize_unchecked",
 ]
 
 EMPTY_SWEEP = "empty_sweep"
@@ -160,8 +161,8 @@ Anchor = Literal["cell_center", "obstacle_point"]
 _ANCHORS = ("cell_center", "obstacle_point")
 _SELECTIONS = ("smoothed", "max")
 _REFINEMENTS = ("vote_mean", "cell_center")
-_CHUNK_ELEMENTS = 2_000_000
-"""Upper bound on the elements of one vectorised block (keeps memory to tens of MB)."""
+Centre = tuple[float, float]
+"""``(x, y)`` of the search circle's centre, {W}, metres."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,11 +198,14 @@ def heading_candidates_around(
         raise ValueError(f"heading_step_rad must be a finite angle > 0 rad, got {step_rad!r}")
     if not (math.isfinite(float(window_rad)) and window_rad >= 0.0):
         raise ValueError(f"heading_window_rad must be a finite angle >= 0 rad, got {window_rad!r}")
+    return _headings_around(float(prior_heading_rad), float(window_rad), float(step_rad))
+
+
+def _headings_around(prior_heading_rad: float, window_rad: float, step_rad: float) -> FloatArray:
+    """:func:`heading_candidates_around` of checked floats (rad)."""
     count = math.floor(window_rad / step_rad + 1e-9)
     count = min(count, math.ceil(math.pi / step_rad))
-    return kim_kernels.heading_grid(  # type: ignore[no-any-return]
-        float(prior_heading_rad), float(step_rad), count
-    )
+    return kim_kernels.heading_grid(prior_heading_rad, step_rad, count)  # type: ignore[no-any-return]
 
 
 # -- the unobstructed-ray table ---------------------------------------------------------------
@@ -248,43 +252,26 @@ class _FreeDistanceTable:
             return self.distance
         missing = np.unique(direction_indices[~self.filled[direction_indices]])
         if missing.size:
-            per_direction = max(1, self.centers.shape[0] * self.samples_m.size)
-            chunk = max(1, _CHUNK_ELEMENTS // per_direction)
-            for start in range(0, missing.size, chunk):
-                block = missing[start : start + chunk]
-                self.distance[block] = self._trace(block)
+            self.distance[missing] = self._trace(missing)
             self.filled[missing] = True
             self.complete = bool(self.filled.all())
         return self.distance
 
     def _trace(self, directions: npt.NDArray[np.intp]) -> FloatArray:
-        """March back from every cell centre in the given directions, a block of samples at a
-        time, keeping only the rays not yet blocked."""
-        nx, ny = self.blocked_cells.shape[0] - 2, self.blocked_cells.shape[1] - 2
+        """March back from every cell centre in the given directions, every half cell
+        (:func:`~sonar_gym.localization.kim_kernels.free_distances`)."""
         x0, y0 = self.origin_m
         cell_size = self.cell_size_m
         angles = 2.0 * np.pi * directions / self.direction_bins
-        back_x = np.repeat(-np.cos(angles), self.centers.shape[0])
-        back_y = np.repeat(-np.sin(angles), self.centers.shape[0])
-        start_x = np.tile((self.centers[:, 0] - x0) / cell_size, directions.size)
-        start_y = np.tile((self.centers[:, 1] - y0) / cell_size, directions.size)
-        samples = self.samples_m / cell_size
-        distance = np.full(back_x.size, self.samples_m[-1])
-        pending = np.arange(back_x.size)
-        block = 8
-        for first in range(0, samples.size, block):
-            steps = samples[first : first + block]
-            cell_x = np.floor(start_x[pending, None] + steps[None, :] * back_x[pending, None])
-            cell_y = np.floor(start_y[pending, None] + steps[None, :] * back_y[pending, None])
-            cell_x = np.clip(cell_x, -1, nx).astype(np.intp) + 1
-            cell_y = np.clip(cell_y, -1, ny).astype(np.intp) + 1
-            blocked = self.blocked_cells[cell_x, cell_y]
-            hit = blocked.any(axis=1)
-            distance[pending[hit]] = self.samples_m[first + np.argmax(blocked[hit], axis=1)]
-            pending = pending[~hit]
-            if pending.size == 0:
-                break
-        return distance.reshape(directions.size, self.centers.shape[0])
+        return kim_kernels.free_distances(  # type: ignore[no-any-return]
+            -np.cos(angles),
+            -np.sin(angles),
+            (self.centers[:, 0] - x0) / cell_size,
+            (self.centers[:, 1] - y0) / cell_size,
+            self.samples_m / cell_size,
+            self.samples_m,
+            self.blocked_cells,
+        )
 
 
 _TABLES: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, float], _FreeDistanceTable]] = (
@@ -295,7 +282,9 @@ _TABLES: weakref.WeakKeyDictionary[OccupancyGrid, dict[tuple[int, float], _FreeD
 def _free_distance_table(
     grid: OccupancyGrid, direction_bins: int, end_clearance_m: float
 ) -> _FreeDistanceTable:
-    tables = _TABLES.setdefault(grid, {})
+    tables = _TABLES.get(grid)
+    if tables is None:
+        tables = _TABLES[grid] = {}
     key = (direction_bins, end_clearance_m)
     if key not in tables:
         tables[key] = _FreeDistanceTable(grid, direction_bins, end_clearance_m)
@@ -325,18 +314,18 @@ def _check_sweeps(sweeps: Sequence[Sweep] | Sweep) -> list[Sweep]:
 
 def _check_center(
     search_center: Pose | npt.ArrayLike | None,
-) -> tuple[FloatArray | None, float | None]:
+) -> tuple[Centre | None, float | None]:
     """``(position, prior heading or None)`` of the search centre."""
     if search_center is None:
         return None, None
     if isinstance(search_center, Pose):
-        return search_center.position, search_center.theta
+        return (search_center.x, search_center.y), search_center.theta
     values = np.asarray(search_center, dtype=np.float64)
     if values.shape not in ((2,), (3,)) or not np.all(np.isfinite(values)):
         raise ValueError(
             f"search_center must be a Pose or a finite (x, y[, theta]), got {search_center!r}"
         )
-    return values[:2].copy(), (float(values[2]) if values.size == 3 else None)
+    return (float(values[0]), float(values[1])), (float(values[2]) if values.size == 3 else None)
 
 
 def _resolve_headings(
@@ -363,7 +352,7 @@ def _resolve_headings(
 # -- voting -------------------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _Readings:
     """All valid readings moved into the first sweep's robot frame."""
 
@@ -384,21 +373,21 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
     loops around numpy's ``cos`` and ``sin`` of the beams)."""
     angles = np.concatenate([sweep.angles for sweep in sweeps])
     ranges = np.concatenate([sweep.ranges for sweep in sweeps])
-    counts = np.array([sweep.ranges.size for sweep in sweeps], dtype=np.int64)
+    counts = np.array([sweep.ranges.size for sweep in sweeps])
     # heading and sensor position of each sweep, in the first sweep's frame
-    headings, sensor_x, sensor_y = np.empty((3, len(sweeps)))
-    for index, sweep in enumerate(sweeps):
+    frames = []
+    for sweep in sweeps:
         pose = sweep.odometry
         offset_x, offset_y = sweep.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
-        headings[index] = pose.theta
-        sensor_x[index] = pose.x + c * offset_x - s * offset_y
-        sensor_y[index] = pose.y + s * offset_x + c * offset_y
-    beam, ranges, sweep_of = kim_kernels.echo_beams(
-        angles, ranges, counts, headings, math.inf if max_range_m is None else float(max_range_m)
-    )
-    end_x, end_y, length = kim_kernels.end_points(
-        ranges, sweep_of, sensor_x, sensor_y, np.cos(beam), np.sin(beam)
+        frames.append(
+            (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
+        )
+    sweep_frames = np.array(frames)
+    max_range = math.inf if max_range_m is None else float(max_range_m)
+    beam = kim_kernels.echo_beams(angles, ranges, counts, sweep_frames, max_range)
+    end_x, end_y, length = kim_kernels.echo_end_points(
+        ranges, counts, sweep_frames, np.cos(beam), np.sin(beam), max_range
     )
     return _Readings(end_x, end_y, beam, length)
 
@@ -425,7 +414,7 @@ def _heading_spread(headings: FloatArray) -> tuple[float, float] | None:
 
 
 def _pair_test(
-    center: FloatArray | None, radius: float | None, headings: FloatArray
+    center: Centre | None, radius: float | None, headings: FloatArray
 ) -> tuple[tuple[float, float, float], tuple[bool, float, float, float, float]]:
     """The search circle ``(centre x, centre y, radius)`` ({W}, metres) and the heading test
     ``(by heading, middle cos, middle sin, spread cos, spread sin)`` of
@@ -448,7 +437,7 @@ def _pair_test(
 def _candidate_pairs(
     readings: _Readings,
     anchors: FloatArray,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]:
@@ -463,7 +452,7 @@ def _candidate_pairs(
     )
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _VoteWindow:
     """The block of grid cells ``low .. low + shape - 1`` that holds every counted vote.
 
@@ -491,9 +480,7 @@ class _VoteWindow:
         return x, y, x + wx - 1, y + wy - 1
 
 
-def _vote_window(
-    grid: OccupancyGrid, center: FloatArray | None, radius: float | None
-) -> _VoteWindow:
+def _vote_window(grid: OccupancyGrid, center: Centre | None, radius: float | None) -> _VoteWindow:
     """The :class:`_VoteWindow` of a search circle (the whole grid without one)."""
     nx, ny = grid.shape
     if center is None or radius is None:
@@ -510,7 +497,7 @@ def _vote_window(
 
 
 def _vote_layout(
-    grid: OccupancyGrid, window: _VoteWindow, center: FloatArray | None, radius: float | None
+    grid: OccupancyGrid, window: _VoteWindow, center: Centre | None, radius: float | None
 ) -> tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]:
     """The compiled vote loops' ``(circle, grid_frame, window)``
     (:mod:`~sonar_gym.localization.kim_kernels`): the search circle (an infinite radius
@@ -519,7 +506,7 @@ def _vote_layout(
     return _search_circle(center, radius), (float(x0), float(y0), float(size)), window.cells
 
 
-def _search_circle(center: FloatArray | None, radius: float | None) -> tuple[float, float, float]:
+def _search_circle(center: Centre | None, radius: float | None) -> tuple[float, float, float]:
     """``(centre x, centre y, radius)`` of the search circle ({W}, metres); without one an
     infinite circle, which every vote lies in."""
     if center is None or radius is None:
@@ -618,8 +605,81 @@ def vote_localize(
     headings = _resolve_headings(
         heading_candidates, prior_heading, heading_step_rad, heading_window_rad
     )
-    direction_bins = int(direction_bins)
+    return _vote(
+        grid,
+        sweep_list,
+        headings,
+        center,
+        radius,
+        max_range_m,
+        clearance,
+        int(direction_bins),
+        selection,
+        refine,
+        anchor,
+        ambiguity_ratio,
+        (ambiguity_distance_m, ambiguity_heading_rad),
+        return_vote_map,
+    )
 
+
+def vote_localize_unchecked(
+    grid: OccupancyGrid,
+    sweeps: Sequence[Sweep],
+    search_center: Pose,
+    search_radius: float,
+    *,
+    heading_step_rad: float,
+    heading_window_rad: float,
+    max_range_m: float,
+    anchor: Anchor,
+) -> VoteLocalization:
+    """``vote_localize(grid, sweeps, search_center=..., search_radius=..., heading_step_rad=...,
+    heading_window_rad=..., max_range_m=..., anchor=..., return_vote_map=False)`` without the
+    argument checks, the other arguments at their defaults.
+
+    For callers that build the arguments from their own checked state (the EKF loop of
+    :mod:`~sonar_gym.localization.kim_fix`): finite floats (metres, radians), a step and a
+    radius > 0, a window >= 0, a list of :class:`Sweep` whose first odometry is the identity.
+    Anything else is the caller's error.
+    """
+    headings = _headings_around(search_center.theta, heading_window_rad, heading_step_rad)
+    return _vote(
+        grid,
+        sweeps,
+        headings,
+        (search_center.x, search_center.y),
+        search_radius,
+        max_range_m,
+        grid.cell_size_m,
+        360,
+        "smoothed",
+        "vote_mean",
+        anchor,
+        None,
+        (0.15, math.radians(10.0)),
+        False,
+    )
+
+
+def _vote(
+    grid: OccupancyGrid,
+    sweep_list: Sequence[Sweep],
+    headings: FloatArray,
+    center: Centre | None,
+    radius: float | None,
+    max_range_m: float | None,
+    clearance: float,
+    direction_bins: int,
+    selection: Selection,
+    refine: Refinement,
+    anchor: Anchor,
+    ambiguity_ratio: float | None,
+    ambiguity_reach: tuple[float, float],
+    return_vote_map: bool,
+) -> VoteLocalization:
+    """:func:`vote_localize` of checked arguments: ``clearance`` is ``end_clearance_m``
+    resolved, ``ambiguity_reach`` is ``(ambiguity_distance_m, ambiguity_heading_rad)``."""
     readings = _gather_readings(sweep_list, max_range_m)
     if readings.range_m.size == 0:
         return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
@@ -655,9 +715,7 @@ def vote_localize(
     votes = int(volume[choice.heading_index, choice.cell[0] - low_x, choice.cell[1] - low_y])
 
     if ambiguity_ratio is not None:
-        rival = _rival_score(
-            grid, choice, window, headings, ambiguity_distance_m, ambiguity_heading_rad
-        )
+        rival = _rival_score(grid, choice, window, headings, *ambiguity_reach)
         if rival >= float(ambiguity_ratio) * choice.best_score:
             return VoteLocalization(
                 status=AMBIGUOUS,
@@ -669,7 +727,7 @@ def vote_localize(
                 vote_map=vote_map,
             )
 
-    x, y = float(choice.centre[0]), float(choice.centre[1])
+    x, y = choice.centre
     # the mean of the chosen heading's votes in the chosen cells: np.mean's own arithmetic
     # (one pairwise sum, one division)
     if refine == "vote_mean" and choice.vote_count:
@@ -688,7 +746,7 @@ def vote_localize(
 _NOTHING_VOTED = "no unobstructed range vector voted inside the grid / search circle"
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class _VoteInputs:
     """What every vote loop of one fix reads: the readings, the anchors, the quantised beam
     directions ``(h, J)``, the free-distance table, the cosines and sines of the candidate
@@ -703,7 +761,7 @@ class _VoteInputs:
     layout: tuple[tuple[float, float, float], tuple[float, float, float], tuple[int, int, int, int]]
 
 
-@dataclass(frozen=True)
+@dataclass
 class _Choice:
     """The chosen heading and cells.
 
@@ -719,7 +777,7 @@ class _Choice:
     cell: tuple[int, int]
     window_low: tuple[int, int]
     window_high: tuple[int, int]
-    centre: FloatArray
+    centre: tuple[float, float]
     vote_count: int
     vote_mean: tuple[float, float]
     volume: npt.NDArray[np.int64]
@@ -742,7 +800,7 @@ def _smoothed_choice(
     grid: OccupancyGrid,
     votes_of: _VoteInputs,
     window: _VoteWindow,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.int64], _Choice | None]:
@@ -770,9 +828,7 @@ def _smoothed_choice(
     low = (max(best_x - 1, 0), max(best_y - 1, 0))
     high = (min(best_x + 1, nx - 1), min(best_y + 1, ny - 1))
     x0, y0 = grid.origin_m  # the centre of the cell, as OccupancyGrid.cell_to_world
-    centre = np.array(
-        [x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m]
-    )
+    centre = (x0 + (best_x + 0.5) * grid.cell_size_m, y0 + (best_y + 0.5) * grid.cell_size_m)
     return volume, _Choice(
         heading_index,
         (best_x, best_y),
@@ -790,7 +846,7 @@ def _max_choice(
     grid: OccupancyGrid,
     votes_of: _VoteInputs,
     window: _VoteWindow,
-    center: FloatArray | None,
+    center: Centre | None,
     radius: float | None,
     headings: FloatArray,
 ) -> tuple[npt.NDArray[np.int64] | None, _Choice | None]:
@@ -842,7 +898,15 @@ def _max_choice(
         (*low, *high),
     )
     return volume, _Choice(
-        heading_index, cell, low, high, centroid, count, (mean_x, mean_y), volume, "max"
+        heading_index,
+        cell,
+        low,
+        high,
+        (float(centroid[0]), float(centroid[1])),
+        count,
+        (mean_x, mean_y),
+        volume,
+        "max",
     )
 
 

@@ -22,7 +22,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from sonar_gym.localization.ekf import ekf_update_unchecked
-from sonar_gym.localization.kim import Anchor, Sweep, VoteLocalization, vote_localize
+from sonar_gym.localization.kim import Anchor, Sweep, VoteLocalization, vote_localize_unchecked
 from sonar_gym.localization.kim_grid import OccupancyGrid
 from sonar_gym.pose import FloatArray, Pose, angle_difference
 
@@ -44,6 +44,10 @@ def vote_around_estimate(
 ) -> VoteLocalization:
     """The vote of sec. 3.3 in the search circle and heading window that ``covariance`` sets.
 
+    The arguments are the filter's own state, so the vote skips
+    :func:`~sonar_gym.localization.kim.vote_localize`'s checks
+    (:func:`~sonar_gym.localization.kim.vote_localize_unchecked`).
+
     Args:
         grid: the known map.
         sweeps: the sweeps, the first one's odometry the identity (see ``vote_localize``).
@@ -62,16 +66,15 @@ def vote_around_estimate(
         MIN_HEADING_WINDOW_RAD,
         MAX_HEADING_WINDOW_RAD,
     )
-    return vote_localize(
+    return vote_localize_unchecked(
         grid,
         sweeps,
-        search_center=estimate,
-        search_radius=radius,
+        estimate,
+        radius,
         heading_step_rad=heading_step_rad,
         heading_window_rad=window,
         max_range_m=max_range_m,
         anchor=anchor,
-        return_vote_map=False,
     )
 
 

@@ -1,13 +1,16 @@
-"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the readings with an echo and
-their end points, the quantised beam directions, the (reading, anchor) pairs that can vote
-inside the search circle, the vote volume, and the votes of one heading in a window.
+"""Compiled inner loops of Kim, Lee & Jeong's voting (sec. 3.3): the free distances of the
+unobstructed-ray table, the readings with an echo and their end points, the quantised beam
+directions, the (reading, anchor) pairs that can vote inside the search circle, the vote
+volume, and the votes of one heading in a window.
 
 They do the arithmetic of the array forms they replace element by element, in the same order
-(kept as references in ``tests/localization/test_kim_fast_paths.py`` and
-``test_kim_reading_kernels.py``), so readings, votes, counts and positions are the same bits;
-the array forms paid numpy's per-call cost on a few dozen readings, a few hundred pairs and a
-few thousand votes per fix. The trigonometry stays in numpy (its ``cos`` and ``sin`` of arrays
-round differently from libm's): callers pass cosines and sines in.
+(kept as references in ``tests/localization/test_kim_fast_paths.py``,
+``test_kim_reading_kernels.py`` and ``kim_free_distance_reference.py``), so distances,
+readings, votes, counts and positions are the same bits; the array forms paid numpy's per-call
+cost on a few dozen readings, a few hundred pairs and a few thousand votes per fix, and traced
+the table's rays in blocks of samples over every pending ray. The trigonometry stays in numpy
+(its ``cos`` and ``sin`` of arrays round differently from libm's): callers pass cosines and
+sines in.
 
 Frames: readings' end points are in the first sweep's robot frame (metres); anchors, search
 centre, grid origin and vote positions ``t = a - R(heading) e`` in the map frame {W} (metres).
@@ -32,96 +35,94 @@ from sonar_gym.compiled import (
 )
 from sonar_gym.pose import FloatArray
 
-_BEAMS = types.Tuple(
-    (
-        types.Array(types.float64, 1, "C"),
-        types.Array(types.float64, 1, "C"),
-        types.Array(types.int64, 1, "C"),
-    )
-)
+
+def _has_echo(range_m: float, max_range: float) -> bool:
+    """Whether a reading returned an echo: a finite range (metres) below ``max_range``."""
+    return bool(np.isfinite(range_m)) and range_m < max_range
+
+
+_has_echo_compiled = compiled(types.boolean, types.float64, types.float64, inline=True)(_has_echo)
 
 
 @compiled(  # type: ignore[misc]
-    _BEAMS,
+    types.Array(types.float64, 1, "C"),
     NUMBERS,  # angles
     NUMBERS,  # ranges
     INDICES,  # counts
-    NUMBERS,  # sweep_headings
+    TABLE,  # sweep_frames
     types.float64,  # max_range
 )
 def echo_beams(
     angles: FloatArray,
     ranges: FloatArray,
     counts: np.ndarray,
-    sweep_headings: FloatArray,
+    sweep_frames: FloatArray,
     max_range: float,
-) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """``(beam, range, sweep)`` of the readings with an echo: a finite range below
-    ``max_range``, in reading order.
+) -> FloatArray:
+    """The beam of each reading with an echo (a finite range below ``max_range``), in reading
+    order: ``sweep heading + angle`` (rad, the first sweep's robot frame), the array form's one
+    addition.
 
     Args:
         angles, ranges: every sweep's beam angles (rad, its own robot frame) and ranges
             (metres), concatenated; ``counts[i]`` readings belong to sweep ``i``.
-        sweep_headings: heading of each sweep in the first sweep's robot frame (rad).
+        sweep_frames: ``(sweeps, 3)``: each sweep's heading (rad) and sensor position
+            (metres) in the first sweep's robot frame; the heading is used here.
         max_range: readings at or beyond it count as no echo (metres; inf: none).
-
-    Returns:
-        beam: ``sweep heading + angle`` (rad, the first sweep's robot frame), the array
-            form's one addition; range: the reading's range (metres); sweep: its sweep.
     """
     beam = np.empty(ranges.size)
-    kept_range = np.empty(ranges.size)
-    sweep_of = np.empty(ranges.size, dtype=np.int64)
     count = 0
     reading = 0
     for sweep in range(counts.size):
         for _ in range(counts[sweep]):
-            value = ranges[reading]
-            if np.isfinite(value) and value < max_range:
-                beam[count] = sweep_headings[sweep] + angles[reading]
-                kept_range[count] = value
-                sweep_of[count] = sweep
+            if _has_echo_compiled(ranges[reading], max_range):
+                beam[count] = sweep_frames[sweep, 0] + angles[reading]
                 count += 1
             reading += 1
-    return beam[:count].copy(), kept_range[:count].copy(), sweep_of[:count].copy()
-
-
-_END_POINTS = types.UniTuple(types.Array(types.float64, 1, "C"), 3)
+    return beam[:count].copy()
 
 
 @compiled(  # type: ignore[misc]
-    _END_POINTS,
+    types.Array(types.float64, 2, "C"),
     NUMBERS,  # ranges
-    INDICES,  # sweep_of
-    NUMBERS,  # sensor_x
-    NUMBERS,  # sensor_y
+    INDICES,  # counts
+    TABLE,  # sweep_frames
     NUMBERS,  # beam_cos
     NUMBERS,  # beam_sin
+    types.float64,  # max_range
 )
-def end_points(
+def echo_end_points(
     ranges: FloatArray,
-    sweep_of: np.ndarray,
-    sensor_x: FloatArray,
-    sensor_y: FloatArray,
+    counts: np.ndarray,
+    sweep_frames: FloatArray,
     beam_cos: FloatArray,
     beam_sin: FloatArray,
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(end x, end y, length)`` of each reading (metres, the first sweep's robot frame):
-    ``end = sensor + range (cos, sin)`` and ``length = sqrt(dx^2 + dy^2)`` of ``end - sensor``,
-    the array form's steps in its order (``beam_cos``, ``beam_sin``: numpy's of the beams;
-    ``sensor_x[i]``, ``sensor_y[i]``: the sensor of sweep ``i``)."""
-    end_x = np.empty(ranges.size)
-    end_y = np.empty(ranges.size)
-    length = np.empty(ranges.size)
-    for reading in range(ranges.size):
-        from_x, from_y = sensor_x[sweep_of[reading]], sensor_y[sweep_of[reading]]
-        to_x = from_x + ranges[reading] * beam_cos[reading]
-        to_y = from_y + ranges[reading] * beam_sin[reading]
-        run_x, run_y = to_x - from_x, to_y - from_y
-        end_x[reading] = to_x
-        end_y[reading] = to_y
-        length[reading] = math.sqrt(run_x * run_x + run_y * run_y)
-    return end_x, end_y, length
+    max_range: float,
+) -> FloatArray:
+    """``(3, J)`` rows end x, end y and length of each reading with an echo (metres, the first
+    sweep's robot frame), in the order of :func:`echo_beams`: ``end = sensor + range (cos,
+    sin)`` and ``length = sqrt(dx^2 + dy^2)`` of ``end - sensor``, the array form's steps in its
+    order (``beam_cos``, ``beam_sin``: numpy's of :func:`echo_beams`; ``ranges``, ``counts``,
+    ``sweep_frames``, ``max_range``: its arguments, ``sweep_frames[i, 1:]`` the sensor of sweep
+    ``i``)."""
+    rows = np.empty((3, beam_cos.size))
+    count = 0
+    reading = 0
+    for sweep in range(counts.size):
+        from_x, from_y = sweep_frames[sweep, 1], sweep_frames[sweep, 2]
+        for _ in range(counts[sweep]):
+            reading_range = ranges[reading]
+            reading += 1
+            if not _has_echo_compiled(reading_range, max_range):
+                continue
+            to_x = from_x + reading_range * beam_cos[count]
+            to_y = from_y + reading_range * beam_sin[count]
+            run_x, run_y = to_x - from_x, to_y - from_y
+            rows[0, count] = to_x
+            rows[1, count] = to_y
+            rows[2, count] = math.sqrt(run_x * run_x + run_y * run_y)
+            count += 1
+    return rows
 
 
 @compiled(  # type: ignore[misc]
@@ -141,7 +142,13 @@ def direction_indices(
     for heading in range(headings.size):
         for reading in range(beams.size):
             turns = (headings[heading] + beams[reading]) * bins_per_radian
-            indices[heading, reading] = int(np.rint(turns)) % direction_bins
+            index = int(np.rint(turns))
+            # the floor modulo: an index at most one turn below 0 needs no integer division
+            if index < 0:
+                index += direction_bins
+            if not 0 <= index < direction_bins:
+                index %= direction_bins
+            indices[heading, reading] = index
     return indices
 
 
@@ -593,6 +600,58 @@ def smoothed_fix(
         (cell_x - 1, cell_y - 1, cell_x + 1, cell_y + 1),
     )  # fmt: skip
     return volume, score, heading, x, y, count, mean_x, mean_y
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 2, "C"),
+    NUMBERS,  # back_x
+    NUMBERS,  # back_y
+    NUMBERS,  # start_x
+    NUMBERS,  # start_y
+    NUMBERS,  # samples
+    NUMBERS,  # samples_m
+    types.Array(types.boolean, 2, "A", readonly=True),  # blocked_cells
+)
+def free_distances(
+    back_x: FloatArray,
+    back_y: FloatArray,
+    start_x: FloatArray,
+    start_y: FloatArray,
+    samples: FloatArray,
+    samples_m: FloatArray,
+    blocked_cells: np.ndarray,
+) -> FloatArray:
+    """``(directions, cells)`` free distance (metres) behind each occupied cell per direction:
+    the first of ``samples_m`` at which the ray traced back from the cell meets a blocked cell,
+    the last sample when none does.
+
+    Sample ``i`` of cell ``k`` traced along direction ``d`` lies in the grid cell
+    ``floor(start + samples[i] back)`` per axis, clipped to ``[-1, n]`` and shifted by one into
+    ``blocked_cells`` (``(nx + 2, ny + 2)``, a blocked border for everything off the grid), the
+    array form's steps in its order.
+
+    Args:
+        back_x, back_y: numpy's ``-cos``, ``-sin`` of each direction.
+        start_x, start_y: each occupied cell's centre in cell units from the grid origin.
+        samples: the sample distances in cell units; ``samples_m``: the same in metres.
+        blocked_cells: occupied cells and the border.
+    """
+    n_x, n_y = blocked_cells.shape[0] - 2, blocked_cells.shape[1] - 2
+    last = samples_m[samples_m.size - 1]
+    distance = np.empty((back_x.size, start_x.size))
+    for direction in range(back_x.size):
+        step_x, step_y = back_x[direction], back_y[direction]
+        for cell in range(start_x.size):
+            from_x, from_y = start_x[cell], start_y[cell]
+            found = last
+            for sample in range(samples.size):
+                cell_x = min(max(math.floor(from_x + samples[sample] * step_x), -1.0), n_x)
+                cell_y = min(max(math.floor(from_y + samples[sample] * step_y), -1.0), n_y)
+                if blocked_cells[int(cell_x) + 1, int(cell_y) + 1]:
+                    found = samples_m[sample]
+                    break
+            distance[direction, cell] = found
+    return distance
 
 
 @compiled(types.float64, NUMBERS)  # type: ignore[misc]

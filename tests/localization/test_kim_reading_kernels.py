@@ -101,6 +101,18 @@ def test_compiled_direction_indices_are_the_array_forms() -> None:
         assert np.array_equal(kim._direction_index(headings, readings, bins), expected)
 
 
+def test_direction_indices_of_beams_several_turns_out_are_the_array_forms() -> None:
+    rng = np.random.default_rng(4)
+    headings = rng.uniform(-np.pi, np.pi, 7)
+    beams = np.concatenate(
+        [rng.uniform(-6.0 * np.pi, 6.0 * np.pi, 300), [-4.0 * np.pi, 2.0 * np.pi]]
+    )
+    for bins in (8, 360, 361):
+        expected = reference_direction_index(headings, beams, bins)
+        readings = kim._Readings(beams, beams, beams, beams)
+        assert np.array_equal(kim._direction_index(headings, readings, bins), expected)
+
+
 def test_direction_indices_round_half_to_even_and_wrap_negative_turns() -> None:
     bins = 8
     per_bin = 2.0 * np.pi / bins
