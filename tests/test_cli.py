@@ -412,27 +412,31 @@ def test_benchmark_reports_random_and_ppo_rates_against_cartpole(tmp_path, capsy
     assert data["meta"]["ppo"]["torch_threads"] == 1
     reference = data["reference"]
     assert reference["env_id"] == "CartPole-v1"
-    before, after = reference["before"], reference["after"]
-    assert before["timesteps"] >= 1 and after["timesteps"] >= 1
-    assert reference["ppo_steps_per_s"] == pytest.approx(
-        (before["steps_per_s"] + after["steps_per_s"]) / 2
-    )
-    assert reference["drift_after_over_before"] == pytest.approx(
-        after["steps_per_s"] / before["steps_per_s"]
-    )
+    runs = reference["runs"]
+    assert len(runs) == 3  # before the first env and after each of the two
+    assert all(run["timesteps"] >= 1 for run in runs)
+    rates = [run["steps_per_s"] for run in runs]
+    assert reference["before"] == runs[0] and reference["after"] == runs[-1]
+    assert reference["ppo_steps_per_s"] == pytest.approx(sum(rates) / 3)
+    assert reference["drift_after_over_before"] == pytest.approx(rates[-1] / rates[0])
+    assert reference["fastest_over_slowest"] == pytest.approx(max(rates) / min(rates))
     assert [entry["env_id"] for entry in data["envs"]] == [DISCRETE_ID, BOX_ID]
-    for entry in data["envs"]:
+    for index, entry in enumerate(data["envs"]):
+        # each env against the two CartPole runs around it
+        assert entry["cartpole_ppo_steps_per_s"] == pytest.approx(
+            (rates[index] + rates[index + 1]) / 2
+        )
         random, ppo = entry["random"], entry["ppo"]
         assert random["steps"] >= 1 and random["episodes"] >= 1
         assert random["steps_per_s"] == pytest.approx(random["steps"] / random["seconds"])
         assert ppo["steps_per_s"] == pytest.approx(ppo["timesteps"] / ppo["seconds"])
         assert entry["ppo_over_cartpole"] == pytest.approx(
-            ppo["steps_per_s"] / reference["ppo_steps_per_s"]
+            ppo["steps_per_s"] / entry["cartpole_ppo_steps_per_s"]
         )
         ceiling = entry["ceiling"]
         assert ceiling["timesteps"] >= 1
         assert entry["ceiling_over_cartpole"] == pytest.approx(
-            ceiling["steps_per_s"] / reference["ppo_steps_per_s"]
+            ceiling["steps_per_s"] / entry["cartpole_ppo_steps_per_s"]
         )
         assert entry["env_seconds_per_ppo_step"] == pytest.approx(
             1 / ppo["steps_per_s"] - 1 / ceiling["steps_per_s"]
@@ -513,6 +517,52 @@ def test_benchmark_phase_shares_split_the_wall_time():
         {"sensing": 0.3, "localization": 0.1, "env other": 0.2, "learner": 0.4}
     )
     assert phase_shares(0.0, 0.0, {}) == {}
+
+
+def test_benchmark_rates_each_env_against_the_cartpole_runs_around_it(monkeypatch):
+    """CartPole runs before the first env and after every env, a failed one too; each env's
+    ratios use the mean of the two runs around it, not of the whole run's."""
+    from sonar_gym.train import benchmark
+
+    cartpole_rates = iter([100.0, 300.0, 500.0, 900.0])
+    order: list[str] = []
+
+    def fake_ppo_rate(env_id, seconds, env_kwargs=None, seed=0, n_steps=512):
+        order.append(f"ppo {env_id}")
+        rate = next(cartpole_rates) if env_id == benchmark.REFERENCE_ENV_ID else 60.0
+        return benchmark.PPORate(env_id, int(rate), 1, 1.0, 0.0)
+
+    def fake_random_rate(env_id, seconds, env_kwargs=None, seed=0):
+        order.append(f"random {env_id}")
+        if env_id == "Broken-v0":
+            raise RuntimeError("broken")
+        return benchmark.RandomRate(env_id, 10, 2, 1.0, 0.5)
+
+    def fake_ceiling_rate(env_id, seconds, episode_steps, env_kwargs=None, seed=0, n_steps=512):
+        order.append(f"ceiling {env_id}")
+        return benchmark.PPORate(env_id, 150, 1, 1.0, 0.0)
+
+    monkeypatch.setattr(benchmark, "ppo_rate", fake_ppo_rate)
+    monkeypatch.setattr(benchmark, "random_rate", fake_random_rate)
+    monkeypatch.setattr(benchmark, "ceiling_rate", fake_ceiling_rate)
+    monkeypatch.setattr(benchmark, "check_env_kwargs", lambda env_id, kwargs: None)
+    report = benchmark.run_benchmark(["A-v0", "Broken-v0", "B-v0"], 1.0, measure_pan=False)
+    cartpole = f"ppo {benchmark.REFERENCE_ENV_ID}"
+    assert order == [
+        cartpole,
+        "random A-v0", "ppo A-v0", "ceiling A-v0", cartpole,
+        "random Broken-v0", cartpole,
+        "random B-v0", "ppo B-v0", "ceiling B-v0", cartpole,
+    ]  # fmt: skip
+    assert list(report.failures) == ["Broken-v0"]
+    first, second = report.envs
+    assert first.reference_steps_per_s == pytest.approx(200.0)  # (100 + 300) / 2
+    assert second.reference_steps_per_s == pytest.approx(700.0)  # (500 + 900) / 2
+    assert first.ppo_over_reference == pytest.approx(0.3)
+    assert second.ceiling_over_reference == pytest.approx(150.0 / 700.0)
+    assert report.reference_steps_per_s == pytest.approx(450.0)
+    assert report.reference_drift == pytest.approx(9.0)
+    assert report.reference_spread == pytest.approx(9.0)
 
 
 @pytest.mark.parametrize("seconds", ["0", "-1", "inf", "soon"])

@@ -6,13 +6,15 @@ One run, one process, reported as tables and written to JSON:
   resets of BeaconScan in ``beom_cho_lab`` with 1,500 extra walls;
 - **sonar pan throughput**, the rows of ``sonar_gym.train.bench_sonar.pan_throughput()`` (each
   with its ratio to bare pymunk ray casts), or a note when that module does not provide them;
-- **PPO on CartPole-v1** (the yardstick every RL user knows), measured before the envs *and*
-  after them, so drift of the machine's load during the run is visible;
+- **PPO on CartPole-v1** (the yardstick every RL user knows), measured before the first env and
+  after every env, so each env is bracketed by two CartPole runs and drift of the machine's
+  load during the run is visible;
 - per env, **random-action steps per second** (``action_space.sample()``, a new episode with
   seed ``seed + k`` whenever one ends, the time of ``reset`` included), and **SB3 PPO
   env-steps per second** (``PPO("MlpPolicy", n_steps=512, batch_size=64, n_epochs=4)``, one
   env, torch on one thread, until the wall-time budget is spent)
-  with its ratio to CartPole's PPO rate (the mean of the before and after runs);
+  with its ratio to CartPole's PPO rate beside it (the mean of the two runs that bracket the
+  env: load on a shared machine drifts over minutes, and a whole run takes several);
 - per env, PPO's **ceiling**: the same PPO on a stand-in env with the env's observation and
   action spaces and its mean episode length whose ``step`` costs nothing
   (:class:`FreeEnv`). Its ratio to CartPole is the best the env could reach were it free: the
@@ -51,6 +53,9 @@ RANDOM_SHARE_OF_BUDGET = 0.5
 """The random-action run gets this fraction of the per-env budget (it needs less to settle)."""
 CEILING_SHARE_OF_BUDGET = 0.5
 """The free-env PPO run gets this fraction of the per-env budget (its rate is steady)."""
+REFERENCE_SHARE_OF_BUDGET = 0.5
+"""Each CartPole-v1 PPO run gets this fraction of the per-env budget (one before the first env,
+one after every env)."""
 ENV_OTHER = "env other"
 LEARNER = "learner"
 
@@ -334,9 +339,11 @@ def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
 
 @dataclass(frozen=True)
 class EnvSpeed:
-    """The rates of one env, and PPO's ratio to CartPole-v1's PPO rate in the same run.
+    """The rates of one env, and PPO's ratio to CartPole-v1's PPO rate beside it.
 
-    ``ceiling`` is PPO on a :class:`FreeEnv` with the env's spaces and mean episode length.
+    ``ceiling`` is PPO on a :class:`FreeEnv` with the env's spaces and mean episode length;
+    ``reference_steps_per_s`` is CartPole-v1's PPO rate, the mean of the two runs that bracket
+    this env's runs.
     """
 
     env_id: str
@@ -383,12 +390,14 @@ class BenchmarkReport:
 
     Attributes:
         seconds: the per-env wall-time budget of PPO, seconds (random actions get
-            :data:`RANDOM_SHARE_OF_BUDGET` of it; CartPole the whole budget, twice).
+            :data:`RANDOM_SHARE_OF_BUDGET` of it, each CartPole run
+            :data:`REFERENCE_SHARE_OF_BUDGET`).
         ppo_n_steps: PPO's rollout length.
         pan_rows: rows of :func:`pan_throughput`.
         room_reset: make and resets in a room with many walls (None when not measured).
-        reference_before: PPO on CartPole-v1 before the envs.
-        reference_after: PPO on CartPole-v1 after the envs.
+        references: PPO on CartPole-v1, in the order run: before the first env, then after
+            each env (a failed env too), so ``envs[i]`` lies between ``references[i]`` and
+            ``references[i + 1]`` when no env failed.
         envs: the rates per env that ran.
         failures: env id -> error text, for envs that could not run.
         notes: measurements skipped and why.
@@ -398,22 +407,37 @@ class BenchmarkReport:
     ppo_n_steps: int
     pan_rows: tuple[Mapping[str, Any], ...]
     room_reset: RoomReset | None
-    reference_before: PPORate
-    reference_after: PPORate
+    references: tuple[PPORate, ...]
     envs: tuple[EnvSpeed, ...]
     failures: Mapping[str, str]
     notes: tuple[str, ...]
 
     @property
+    def reference_before(self) -> PPORate:
+        """PPO on CartPole-v1 before the first env."""
+        return self.references[0]
+
+    @property
+    def reference_after(self) -> PPORate:
+        """PPO on CartPole-v1 after the last env."""
+        return self.references[-1]
+
+    @property
     def reference_steps_per_s(self) -> float:
-        """CartPole-v1 PPO env-steps/s, mean of the runs before and after the envs."""
-        return 0.5 * (self.reference_before.steps_per_s + self.reference_after.steps_per_s)
+        """CartPole-v1 PPO env-steps/s, the mean over all its runs."""
+        return sum(run.steps_per_s for run in self.references) / len(self.references)
 
     @property
     def reference_drift(self) -> float:
         """CartPole-v1 PPO rate after over before (1 = the machine's load did not change)."""
         before = self.reference_before.steps_per_s
         return self.reference_after.steps_per_s / before if before > 0 else math.nan
+
+    @property
+    def reference_spread(self) -> float:
+        """CartPole-v1's fastest PPO run over its slowest (1 = every run at the same rate)."""
+        rates = [run.steps_per_s for run in self.references]
+        return max(rates) / min(rates) if min(rates) > 0 else math.nan
 
     def to_dict(self, meta: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """A JSON-ready dict (``meta`` first)."""
@@ -436,14 +460,17 @@ class BenchmarkReport:
                 "env_id": REFERENCE_ENV_ID,
                 "before": _rate_to_dict(self.reference_before),
                 "after": _rate_to_dict(self.reference_after),
+                "runs": [_rate_to_dict(run) for run in self.references],
                 "ppo_steps_per_s": self.reference_steps_per_s,
                 "drift_after_over_before": self.reference_drift,
+                "fastest_over_slowest": self.reference_spread,
             },
             "envs": [
                 {
                     "env_id": speed.env_id,
                     "random": _rate_to_dict(speed.random),
                     "ppo": _rate_to_dict(speed.ppo),
+                    "cartpole_ppo_steps_per_s": speed.reference_steps_per_s,
                     "ppo_over_cartpole": speed.ppo_over_reference,
                     "ceiling": _rate_to_dict(speed.ceiling),
                     "ceiling_over_cartpole": speed.ceiling_over_reference,
@@ -469,15 +496,16 @@ def run_benchmark(
     ppo_n_steps: int = PPO_N_STEPS,
     measure_pan: bool = True,
 ) -> BenchmarkReport:
-    """Pan throughput, CartPole PPO, then per env random actions, PPO and PPO on the env's free
-    stand-in, then CartPole again.
+    """Pan throughput, CartPole PPO, then per env random actions, PPO, PPO on the env's free
+    stand-in and CartPole PPO again: each env's ratios are to the two CartPole runs around it.
 
     Torch is set to one thread for the run (and restored after). An env that raises is
     recorded in ``failures`` and the others still run.
 
     Args:
         env_ids: the envs to measure.
-        seconds: PPO wall-time budget per env and per CartPole run (positive).
+        seconds: PPO wall-time budget per env (positive); each CartPole run gets
+            :data:`REFERENCE_SHARE_OF_BUDGET` of it.
         env_kwargs: keyword arguments for every env's ``gym.make`` (checked first).
         on_stage: told what is measured next.
         ppo_n_steps: PPO's rollout length (512 in every reported number; smaller only to
@@ -513,11 +541,17 @@ def run_benchmark(
             room = room_reset()
         else:
             notes.append("pan throughput and large-room reset skipped: not requested")
-        stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (before)")
-        before = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
-        measured: list[tuple[str, RandomRate, PPORate, PPORate]] = []
+        reference_seconds = REFERENCE_SHARE_OF_BUDGET * seconds
+
+        def reference_run(when: str) -> PPORate:
+            stage(f"{REFERENCE_ENV_ID}: PPO for {reference_seconds:g} s ({when})")
+            return ppo_rate(REFERENCE_ENV_ID, reference_seconds, n_steps=ppo_n_steps)
+
+        references = [reference_run("before the envs")]
+        speeds: list[EnvSpeed] = []
         failures: dict[str, str] = {}
         for env_id in env_ids:
+            measured: tuple[RandomRate, PPORate, PPORate] | None = None
             try:
                 stage(f"{env_id}: random actions for {RANDOM_SHARE_OF_BUDGET * seconds:g} s")
                 random = random_rate(env_id, RANDOM_SHARE_OF_BUDGET * seconds, env_kwargs)
@@ -529,24 +563,25 @@ def run_benchmark(
                 ceiling = ceiling_rate(
                     env_id, ceiling_seconds, episode_steps, env_kwargs, n_steps=ppo_n_steps
                 )
-                measured.append((env_id, random, ppo, ceiling))
+                measured = (random, ppo, ceiling)
             except UsageError:
                 raise
             except Exception as error:  # a broken env must not hide the other envs' numbers
                 failures[env_id] = f"{type(error).__name__}: {error}"
-        stage(f"{REFERENCE_ENV_ID}: PPO for {seconds:g} s (after)")
-        after = ppo_rate(REFERENCE_ENV_ID, seconds, n_steps=ppo_n_steps)
+            references.append(reference_run(f"after {env_id}"))
+            if measured is not None:
+                beside = 0.5 * (references[-2].steps_per_s + references[-1].steps_per_s)
+                random, ppo, ceiling = measured
+                speeds.append(EnvSpeed(env_id, random, ppo, beside, ceiling))
     finally:
         torch.set_num_threads(threads)
-    reference = 0.5 * (before.steps_per_s + after.steps_per_s)
     return BenchmarkReport(
         seconds=seconds,
         ppo_n_steps=ppo_n_steps,
         pan_rows=tuple(pan_rows),
         room_reset=room,
-        reference_before=before,
-        reference_after=after,
-        envs=tuple(EnvSpeed(env_id, r, p, reference, c) for env_id, r, p, c in measured),
+        references=tuple(references),
+        envs=tuple(speeds),
         failures=failures,
         notes=tuple(notes),
     )

@@ -200,10 +200,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="steps per second a user gets: random actions, PPO training, sonar pans",
         description="Measure, in one run: sonar pan throughput; per env random-action steps/s "
         "and SB3 PPO env-steps/s (n_steps 512, batch 64, 4 epochs, one env, torch on one "
-        "thread) against PPO on CartPole-v1 (measured before and after the envs); the ceiling "
-        "(PPO on a free stand-in with the env's spaces); the share of time per phase. The "
-        "whole run takes about (2 + 2 x envs) x SECONDS plus the pan rows (under 5 min for "
-        "every env at the default).",
+        "thread) against PPO on CartPole-v1 (measured before the first env and after each, "
+        "every env's ratio to the two runs around it); the ceiling (PPO on a free stand-in "
+        "with the env's spaces); the share of time per phase. The whole run takes about "
+        "(0.5 + 2.5 x envs) x SECONDS plus the pan rows (about 6 min for every env at the "
+        "default).",
     )
     benchmark.add_argument(
         "--env", nargs="+", default=["all"], metavar="ID", help="env ids or 'all' (default)"
@@ -213,8 +214,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=_positive_float,
         default=DEFAULT_BENCHMARK_SECONDS,
         metavar="S",
-        help=f"PPO wall-time budget per env and per CartPole run; random actions and the "
-        f"free stand-in get half each "
+        help=f"PPO wall-time budget per env; random actions, the free stand-in and each "
+        f"CartPole run get half of it "
         f"(default {DEFAULT_BENCHMARK_SECONDS:g})",
     )
     benchmark.add_argument(

@@ -361,13 +361,15 @@ def _shares_text(shares: Mapping[str, float]) -> str:
 
 
 def speed_table(report: BenchmarkReport) -> Table:
-    """Per env: random-action steps/s, PPO env-steps/s and its ratio to PPO on CartPole-v1 in
-    the same run, the ceiling (the ratio on a free stand-in with the env's spaces), the env's
-    own time per PPO step, and the share of wall time per phase of both runs."""
+    """Per env: random-action steps/s, PPO env-steps/s and its ratio to PPO on CartPole-v1
+    beside it (the two runs around the env), the ceiling (the ratio on a free stand-in with the
+    env's spaces), the env's own time per PPO step, and the share of wall time per phase of
+    both runs."""
     reference = report.reference_steps_per_s
     table = Table(
-        title=f"env steps per second (PPO on CartPole-v1: {reference:.0f} steps/s, "
-        f"after/before {report.reference_drift:.2f})",
+        title=f"env steps per second (PPO on CartPole-v1: {len(report.references)} runs, "
+        f"mean {reference:.0f} steps/s, last/first {report.reference_drift:.2f}, "
+        f"fastest/slowest {report.reference_spread:.2f})",
         title_justify="left",
         header_style="bold",
     )
@@ -376,6 +378,7 @@ def speed_table(report: BenchmarkReport) -> Table:
         "random steps/s",
         "episodes",
         "PPO steps/s",
+        "CartPole PPO steps/s beside it",
         "PPO vs CartPole",
         "ceiling vs CartPole",
         "env ms per PPO step",
@@ -389,6 +392,7 @@ def speed_table(report: BenchmarkReport) -> Table:
             f"{speed.random.steps_per_s:.1f}",
             str(speed.random.episodes),
             f"{speed.ppo.steps_per_s:.1f}",
+            f"{speed.reference_steps_per_s:.0f}",
             f"{speed.ppo_over_reference:.3f}",
             f"{speed.ceiling_over_reference:.3f}",
             f"{1e3 * speed.env_seconds_per_step:.2f}",

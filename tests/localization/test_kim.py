@@ -109,11 +109,6 @@ def noisy_sweeps(
     return sweeps
 
 
-@pytest.fixture(scope="module")
-def arena_grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, CELL)
-
-
 def _position_error(estimate: Pose, truth: Pose) -> float:
     return math.hypot(estimate.x - truth.x, estimate.y - truth.y)
 

@@ -12,9 +12,6 @@ from sonar_gym.localization import kim, kim_kernels
 from sonar_gym.localization.kim import OccupancyGrid
 from sonar_gym.pose import FloatArray, Pose, wrap_angles
 from tests.localization.test_kim import (
-    ARENA_BOUNDS,
-    ARENA_CIRCLES,
-    ARENA_SEGMENTS,
     MOVES,
     noisy_sweeps,
 )
@@ -80,30 +77,25 @@ def test_smoothed_maximum_of_an_empty_volume() -> None:
     assert kim_kernels.smoothed_maximum(np.zeros((0, 4, 3), dtype=np.int64)) == (0, 0, 0, 0)
 
 
-@pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, 0.05)
-
-
 @pytest.mark.parametrize("count", [1, 3])
 @pytest.mark.parametrize("radius", [None, 0.3])
 @pytest.mark.parametrize("cells_half_width", [0, 1, 100])
 def test_vote_mean_is_the_array_forms_mean(
-    grid: OccupancyGrid, count: int, radius: float | None, cells_half_width: int
+    arena_grid: OccupancyGrid, count: int, radius: float | None, cells_half_width: int
 ) -> None:
     truth = Pose(0.93, 0.71, 0.4)
     sweeps = noisy_sweeps(truth, MOVES[:count], np.random.default_rng(count), 0.01, 0.1)
     center = None if radius is None else np.array([truth.x + 0.04, truth.y - 0.03])
     headings = kim.heading_candidates_around(truth.theta, math.radians(5.0), math.radians(1.0))
     readings = kim._gather_readings(sweeps, None)
-    table_cache = kim._free_distance_table(grid, 360, grid.cell_size_m)
+    table_cache = kim._free_distance_table(arena_grid, 360, arena_grid.cell_size_m)
     anchors = table_cache.anchors("cell_center")
     pairs = kim._candidate_pairs(readings, anchors, center, radius, headings)
-    window = kim._vote_window(grid, center, radius)
+    window = kim._vote_window(arena_grid, center, radius)
     direction_index = kim._direction_index(headings, readings, 360)
     table = table_cache.columns(direction_index.ravel())
-    layout = kim._vote_layout(grid, window, center, radius)
-    best_x, best_y = grid.world_to_cell(truth.position)
+    layout = kim._vote_layout(arena_grid, window, center, radius)
+    best_x, best_y = arena_grid.world_to_cell(truth.position)
     cells = (
         best_x - cells_half_width,
         best_y - cells_half_width,

@@ -13,9 +13,6 @@ from sonar_gym.localization import kim, kim_kernels
 from sonar_gym.localization.kim import OccupancyGrid
 from sonar_gym.pose import FloatArray, Pose
 from tests.localization.test_kim import (
-    ARENA_BOUNDS,
-    ARENA_CIRCLES,
-    ARENA_SEGMENTS,
     MOVES,
     noisy_sweeps,
 )
@@ -69,7 +66,7 @@ def reference_pairs(
 
 
 def reference_votes(
-    grid: OccupancyGrid,
+    arena_grid: OccupancyGrid,
     readings: kim._Readings,
     anchors: FloatArray,
     table: FloatArray,
@@ -97,9 +94,9 @@ def reference_votes(
     if center is not None and radius is not None:
         inside = np.flatnonzero((t_x - center[0]) ** 2 + (t_y - center[1]) ** 2 <= radius * radius)
         heading_i, t_x, t_y = heading_i.take(inside), t_x.take(inside), t_y.take(inside)
-    x0, y0 = grid.origin_m
-    cell_x = np.floor((t_x - x0) / grid.cell_size_m).astype(np.int64)
-    cell_y = np.floor((t_y - y0) / grid.cell_size_m).astype(np.int64)
+    x0, y0 = arena_grid.origin_m
+    cell_x = np.floor((t_x - x0) / arena_grid.cell_size_m).astype(np.int64)
+    cell_y = np.floor((t_y - y0) / arena_grid.cell_size_m).astype(np.int64)
     low_x, low_y, high_x, high_y = window
     kept = np.flatnonzero(
         (cell_x >= low_x) & (cell_x <= high_x) & (cell_y >= low_y) & (cell_y <= high_y)
@@ -113,11 +110,6 @@ def reference_votes(
     )
 
 
-@pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, 0.05)
-
-
 @pytest.mark.parametrize("anchor", ["cell_center", "obstacle_point"])
 @pytest.mark.parametrize("radius", [None, 0.1, 0.3, 0.6])
 @pytest.mark.parametrize("window_deg", [2.0, 10.0, 100.0, 180.0])
@@ -126,7 +118,7 @@ def grid() -> OccupancyGrid:
     "truth", [Pose(0.93, 0.71, 0.4), Pose(0.2, 0.25, -3.1)], ids=["middle", "near_corner"]
 )
 def test_compiled_votes_are_the_array_forms_votes(
-    grid: OccupancyGrid,
+    arena_grid: OccupancyGrid,
     anchor: str,
     radius: float | None,
     window_deg: float,
@@ -141,7 +133,7 @@ def test_compiled_votes_are_the_array_forms_votes(
         prior.theta, math.radians(window_deg), math.radians(1.0)
     )
     readings = kim._gather_readings(sweeps, None)
-    table_cache = kim._free_distance_table(grid, 360, grid.cell_size_m)
+    table_cache = kim._free_distance_table(arena_grid, 360, arena_grid.cell_size_m)
     anchors = table_cache.anchors(anchor)  # type: ignore[arg-type]
 
     pairs = kim._candidate_pairs(readings, anchors, center, radius, headings)
@@ -150,19 +142,19 @@ def test_compiled_votes_are_the_array_forms_votes(
     assert np.array_equal(pairs[1], expected_pairs[1])
     assert pairs[0].size > 0
 
-    window = kim._vote_window(grid, center, radius)
+    window = kim._vote_window(arena_grid, center, radius)
     direction_index = kim._direction_index(headings, readings, 360)
     table = table_cache.columns(direction_index.ravel())
     cos_h, sin_h = np.cos(headings), np.sin(headings)
-    layout = kim._vote_layout(grid, window, center, radius)
+    layout = kim._vote_layout(arena_grid, window, center, radius)
     volume = kim_kernels.vote_volume(
         *pairs, direction_index, table, readings.range_m, readings.end_x, readings.end_y,
         anchors, cos_h, sin_h, *layout,
     )  # fmt: skip
 
     heading_i, t_x, t_y, cell_x, cell_y = reference_votes(
-        grid, readings, anchors, table, headings, direction_index, pairs, window.cells, center,
-        radius,
+        arena_grid, readings, anchors, table, headings, direction_index, pairs, window.cells,
+        center, radius,
     )  # fmt: skip
     low_x, low_y = window.low
     wx, wy = window.shape

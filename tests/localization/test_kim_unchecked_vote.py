@@ -1,7 +1,7 @@
 """Kim, Lee & Jeong's vote of sec. 3.3 without the argument checks (the form the EKF loop of
 ``kim_fix`` calls) against the checked :func:`vote_localize` with the same arguments, field for
 field and bit for bit, over random poses, priors, circles, heading windows and sweep counts,
-with silent sweeps and circles that miss the grid."""
+with silent sweeps and circles that miss the arena_grid."""
 
 from __future__ import annotations
 
@@ -14,17 +14,9 @@ from sonar_gym.localization import kim
 from sonar_gym.localization.kim import OccupancyGrid, Sweep, VoteLocalization
 from sonar_gym.pose import Pose
 from tests.localization.test_kim import (
-    ARENA_BOUNDS,
-    ARENA_CIRCLES,
-    ARENA_SEGMENTS,
     MOVES,
     noisy_sweeps,
 )
-
-
-@pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, 0.05)
 
 
 def _assert_same(result: VoteLocalization, expected: VoteLocalization) -> None:
@@ -49,7 +41,7 @@ def _assert_same(result: VoteLocalization, expected: VoteLocalization) -> None:
 
 
 def _checked_and_unchecked(
-    grid: OccupancyGrid,
+    arena_grid: OccupancyGrid,
     sweeps: list[Sweep],
     prior: Pose,
     radius: float,
@@ -59,7 +51,7 @@ def _checked_and_unchecked(
     anchor: kim.Anchor,
 ) -> tuple[VoteLocalization, VoteLocalization]:
     checked = kim.vote_localize(
-        grid,
+        arena_grid,
         sweeps,
         search_center=prior,
         search_radius=radius,
@@ -70,7 +62,7 @@ def _checked_and_unchecked(
         return_vote_map=False,
     )
     unchecked = kim.vote_localize_unchecked(
-        grid,
+        arena_grid,
         sweeps,
         prior,
         radius,
@@ -83,7 +75,7 @@ def _checked_and_unchecked(
 
 
 @pytest.mark.parametrize("seed", range(40))
-def test_unchecked_vote_is_the_checked_vote(grid: OccupancyGrid, seed: int) -> None:
+def test_unchecked_vote_is_the_checked_vote(arena_grid: OccupancyGrid, seed: int) -> None:
     rng = np.random.default_rng(seed)
     truth = Pose(rng.uniform(0.3, 1.7), rng.uniform(0.3, 1.7), rng.uniform(-math.pi, math.pi))
     sweeps = noisy_sweeps(truth, MOVES[: int(rng.integers(1, 5))], rng, 0.02, 0.1)
@@ -93,7 +85,7 @@ def test_unchecked_vote_is_the_checked_vote(grid: OccupancyGrid, seed: int) -> N
         truth.theta + rng.normal(0.0, 0.05),
     )
     unchecked, checked = _checked_and_unchecked(
-        grid,
+        arena_grid,
         sweeps,
         prior,
         float(rng.uniform(0.1, 0.6)),
@@ -106,18 +98,25 @@ def test_unchecked_vote_is_the_checked_vote(grid: OccupancyGrid, seed: int) -> N
     _assert_same(unchecked, checked)
 
 
-def test_unchecked_vote_fails_as_the_checked_vote(grid: OccupancyGrid) -> None:
+def test_unchecked_vote_fails_as_the_checked_vote(arena_grid: OccupancyGrid) -> None:
     rng = np.random.default_rng(7)
     truth = Pose(1.0, 1.0, 0.3)
     sweeps = noisy_sweeps(truth, MOVES[:2], rng, 0.02, 0.0)
     silent = [Sweep(s.angles, np.full(s.ranges.size, np.nan), odometry=s.odometry) for s in sweeps]
     cases = [
         (silent, truth, "empty_sweep"),
-        (sweeps, Pose(9.0, 9.0, 0.3), "no_votes"),  # the circle misses the grid
+        (sweeps, Pose(9.0, 9.0, 0.3), "no_votes"),  # the circle misses the arena_grid
     ]
     for sweep_list, prior, status in cases:
         unchecked, checked = _checked_and_unchecked(
-            grid, sweep_list, prior, 0.3, math.radians(1.0), math.radians(5.0), 3.0, "cell_center"
+            arena_grid,
+            sweep_list,
+            prior,
+            0.3,
+            math.radians(1.0),
+            math.radians(5.0),
+            3.0,
+            "cell_center",
         )
         assert checked.status == status
         _assert_same(unchecked, checked)

@@ -11,9 +11,6 @@ from sonar_gym.localization import kim, kim_kernels
 from sonar_gym.localization.kim import OccupancyGrid, vote_localize
 from sonar_gym.pose import Pose
 from tests.localization.test_kim import (
-    ARENA_BOUNDS,
-    ARENA_CIRCLES,
-    ARENA_SEGMENTS,
     MOVES,
     _sweep,
     noisy_sweeps,
@@ -28,16 +25,15 @@ def _all_pairs(readings, anchors, center, radius, headings):  # type: ignore[no-
     return _PRE_SELECTED_PAIRS(readings, anchors, None, None, headings)
 
 
-@pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, 0.05)
-
-
 @pytest.mark.parametrize("anchor", ["cell_center", "obstacle_point"])
 @pytest.mark.parametrize("radius", [0.1, 0.25, 0.6])
 @pytest.mark.parametrize("count", [1, 4])
 def test_pre_selected_pairs_give_the_same_result_as_the_full_product(
-    grid: OccupancyGrid, monkeypatch: pytest.MonkeyPatch, anchor: str, radius: float, count: int
+    arena_grid: OccupancyGrid,
+    monkeypatch: pytest.MonkeyPatch,
+    anchor: str,
+    radius: float,
+    count: int,
 ) -> None:
     truth = Pose(0.93, 0.71, 0.4)
     sweeps = noisy_sweeps(truth, MOVES[:count], np.random.default_rng(7))
@@ -51,19 +47,19 @@ def test_pre_selected_pairs_give_the_same_result_as_the_full_product(
         anchor=anchor,
         selection="max",
     )
-    fast = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    fast = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     monkeypatch.setattr(kim, "_candidate_pairs", _all_pairs)
-    slow = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    slow = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     assert fast.status == slow.status == "ok"
     assert fast.pose == slow.pose
     assert fast.votes == slow.votes
     assert np.array_equal(fast.vote_map, slow.vote_map)
 
 
-def test_pairs_keep_every_pair_that_can_vote_inside_the_circle(grid: OccupancyGrid) -> None:
+def test_pairs_keep_every_pair_that_can_vote_inside_the_circle(arena_grid: OccupancyGrid) -> None:
     truth = Pose(0.93, 0.71, 0.4)
     readings = kim._gather_readings([_sweep(truth)], None)
-    anchors = grid.occupied_obstacle_points()
+    anchors = arena_grid.occupied_obstacle_points()
     centre, radius = np.array([1.0, 0.7]), 0.2
     headings = np.radians(np.arange(-180.0, 180.0, 2.0))
     pair_j, pair_k = kim._candidate_pairs(readings, anchors, centre, radius, headings)

@@ -11,9 +11,6 @@ from sonar_gym.localization import kim
 from sonar_gym.localization.kim import OccupancyGrid, vote_localize
 from sonar_gym.pose import Pose
 from tests.localization.test_kim import (
-    ARENA_BOUNDS,
-    ARENA_CIRCLES,
-    ARENA_SEGMENTS,
     MOVES,
     _sweep,
     noisy_sweeps,
@@ -23,14 +20,9 @@ from tests.localization.test_kim import (
 _CIRCLE_WINDOW = kim._vote_window
 
 
-def _whole_grid(grid, center, radius):  # type: ignore[no-untyped-def]
-    """The slow reference: votes counted over every cell of the grid."""
-    return _CIRCLE_WINDOW(grid, None, None)
-
-
-@pytest.fixture(scope="module")
-def grid() -> OccupancyGrid:
-    return OccupancyGrid.from_segments(ARENA_SEGMENTS, ARENA_CIRCLES, ARENA_BOUNDS, 0.05)
+def _whole_grid(arena_grid, center, radius):  # type: ignore[no-untyped-def]
+    """The slow reference: votes counted over every cell of the arena_grid."""
+    return _CIRCLE_WINDOW(arena_grid, None, None)
 
 
 @pytest.mark.parametrize("selection", ["smoothed", "max"])
@@ -40,7 +32,7 @@ def grid() -> OccupancyGrid:
     "truth", [Pose(0.93, 0.71, 0.4), Pose(0.2, 0.25, -2.0)], ids=["middle", "near_corner"]
 )
 def test_windowed_votes_give_the_result_of_the_whole_grid(
-    grid: OccupancyGrid,
+    arena_grid: OccupancyGrid,
     monkeypatch: pytest.MonkeyPatch,
     selection: str,
     ambiguity_ratio: float | None,
@@ -57,29 +49,31 @@ def test_windowed_votes_give_the_result_of_the_whole_grid(
         ambiguity_ratio=ambiguity_ratio,
         anchor="obstacle_point",
     )
-    fast = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    fast = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     monkeypatch.setattr(kim, "_vote_window", _whole_grid)
-    slow = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    slow = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     assert fast.status == slow.status
     assert fast.status in ("ok", "ambiguous")
     assert fast.pose == slow.pose
     assert fast.last_sweep_pose == slow.last_sweep_pose
     assert fast.votes == slow.votes
     assert fast.vote_map is not None and slow.vote_map is not None
-    assert fast.vote_map.shape == grid.shape
+    assert fast.vote_map.shape == arena_grid.shape
     assert np.array_equal(fast.vote_map, slow.vote_map)
 
 
-def test_window_covers_the_search_circle_and_is_clipped_to_the_grid(grid: OccupancyGrid) -> None:
-    window = kim._vote_window(grid, np.array([0.0, 1.0]), 0.3)
+def test_window_covers_the_search_circle_and_is_clipped_to_the_grid(
+    arena_grid: OccupancyGrid,
+) -> None:
+    window = kim._vote_window(arena_grid, np.array([0.0, 1.0]), 0.3)
     (low_x, low_y), (wx, wy) = window.low, window.shape
     assert low_x == 0
-    nx, ny = grid.shape
+    nx, ny = arena_grid.shape
     assert 0 < wx < nx and 0 < wy < ny
-    inside = grid.world_to_cell(np.array([[0.3, 1.0], [0.0, 0.7], [0.0, 1.3], [0.05, 1.0]]))
+    inside = arena_grid.world_to_cell(np.array([[0.3, 1.0], [0.0, 0.7], [0.0, 1.3], [0.05, 1.0]]))
     assert np.all(inside[:, 0] >= low_x) and np.all(inside[:, 0] < low_x + wx)
     assert np.all(inside[:, 1] >= low_y) and np.all(inside[:, 1] < low_y + wy)
-    assert kim._vote_window(grid, None, None).shape == grid.shape
+    assert kim._vote_window(arena_grid, None, None).shape == arena_grid.shape
 
 
 def _no_heading_test(headings):  # type: ignore[no-untyped-def]
@@ -91,7 +85,7 @@ def _no_heading_test(headings):  # type: ignore[no-untyped-def]
 @pytest.mark.parametrize("radius", [0.1, 0.35, 0.6])
 @pytest.mark.parametrize("theta", [0.4, 3.1, -3.1])
 def test_pairs_dropped_for_their_heading_never_vote(
-    grid: OccupancyGrid,
+    arena_grid: OccupancyGrid,
     monkeypatch: pytest.MonkeyPatch,
     window_deg: float,
     radius: float,
@@ -107,19 +101,19 @@ def test_pairs_dropped_for_their_heading_never_vote(
         heading_window_rad=math.radians(window_deg),
         anchor="obstacle_point",
     )
-    fast = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    fast = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     monkeypatch.setattr(kim, "_heading_spread", _no_heading_test)
-    slow = vote_localize(grid, sweeps, **arguments)  # type: ignore[arg-type]
+    slow = vote_localize(arena_grid, sweeps, **arguments)  # type: ignore[arg-type]
     assert fast.status == slow.status == "ok"
     assert fast.pose == slow.pose
     assert fast.votes == slow.votes
     assert np.array_equal(fast.vote_map, slow.vote_map)
 
 
-def test_heading_filter_drops_most_pairs_of_a_narrow_window(grid: OccupancyGrid) -> None:
+def test_heading_filter_drops_most_pairs_of_a_narrow_window(arena_grid: OccupancyGrid) -> None:
     truth = Pose(0.93, 0.71, 0.4)
     readings = kim._gather_readings([_sweep(truth)], None)
-    anchors = grid.occupied_obstacle_points()
+    anchors = arena_grid.occupied_obstacle_points()
     centre, radius = np.array([0.95, 0.7]), 0.1
     every_heading = np.radians(np.arange(-180.0, 180.0, 1.0))
     pairs = kim._candidate_pairs(readings, anchors, centre, radius, every_heading)
