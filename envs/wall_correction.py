@@ -45,6 +45,7 @@ from sonar_gym.envs.config import (
     scenario_field,
 )
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
+from sonar_gym.localization.apcs_walls import WallMap
 from sonar_gym.localization.apcs_online import (
     SIDE_NAMES,
     APCSTracker,
@@ -372,6 +373,7 @@ class WallCorrectionEnv(SonarEnv):
             )
         self.params = DEFAULT_PARAMETERS
         self.wall_map = map_wall_vectors(self.scenario)
+        self._wall_table_map = WallMap(tuple(self.wall_map))  # read-only: shared by episodes
         (x_min, y_min), (x_max, y_max) = self.scenario.room.min, self.scenario.room.max
         self.centre_line_y = 0.5 * (y_min + y_max)
         self.route_start_x = x_min + config.route_margin_m
@@ -494,7 +496,7 @@ class WallCorrectionEnv(SonarEnv):
         sensor_rng = np.random.default_rng(int(rng.integers(2**63)))
         robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
         tracker = APCSTracker(
-            self.wall_map,
+            self._wall_table_map,
             estimate,
             covariance,
             wheel_base_m=robot.wheel_base_for(world),

@@ -411,7 +411,9 @@ class APCSTracker:
     """The APCS estimate, its covariance and the two side streams, updated as the robot moves.
 
     Args:
-        wall_map: the map's oriented wall vectors (sec. 4.1).
+        wall_map: the map's oriented wall vectors (sec. 4.1); a
+            :class:`~sonar_gym.localization.apcs_walls.WallMap` is used as it is (it is
+            read-only, so trackers can share one), any other sequence is made one.
         estimate, covariance: the initial estimate ({W}) and its 3x3 covariance.
         wheel_base_m: the wheel base the dead reckoning assumes, metres.
         variance_per_m: each wheel's variance per metre rolled, m^2/m (``odometry.predict_run``).
@@ -445,7 +447,7 @@ class APCSTracker:
                 f"argument 'correction_method' must be one of {list(CORRECTION_METHODS)}; "
                 f"got {correction_method!r}"
             )
-        self.wall_map = WallMap(tuple(wall_map))
+        self.wall_map = wall_map if isinstance(wall_map, WallMap) else WallMap(tuple(wall_map))
         self.estimate = estimate
         self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
         # Checked once here: dead reckoning and the Joseph-form corrections keep it so.
