@@ -28,7 +28,6 @@ from typing import Literal, overload
 
 import numpy as np
 import numpy.typing as npt
-from numpy.linalg import _umath_linalg  # type: ignore[attr-defined]
 
 from sonar_gym.localization import apcs_kernels, apcs_match_kernels
 from sonar_gym.pose import FloatArray, wrap_angles
@@ -753,7 +752,7 @@ def fit_group_points(
     centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
     centred = members - centroid
     scatter = centred.T @ centred / len(indices)
-    values, eigenvectors = _symmetric_eigen(scatter)
+    values, eigenvectors = np.linalg.eigh(scatter)
     eigenvalues: list[float] = values.tolist()  # ascending
     residual_variance = max(eigenvalues[0], 0.0)
     if residual_variance >= params.variance_threshold_m2:
@@ -783,19 +782,6 @@ def fit_group_points(
     end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
     wall = DetectedWall(start, end, indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)
-
-
-def _symmetric_eigen(matrix: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """``np.linalg.eigh(matrix)`` of a float64 ``(2, 2)`` symmetric matrix: the same LAPACK
-    routine (numpy's ``eigh_lo`` gufunc, the lower triangle), called without the wrapper's
-    type and shape checks when every entry is finite; ``np.linalg.eigh`` itself otherwise, or
-    when LAPACK gives no finite answer (its errors stay numpy's)."""
-    if all(map(math.isfinite, matrix.ravel().tolist())):
-        values, vectors = _umath_linalg.eigh_lo(matrix, signature="d->dd")
-        if all(map(math.isfinite, values.tolist())):
-            return values, vectors
-    values, vectors = np.linalg.eigh(matrix)
-    return values, vectors
 
 
 def fit_wall_groups(

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import pickle
 import warnings
-from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -17,7 +16,6 @@ from sonar_gym.localization.apcs_walls import (
     GROUP_ZERO_LENGTH,
     APCSParameters,
     WallFit,
-    _symmetric_eigen,
     fit_group_points,
 )
 from sonar_gym.pose import wrap_angles
@@ -99,31 +97,3 @@ def test_fit_group_points_goes_through_eigh_on_an_overflowing_group() -> None:
         got = fit_group_points(members, None, indices)
     assert _bits(got) == _bits(expected)
     assert [str(w.message) for w in got_warnings] == [str(w.message) for w in expected_warnings]
-
-
-def _eigen_outcome(
-    function: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], matrix: np.ndarray
-) -> object:
-    """The bits of ``function(matrix)``'s eigenvalues and eigenvectors, or its error's type."""
-    try:
-        values, vectors = function(matrix)
-    except np.linalg.LinAlgError as error:
-        return type(error)
-    return values.tobytes(), vectors.tobytes(), values.dtype, vectors.dtype, vectors.shape
-
-
-@pytest.mark.parametrize("seed", range(4))
-def test_symmetric_eigen_has_the_bits_of_eigh(seed: int) -> None:
-    """The gufunc called directly gives what ``np.linalg.eigh`` gives, finite or not."""
-    rng = np.random.default_rng(seed)
-    for _ in range(2000):
-        points = rng.normal(0.0, 10.0 ** rng.integers(-8, 8), size=(int(rng.integers(2, 9)), 2))
-        centred = points - np.add.reduce(points, axis=0) / len(points)
-        matrix = centred.T @ centred / len(points)
-        if rng.random() < 0.1:
-            matrix[rng.integers(2), rng.integers(2)] = rng.choice([np.nan, np.inf, -np.inf])
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")
-            assert _eigen_outcome(_symmetric_eigen, matrix) == _eigen_outcome(
-                np.linalg.eigh, matrix
-            )
