@@ -45,6 +45,7 @@ from sonar_gym.envs.config import (
     scenario_field,
 )
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
+from sonar_gym.localization.apcs_walls import WallMap
 from sonar_gym.localization.apcs_online import (
     SIDE_NAMES,
     APCSTracker,
@@ -372,6 +373,7 @@ class WallCorrectionEnv(SonarEnv):
             )
         self.params = DEFAULT_PARAMETERS
         self.wall_map = map_wall_vectors(self.scenario)
+        self._wall_table_map = WallMap(tuple(self.wall_map))  # read-only: shared by episodes
         (x_min, y_min), (x_max, y_max) = self.scenario.room.min, self.scenario.room.max
         self.centre_line_y = 0.5 * (y_min + y_max)
         self.route_start_x = x_min + config.route_margin_m
@@ -494,7 +496,7 @@ class WallCorrectionEnv(SonarEnv):
         sensor_rng = np.random.default_rng(int(rng.integers(2**63)))
         robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
         tracker = APCSTracker(
-            self.wall_map,
+            self._wall_table_map,
             estimate,
             covariance,
             wheel_base_m=robot.wheel_base_for(world),
@@ -558,18 +560,26 @@ class WallCorrectionEnv(SonarEnv):
         assert room is not None
         estimate = route.tracker.estimate
         observation["progress"] = route.leg / config.n_legs
-        observation["estimate_xy"] = ScaledPosition.values(estimate.position, room.min, room.max)
+        observation["estimate_xy"] = ScaledPosition.float_values(
+            (estimate.x, estimate.y), room.min, room.max
+        )
         observation["estimate_heading"] = Heading.values(estimate.theta)
-        variances = np.maximum(np.diag(route.tracker.covariance), 0.0)
-        position_std, heading_std = np.sqrt(variances[:2]), math.sqrt(variances[2])
-        observation["position_std"] = np.minimum(position_std / POSITION_STD_SCALE_M, 1.0)
-        observation["heading_std"] = min(heading_std / HEADING_STD_SCALE_RAD, 1.0)
+        # On Python floats, rounding as numpy's maximum, sqrt and minimum of the diagonal do.
+        variance_x, variance_y, variance_theta = (
+            _non_negative(variance) for variance in np.diag(route.tracker.covariance).tolist()
+        )
+        observation["position_std"] = [
+            min(math.sqrt(variance_x) / POSITION_STD_SCALE_M, 1.0),
+            min(math.sqrt(variance_y) / POSITION_STD_SCALE_M, 1.0),
+        ]
+        observation["heading_std"] = min(math.sqrt(variance_theta) / HEADING_STD_SCALE_RAD, 1.0)
         if route.leg < config.n_legs:
             observation["map_ahead"] = self._map_ahead[route.leg]
         last = route.last_leg
         tallies = (last.detected, last.matched, last.rejected)
-        counts = [tally[side] for side in SIDE_NAMES for tally in tallies]
-        observation["last_leg_walls"] = np.minimum(np.asarray(counts) / COUNT_SCALE, 1.0)
+        observation["last_leg_walls"] = [
+            min(tally[side] / COUNT_SCALE, 1.0) for side in SIDE_NAMES for tally in tallies
+        ]
         observation["last_leg_dropped"] = min(last.dropped_groups / COUNT_SCALE, 1.0)
         observation["collided"] = float(last.collided)
         sensing_fraction = route.sensing_time_s / self._max_sensing_time_s
@@ -632,6 +642,11 @@ class WallCorrectionEnv(SonarEnv):
         if self._episode is None:
             raise RuntimeError("WallCorrectionEnv: call reset() first")
         return self._episode
+
+
+def _non_negative(value: float) -> float:
+    """``np.maximum(value, 0.0)`` of a float: NaN stays NaN and a signed zero gives ``0.0``."""
+    return value if value > 0.0 or value != value else 0.0
 
 
 __all__ = [

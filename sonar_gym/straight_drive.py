@@ -22,7 +22,7 @@ task's seeded rollouts pin these bits.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from collections.abc import Mapping
 from typing import Any
 
@@ -109,46 +109,75 @@ class CommandDraws:
     """The random numbers of a run of :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive`
     commands, drawn in its order (two standard normals, then four uniforms, per command).
 
+    The numbers are kept in the blocks they were drawn in (one block per :meth:`extend` or
+    :meth:`draw`); :attr:`normals` and :attr:`uniforms` join them.
+
     Attributes:
         start_state: the generator's state before the first command (to replay a command
             through ``drive``, or to stop the run early).
+        normal_blocks, uniform_blocks: ``(k, 2)`` normals and ``(k, 4)`` uniforms of each
+            block of commands, in order.
         end_state: its state after the last command (set by :meth:`finish`).
+        count: the number of commands drawn.
     """
 
     start_state: Mapping[str, Any]
-    normals: list[FloatArray]
-    uniforms: list[FloatArray]
+    normal_blocks: list[FloatArray] = field(default_factory=list)
+    uniform_blocks: list[FloatArray] = field(default_factory=list)
     end_state: Mapping[str, Any] | None = None
+    count: int = 0
 
     @classmethod
     def start(cls, rng: np.random.Generator) -> CommandDraws:
         """Begin drawing from ``rng``."""
-        return cls(rng.bit_generator.state, [], [])
+        return cls(rng.bit_generator.state)
+
+    @property
+    def normals(self) -> FloatArray:
+        """``(K, 2)`` the standard normals of every command, in order."""
+        return _joined(self.normal_blocks, 2)
+
+    @property
+    def uniforms(self) -> FloatArray:
+        """``(K, 4)`` the uniforms of every command, in order."""
+        return _joined(self.uniform_blocks, 4)
 
     def draw(self, rng: np.random.Generator) -> tuple[FloatArray, FloatArray]:
         """Draw one command's numbers; returns ``(normals, uniforms)``."""
         normals, uniforms = rng.standard_normal(2), rng.random(4)
-        self.normals.append(normals)
-        self.uniforms.append(uniforms)
+        self.normal_blocks.append(normals[None, :])
+        self.uniform_blocks.append(uniforms[None, :])
+        self.count += 1
         return normals, uniforms
 
     def extend(self, normals: FloatArray, uniforms: FloatArray) -> None:
         """Add commands' numbers drawn in this order elsewhere: ``(k, 2)`` and ``(k, 4)``
         (:func:`sonar_gym.drive_kernels.draw_commands`)."""
-        self.normals.extend(normals)
-        self.uniforms.extend(uniforms)
+        self.normal_blocks.append(normals)
+        self.uniform_blocks.append(uniforms)
+        self.count += len(normals)
 
     def finish(self, rng: np.random.Generator) -> None:
         """Note the generator's state after the last command."""
         self.end_state = rng.bit_generator.state
 
     def rewind(self, rng: np.random.Generator, index: int) -> None:
-        """Put ``rng`` in its state before command ``index`` (after the last for ``len``)."""
-        if index == len(self.normals) and self.end_state is not None:
+        """Put ``rng`` in its state before command ``index`` (after the last for ``count``)."""
+        if index == self.count and self.end_state is not None:
             rng.bit_generator.state = self.end_state
             return
         rng.bit_generator.state = self.start_state
         drive_kernels.draw_commands(rng, index)
+
+
+def _joined(blocks: list[FloatArray], width: int) -> FloatArray:
+    """The rows of ``blocks`` (each ``(k, width)``) as one ``(K, width)`` array; the block
+    itself when there is one."""
+    if len(blocks) == 1:
+        return blocks[0]
+    if not blocks:
+        return np.zeros((0, width))
+    return np.concatenate(blocks)
 
 
 def drive_commands(
@@ -173,8 +202,8 @@ def drive_commands(
         )
     base = robot.wheel_base_for(world)
     noise = robot.noise
-    normals = np.array(draws.normals)
-    uniforms = np.array(draws.uniforms)
+    normals = draws.normals
+    uniforms = draws.uniforms
     encoder, ground = straight_drive_kernels.wheel_travel(
         commanded,
         normals,

@@ -155,3 +155,27 @@ def test_rewind_puts_the_generator_before_the_command(index: int) -> None:
     normals, uniforms = rng.standard_normal(2), rng.random(4)
     assert np.array_equal(normals, draws.normals[index])
     assert np.array_equal(uniforms, draws.uniforms[index])
+
+
+def test_draws_join_their_blocks_in_drawing_order() -> None:
+    """Blocks drawn elsewhere and commands drawn one by one read back as one table per kind,
+    in the order drawn (the rows the per-command lists held)."""
+    rng, reference = np.random.default_rng(5), np.random.default_rng(5)
+    draws = CommandDraws.start(rng)
+    assert draws.normals.shape == (0, 2) and draws.uniforms.shape == (0, 4)
+    normal_rows: list[np.ndarray] = []
+    uniform_rows: list[np.ndarray] = []
+    for block in (3, 0, 2):
+        draws.extend(*draw_commands(rng, block))
+        normals, uniforms = draw_commands(reference, block)
+        normal_rows.extend(normals)
+        uniform_rows.extend(uniforms)
+        draws.draw(rng)
+        normal_rows.append(reference.standard_normal(2))
+        uniform_rows.append(reference.random(4))
+    assert draws.count == len(normal_rows) == 8
+    assert np.array_equal(draws.normals, np.array(normal_rows))
+    assert np.array_equal(draws.uniforms, np.array(uniform_rows))
+    single = CommandDraws.start(rng)
+    single.extend(*draw_commands(rng, 4))
+    assert single.normals.shape == (4, 2) and single.uniforms.shape == (4, 4)

@@ -333,9 +333,10 @@ class WallStream:
         turn = after.theta - before.theta
         cos_turn, sin_turn = math.cos(turn), math.sin(turn)
         rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
+        origin_before, origin_after = before.position, after.position
 
         def moved(point: tuple[float, float]) -> tuple[float, float]:
-            x, y = after.position + rotation @ (np.asarray(point) - before.position)
+            x, y = origin_after + rotation @ (np.asarray(point) - origin_before)
             return float(x), float(y)
 
         if self._previous is not None:
@@ -360,6 +361,11 @@ class WallStream:
 # --------------------------------------------------------------------------------------------
 # The Fig. 2 loop
 # --------------------------------------------------------------------------------------------
+
+_PendingRows = tuple[list[float], list[float], list[float], list[bool]]
+"""A side's rows from a reading on, as flat lists: sensor ``x0, y0, x1, ...`` (metres), ERP
+``x0, y0, x1, ...`` (metres), reflection directions (radians), whether the reading gives an
+ERP."""
 
 
 @dataclass(frozen=True)
@@ -411,7 +417,9 @@ class APCSTracker:
     """The APCS estimate, its covariance and the two side streams, updated as the robot moves.
 
     Args:
-        wall_map: the map's oriented wall vectors (sec. 4.1).
+        wall_map: the map's oriented wall vectors (sec. 4.1); a
+            :class:`~sonar_gym.localization.apcs_walls.WallMap` is used as it is (it is
+            read-only, so trackers can share one), any other sequence is made one.
         estimate, covariance: the initial estimate ({W}) and its 3x3 covariance.
         wheel_base_m: the wheel base the dead reckoning assumes, metres.
         variance_per_m: each wheel's variance per metre rolled, m^2/m (``odometry.predict_run``).
@@ -445,7 +453,7 @@ class APCSTracker:
                 f"argument 'correction_method' must be one of {list(CORRECTION_METHODS)}; "
                 f"got {correction_method!r}"
             )
-        self.wall_map = WallMap(tuple(wall_map))
+        self.wall_map = wall_map if isinstance(wall_map, WallMap) else WallMap(tuple(wall_map))
         self.estimate = estimate
         self.covariance = checked_array(covariance, "covariance", (3, 3)).copy()
         # Checked once here: dead reckoning and the Joseph-form corrections keep it so.
@@ -538,7 +546,7 @@ class APCSTracker:
         event = 0
         while event < len(events) and sample_list[events[event][0]] < limit:
             first_sample = events[event][0]
-            pending = {}
+            pending: dict[str, _PendingRows] = {}
             rows = poses[samples[first_sample:] + 1]
             for side in sides:
                 sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
@@ -553,33 +561,32 @@ class APCSTracker:
                     valid.tolist(),
                 )
             headings = rows[:, 2].tolist()
+            # WallStream.accept on plain floats. Each side's latest reading (its sample) is
+            # stored in its stream only where the stored reading is read: before a verified
+            # wall is handled (a correction moves the streams) and when this pass ends.
+            unstored: dict[str, int] = {}
             corrected = False
             while event < len(events) and not corrected and sample_list[events[event][0]] < limit:
                 m, side = events[event]
                 event += 1
-                sensor_coordinates, erp_coordinates, erp_phis, erp_valid = pending[side]
+                unstored[side] = m
+                _, erp_coordinates, erp_phis, erp_valid = pending[side]
                 row = m - first_sample
-                stream = self.streams[side]
-                # WallStream.accept on plain floats
-                stream._remember(
-                    sensor_coordinates[2 * row],
-                    sensor_coordinates[2 * row + 1],
-                    headings[row],
-                    range_lists[side][m],
-                )
                 if not erp_valid[row]:
                     continue
                 point_x, point_y = erp_coordinates[2 * row], erp_coordinates[2 * row + 1]
                 result.erps.append((point_x, point_y, side))
-                groups = stream._accept_erp(point_x, point_y, erp_phis[row])
+                groups = self.streams[side]._accept_erp(point_x, point_y, erp_phis[row])
                 if groups:
                     command = sample_list[m]
                     # Only a verified wall reads the estimate (most closed groups are dropped);
                     # the end of the run sets it in any case.
                     if any(group.fit.wall is not None for group in groups):
+                        self._store_readings(unstored, pending, headings, range_lists, first_sample)
                         self.estimate = Pose.unchecked(*poses[command + 1].tolist())
                         self.covariance = covariances[command + 1]
                     corrected = self.handle_groups(side, groups, command, result)
+            self._store_readings(unstored, pending, headings, range_lists, first_sample)
             if corrected:
                 command = sample_list[events[event - 1][0]]
                 later_stops = [stop for stop in stops if stop > command]
@@ -603,6 +610,28 @@ class APCSTracker:
             self.estimate = Pose.unchecked(*poses[limit].tolist())
             self.covariance = covariances[limit].copy()
         return result
+
+    def _store_readings(
+        self,
+        unstored: dict[str, int],
+        pending: Mapping[str, _PendingRows],
+        headings: list[float],
+        range_lists: Mapping[str, list[float]],
+        first_sample: int,
+    ) -> None:
+        """Store each side's latest reading (``unstored``: side -> its sample) in its stream
+        (:meth:`WallStream._remember`), from the plain-float rows of a pass of
+        :meth:`run_unchecked` that starts at sample ``first_sample``; ``unstored`` is emptied."""
+        for side, m in unstored.items():
+            sensor_coordinates = pending[side][0]
+            row = m - first_sample
+            self.streams[side]._remember(
+                sensor_coordinates[2 * row],
+                sensor_coordinates[2 * row + 1],
+                headings[row],
+                range_lists[side][m],
+            )
+        unstored.clear()
 
     def flush(self, side: str, result: RunResult | None = None) -> RunResult:
         """Stop ``side``'s sonar: close its open group and handle it (Fig. 2)."""

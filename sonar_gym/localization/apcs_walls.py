@@ -762,7 +762,10 @@ def fit_group_points(
     along_x, along_y = along.tolist()
     occupied_side = np.array([-along_y, along_x])  # left of `along`
     if directions is not None:
-        towards_wall = np.array([np.cos(directions).sum(), np.sin(directions).sum()])
+        # np.add.reduce is what ndarray.sum calls, without its Python wrapper
+        towards_wall = np.array(
+            [np.add.reduce(np.cos(directions)), np.add.reduce(np.sin(directions))]
+        )
         flip = float(occupied_side @ towards_wall) < 0.0
     else:
         flip = float((centred[-1] - centred[0]) @ along) < 0.0
