@@ -378,6 +378,10 @@ class BeaconScanEnv(SonarEnv):
         )
         # the progress features run from sensing_time to the end of the vector
         self._progress_start = self.observation_spec.layout["sensing_time"].start
+        # the method's parameters are the config's, the same for every localization
+        self._localization_params = BeomChoParameters(
+            assignment=config.pair_assignment, extraction=config.rcd_extraction
+        )
         self._episode: _Episode | None = None
         self._room: _Room | None = None
         if self._fixed_scenario is not None and config.start_pose == "beacons_visible":
@@ -582,9 +586,7 @@ class BeaconScanEnv(SonarEnv):
             result = localize_scans(
                 scans,
                 episode.world.scenario,
-                params=BeomChoParameters(
-                    assignment=self.config.pair_assignment, extraction=self.config.rcd_extraction
-                ),
+                params=self._localization_params,
                 method=self.config.localization_method,
                 prior=None if self.config.prior_gate_m is None else episode.prior,
                 prior_gate_m=self.config.prior_gate_m or 0.5,
