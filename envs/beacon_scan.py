@@ -175,6 +175,7 @@ class _Room:
     sonar: RotatingSonar  # assuming 20 deg C, before any calibration
     bounds: np.ndarray  # (2, 2) scenario bounds, [min, max]
     beacon_centres: np.ndarray  # (2, 2) small then large beacon
+    bounds_xy: tuple[tuple[float, float], tuple[float, float]]  # bounds as floats
 
 
 @dataclass
@@ -461,7 +462,8 @@ class BeaconScanEnv(SonarEnv):
         true_pose = sample_start_pose(
             world, sonar, rng, require_beacons=config.start_pose == "beacons_visible"
         )
-        world.set_robot_pose(true_pose)
+        # drawn free with a wider margin than the robot's radius: no need to check it again
+        world.place_robot_on_clear_path(true_pose)
         prior = Pose(
             true_pose.x + rng.normal(0.0, config.prior_position_std_m),
             true_pose.y + rng.normal(0.0, config.prior_position_std_m),
@@ -514,7 +516,10 @@ class BeaconScanEnv(SonarEnv):
         ).with_assumed_speed(speed_of_sound_mps(ASSUMED_TEMPERATURE_C))
         centres = [scenario.beacon(role).center for role in BEACON_ROLES]
         bounds = np.array(scenario.bounds, dtype=np.float64)
-        self._room = _Room(world, sonar, bounds, np.array(centres, dtype=np.float64))
+        (x0, y0), (x1, y1) = bounds.tolist()
+        self._room = _Room(
+            world, sonar, bounds, np.array(centres, dtype=np.float64), ((x0, y0), (x1, y1))
+        )
         return self._room
 
     def _apply_action(self, action: Any) -> StepOutcome:
@@ -635,7 +640,7 @@ class BeaconScanEnv(SonarEnv):
     def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
         """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
         features = [
-            *ScaledPosition.values((prior.x, prior.y), room.bounds[0], room.bounds[1]).tolist(),
+            *ScaledPosition.float_values((prior.x, prior.y), *room.bounds_xy),
             *Heading.values(prior.theta),
         ]
         for x, y in room.beacon_centres.tolist():

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from sonar_gym.pose import Pose
+from sonar_gym.pose import Pose, vector_norm
 from sonar_gym.scenario import Scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.world import World
@@ -39,9 +39,7 @@ def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
     sensor = np.array([sensor_x, sensor_y])
     transducer = sonar.transducer
     for centre, centre_x, centre_y, radius in beacons:
-        to_centre = centre - sensor
-        # np.linalg.norm of a vector: the square root of its dot product with itself
-        distance = math.sqrt(to_centre.dot(to_centre)) - radius
+        distance = vector_norm(centre - sensor) - radius
         if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
             return False
         # centre + (sensor - centre) * radius / (distance + radius), coordinate by coordinate
