@@ -175,6 +175,7 @@ class _Room:
     sonar: RotatingSonar  # assuming 20 deg C, before any calibration
     bounds: np.ndarray  # (2, 2) scenario bounds, [min, max]
     beacon_centres: np.ndarray  # (2, 2) small then large beacon
+    bounds_xy: tuple[tuple[float, float], tuple[float, float]]  # bounds as floats
 
 
 @dataclass
@@ -378,6 +379,10 @@ class BeaconScanEnv(SonarEnv):
         )
         # the progress features run from sensing_time to the end of the vector
         self._progress_start = self.observation_spec.layout["sensing_time"].start
+        # the method's parameters are the config's, the same for every localization
+        self._localization_params = BeomChoParameters(
+            assignment=config.pair_assignment, extraction=config.rcd_extraction
+        )
         self._episode: _Episode | None = None
         self._room: _Room | None = None
         if self._fixed_scenario is not None and config.start_pose == "beacons_visible":
@@ -457,7 +462,8 @@ class BeaconScanEnv(SonarEnv):
         true_pose = sample_start_pose(
             world, sonar, rng, require_beacons=config.start_pose == "beacons_visible"
         )
-        world.set_robot_pose(true_pose)
+        # drawn free with a wider margin than the robot's radius: no need to check it again
+        world.place_robot_on_clear_path(true_pose)
         prior = Pose(
             true_pose.x + rng.normal(0.0, config.prior_position_std_m),
             true_pose.y + rng.normal(0.0, config.prior_position_std_m),
@@ -510,7 +516,10 @@ class BeaconScanEnv(SonarEnv):
         ).with_assumed_speed(speed_of_sound_mps(ASSUMED_TEMPERATURE_C))
         centres = [scenario.beacon(role).center for role in BEACON_ROLES]
         bounds = np.array(scenario.bounds, dtype=np.float64)
-        self._room = _Room(world, sonar, bounds, np.array(centres, dtype=np.float64))
+        (x0, y0), (x1, y1) = bounds.tolist()
+        self._room = _Room(
+            world, sonar, bounds, np.array(centres, dtype=np.float64), ((x0, y0), (x1, y1))
+        )
         return self._room
 
     def _apply_action(self, action: Any) -> StepOutcome:
@@ -582,9 +591,7 @@ class BeaconScanEnv(SonarEnv):
             result = localize_scans(
                 scans,
                 episode.world.scenario,
-                params=BeomChoParameters(
-                    assignment=self.config.pair_assignment, extraction=self.config.rcd_extraction
-                ),
+                params=self._localization_params,
                 method=self.config.localization_method,
                 prior=None if self.config.prior_gate_m is None else episode.prior,
                 prior_gate_m=self.config.prior_gate_m or 0.5,
@@ -633,7 +640,7 @@ class BeaconScanEnv(SonarEnv):
     def _prior_features(self, room: _Room, prior: Pose, max_range: float) -> np.ndarray:
         """``prior_xy``, ``prior_heading`` and both beacons seen from the prior (float32)."""
         features = [
-            *ScaledPosition.values((prior.x, prior.y), room.bounds[0], room.bounds[1]).tolist(),
+            *ScaledPosition.float_values((prior.x, prior.y), *room.bounds_xy),
             *Heading.values(prior.theta),
         ]
         for x, y in room.beacon_centres.tolist():

@@ -7,9 +7,11 @@ blocks the line from the pan axis to them. Metres and radians in the world frame
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from sonar_gym.pose import Pose
+from sonar_gym.pose import Pose, vector_norm
 from sonar_gym.scenario import Scenario
 from sonar_gym.sonar.rotating import RotatingSonar
 from sonar_gym.world import World
@@ -28,29 +30,46 @@ def beacons_visible(world: World, sonar: RotatingSonar, pose: Pose) -> bool:
     0.2 m short of its maximum. In sight: no shape blocks the segment from the pan axis to the
     point of the beacon nearest it. ``pose`` is the robot pose in {W}; metres throughout.
     """
-    sensor = pose.transform_point(world.scenario.robot.sensor_offset)
+    scenario = world.scenario
+    offset_x, offset_y, beacons = _scenario_parts(scenario)
+    # the pan axis in {W}, as Pose.transform_point computes it, on floats
+    c, s = math.cos(pose.theta), math.sin(pose.theta)
+    sensor_x = pose.x + c * offset_x - s * offset_y
+    sensor_y = pose.y + s * offset_x + c * offset_y
+    sensor = np.array([sensor_x, sensor_y])
     transducer = sonar.transducer
-    for centre, radius in _beacons_of(world.scenario):
-        distance = float(np.linalg.norm(centre - sensor)) - radius
+    for centre, centre_x, centre_y, radius in beacons:
+        distance = vector_norm(centre - sensor) - radius
         if not transducer.min_range_m + 0.05 <= distance <= transducer.max_range_m - 0.2:
             return False
-        echo_point = centre + (sensor - centre) * radius / (distance + radius)
-        if not world.line_of_sight(sensor, echo_point):
+        # centre + (sensor - centre) * radius / (distance + radius), coordinate by coordinate
+        echo_point = (
+            centre_x + (sensor_x - centre_x) * radius / (distance + radius),
+            centre_y + (sensor_y - centre_y) * radius / (distance + radius),
+        )
+        if not world.line_of_sight_unchecked((sensor_x, sensor_y), echo_point):
             return False
     return True
 
 
-_last_beacons: tuple[Scenario, list[tuple[np.ndarray, float]]] | None = None
+_Beacon = tuple[np.ndarray, float, float, float]
+_last_parts: tuple[Scenario, tuple[float, float, list[_Beacon]]] | None = None
 
 
-def _beacons_of(scenario: Scenario) -> list[tuple[np.ndarray, float]]:
-    """``(centre, radius)`` of the small then the large beacon (metres, {W}); the last
-    scenario's are kept, as start poses are drawn many times in one scenario."""
-    global _last_beacons
-    if _last_beacons is None or _last_beacons[0] is not scenario:
-        beacons = [scenario.beacon(role) for role in BEACON_ROLES]
-        _last_beacons = (scenario, [(np.asarray(b.center), b.radius) for b in beacons])
-    return _last_beacons[1]
+def _scenario_parts(scenario: Scenario) -> tuple[float, float, list[_Beacon]]:
+    """The sensor offset ``(x, y)`` in {R} and ``(centre, centre x, centre y, radius)`` of the
+    small then the large beacon ({W}), metres, as floats; the last scenario's are kept, as
+    start poses are drawn many times in one scenario."""
+    global _last_parts
+    if _last_parts is None or _last_parts[0] is not scenario:
+        offset = np.asarray(scenario.robot.sensor_offset, dtype=np.float64).reshape(2)
+        beacons: list[_Beacon] = []
+        for role in BEACON_ROLES:
+            beacon = scenario.beacon(role)
+            centre = np.asarray(beacon.center)
+            beacons.append((centre, float(centre[0]), float(centre[1]), beacon.radius))
+        _last_parts = (scenario, (float(offset[0]), float(offset[1]), beacons))
+    return _last_parts[1]
 
 
 def sample_start_pose(

@@ -340,6 +340,11 @@ class World:
             raise ValueError(
                 f"argument 'radius' must be a finite number >= 0 (metres); got {radius!r}"
             )
+        return self.is_free_unchecked(x, y, r)
+
+    def is_free_unchecked(self, x: float, y: float, r: float) -> bool:
+        """:meth:`is_free` of the disc at ``(x, y)`` of radius ``r`` (metres, {W}) without
+        the argument checks: finite Python floats, ``r >= 0``, are the caller's to ensure."""
         room = self.scenario.room
         inner = r - OVERLAP_TOLERANCE_M
         if room is not None and not (
@@ -402,7 +407,7 @@ class World:
             x = float(rng.uniform(x0, x1))
             y = float(rng.uniform(y0, y1))
             # The tolerance is added so sampled poses are clear by the full margin.
-            if self.is_free((x, y), margin + OVERLAP_TOLERANCE_M):
+            if self.is_free_unchecked(x, y, margin + OVERLAP_TOLERANCE_M):
                 return Pose(x, y, float(rng.uniform(-math.pi, math.pi)))
         raise NoFreePoseError(
             f"scenario {self.scenario.name!r}: no free pose found in {max_tries} tries with "
@@ -416,8 +421,11 @@ class World:
         Contacts within 1 micrometre of either end point do not block, so a point *on* a
         surface (an echo point on a wall or a beacon) is visible from the free side.
         """
-        a = _as_point(a_xy, "a_xy")
-        b = _as_point(b_xy, "b_xy")
+        return self.line_of_sight_unchecked(_as_point(a_xy, "a_xy"), _as_point(b_xy, "b_xy"))
+
+    def line_of_sight_unchecked(self, a: tuple[float, float], b: tuple[float, float]) -> bool:
+        """:meth:`line_of_sight` between points given as pairs of finite Python floats
+        (metres, {W}), without the argument checks."""
         length = math.dist(a, b)
         if length <= 2.0 * _ENDPOINT_TOLERANCE_M:
             return True

@@ -8,6 +8,7 @@ when the robot localizes (a calibration after the pans still corrects them).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -58,12 +59,8 @@ class ScanMemory:
         """Store a pan; its ranges were converted with ``assumed_speed_of_sound_mps`` (m/s)."""
         if len(scan.angles) == 0:
             return
-        slots = self._slots(scan.angles)
-        increment = 1
-        if len(slots) > 1:  # the smallest gap between distinct slots, n_slots if none
-            gaps = np.diff(np.sort(slots))
-            gaps = gaps[gaps > 0]
-            increment = int(gaps.min()) if len(gaps) else self.n_slots
+        angles = np.asarray(scan.angles, dtype=np.float64)
+        slots, increment = _grid_slots(self.n_slots, angles.shape, angles.tobytes())
         self.round_trip_tof_s[slots] = 2.0 * scan.ranges / assumed_speed_of_sound_mps
         self.amplitudes[slots] = scan.amplitudes
         self.scanned[slots] = True
@@ -168,12 +165,31 @@ class ScanMemory:
                 chains.append(run)
         return chains
 
-    def _slots(self, angles_rad: FloatArray) -> np.ndarray:
-        position = (wrap_angles(angles_rad) + math.pi) / self.resolution_rad
-        slots = np.rint(position)
-        if np.any(np.abs(position - slots) > 1e-6):
-            raise ValueError(
-                "pan angles must lie on the memory's grid of "
-                f"{math.degrees(self.resolution_rad):g} deg"
-            )
-        return slots.astype(np.int64) % self.n_slots
+
+@functools.lru_cache(maxsize=1024)
+def _grid_slots(n_slots: int, shape: tuple[int, ...], angle_bytes: bytes) -> tuple[np.ndarray, int]:
+    """The slots of pan angles on a grid of ``n_slots`` and the pan's increment in slots (the
+    smallest gap between distinct slots, ``n_slots`` if none; 1 for one angle).
+
+    The angles are the float64 ``angle_bytes`` of ``shape`` (radians, {R}). Remembered: a
+    task offers a few pan grids and pans them again and again. The slots are read-only.
+
+    Raises:
+        ValueError: an angle is off the grid by more than 1e-6 of a slot.
+    """
+    angles_rad = np.frombuffer(angle_bytes, dtype=np.float64).reshape(shape)
+    resolution_rad = 2.0 * math.pi / n_slots
+    position = (wrap_angles(angles_rad) + math.pi) / resolution_rad
+    rounded = np.rint(position)
+    if np.any(np.abs(position - rounded) > 1e-6):
+        raise ValueError(
+            f"pan angles must lie on the memory's grid of {math.degrees(resolution_rad):g} deg"
+        )
+    slots = rounded.astype(np.int64) % n_slots
+    increment = 1
+    if len(slots) > 1:  # the smallest gap between distinct slots, n_slots if none
+        gaps = np.diff(np.sort(slots))
+        gaps = gaps[gaps > 0]
+        increment = int(gaps.min()) if len(gaps) else n_slots
+    slots.flags.writeable = False
+    return slots, increment

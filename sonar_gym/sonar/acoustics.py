@@ -125,6 +125,17 @@ def _piston_directivity_of(x: FloatArray) -> FloatArray:
     return np.where(small, 1.0 - x * x / 8.0, 2.0 * j1(safe) / safe)
 
 
+def _piston_directivity_of_rising(x: FloatArray) -> FloatArray:
+    """:func:`_piston_directivity_of` of a rising ``x``: its small arguments are the first ones,
+    so each part is evaluated on its own slice (each sample by the same formula)."""
+    n_small = int(x.searchsorted(1e-4, side="left"))
+    directivity = np.empty(len(x))
+    small, rest = x[:n_small], x[n_small:]
+    directivity[:n_small] = 1.0 - small * small / 8.0
+    directivity[n_small:] = 2.0 * j1(rest) / rest
+    return directivity
+
+
 def two_way_directivity(theta_rad: npt.ArrayLike, wavenumber_ka: float) -> FloatArray:
     """Two-way (transmit and receive) amplitude pattern ``D^2``; zero beyond 90 deg off axis."""
     theta = np.abs(np.asarray(theta_rad, dtype=np.float64))
@@ -266,7 +277,11 @@ _TABLE_SIZE = math.ceil(math.sqrt(2.0) * TABLE_STEPS_PER_UNIT) + 1
 def _table_grid() -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
     """The samples of :class:`PistonBeam`'s table, the same for every ``k a``: which lie in
     front (``s <= 1``), their off-axis angles (radians; pi behind) and ``sin(theta)`` of those
-    in front. Read-only."""
+    in front. Read-only.
+
+    The samples in front are the first ``TABLE_STEPS_PER_UNIT + 1`` (``s`` rises from 0), and
+    the angles do not fall from one sample to the next (:func:`_main_lobe_samples` counts on
+    both)."""
     s = np.arange(_TABLE_SIZE + 1, dtype=np.float64) / TABLE_STEPS_PER_UNIT
     front = s <= 1.0
     theta = np.full(len(s), math.pi)
@@ -275,6 +290,21 @@ def _table_grid() -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
     for array in (front, theta, sin_front):
         array.flags.writeable = False
     return front, theta, sin_front
+
+
+def _main_lobe_samples(theta: FloatArray, wavenumber_ka: float) -> int:
+    """How many of the table's first samples lie before the piston's first null: the samples
+    with ``theta < first_null_rad(k a)``, a prefix since the angles do not fall."""
+    return int(np.searchsorted(theta, first_null_rad(wavenumber_ka), side="left"))
+
+
+@functools.lru_cache(maxsize=8)
+def _cell_numbers_down_from(last: int) -> FloatArray:
+    """``last, last - 1, ..., 0, -1`` as floats (read-only): the cell numbers of
+    :attr:`PistonBeam.main_lobe_cells`."""
+    numbers = np.arange(last, -2, -1, dtype=np.float64)
+    numbers.flags.writeable = False
+    return numbers
 
 
 @dataclass(frozen=True, eq=False)
@@ -313,10 +343,15 @@ class PistonBeam:
         object.__setattr__(self, "_values", self._cells[:, 0])
         object.__setattr__(self, "_slopes", self._cells[:, 1])
         # Row i: (cell number, value, slope) of the cell that main_lobe_cos_limits finds for a
-        # level placed at i in the rising table (cell len - 1 - i), so that one lookup serves.
+        # level placed at i in the rising table (cell len - 1 - i), so that one lookup serves;
+        # the last row is the table's last cell (number -1).
+        # Column by column: numpy copies a long strided column fast, a row of 2 slowly.
         last = len(self._main_lobe_rising) - 1
-        numbers = np.arange(last, -2, -1, dtype=np.float64)
-        main_lobe_cells = np.column_stack([numbers, self._cells.take(numbers.astype(np.intp), 0)])
+        main_lobe_cells = np.empty((last + 2, 3))
+        main_lobe_cells[:, 0] = _cell_numbers_down_from(last)
+        main_lobe_cells[: last + 1, 1] = self._values[last::-1]
+        main_lobe_cells[: last + 1, 2] = self._slopes[last::-1]
+        main_lobe_cells[last + 1, 1:] = self._cells[-1]
         main_lobe_cells.flags.writeable = False
         object.__setattr__(self, "_main_lobe_cells", main_lobe_cells)
 
@@ -329,29 +364,32 @@ class PistonBeam:
         if not wavenumber_ka > 0.0:
             raise ValueError(f"argument 'wavenumber_ka' must be positive; got {wavenumber_ka!r}")
         leakage = _validated_leakage(side_lobe_leakage)
-        front, theta, sin_front = _table_grid()
-        x = wavenumber_ka * sin_front  # k a sin(theta) of the samples in front
-        values = np.zeros(len(theta))  # behind the transducer the pattern is 0
-        beyond_main_lobe = (theta >= first_null_rad(wavenumber_ka)) | ~front
+        _, theta, sin_front = _table_grid()
+        n_front = len(sin_front)  # the samples in front come first; behind, the pattern is 0
+        n_main = _main_lobe_samples(theta, wavenumber_ka)
+        x = wavenumber_ka * sin_front  # k a sin(theta) of the samples in front, rising
+        values = np.zeros(len(theta))
         if side_lobes:
-            values[front] = _piston_directivity_of(x) ** 2
+            values[:n_front] = _piston_directivity_of_rising(x) ** 2
         else:
             # Without side lobes the pattern is 0 beyond the first null, so 2 J1(x) / x is
-            # evaluated on the main lobe alone (about a sixth of the samples for k a = 17.6);
-            # each sample is computed as before, so the table is the same bits.
-            main_lobe = ~beyond_main_lobe
-            values[main_lobe] = _piston_directivity_of(x[main_lobe[front]]) ** 2
-        last_monotone = int(np.argmax(beyond_main_lobe)) - 1
+            # evaluated on the main lobe alone (about a sixth of the samples for k a = 17.6).
+            values[:n_main] = _piston_directivity_of_rising(x[:n_main]) ** 2
+        last_monotone = n_main - 1
         if leakage > 0.0:
-            leaking = x >= leakage_onset_argument(leakage)
-            floor = leakage * side_lobe_envelope(np.where(leaking, x, 1.0))
-            values[front] = np.where(leaking, np.maximum(values[front], floor), values[front])
+            # sin(theta) rises over the front, so the leaking samples are its last ones
+            first_leaking = int(np.searchsorted(x, leakage_onset_argument(leakage), side="left"))
+            leaking = values[first_leaking:n_front]
+            np.maximum(leaking, leakage * side_lobe_envelope(x[first_leaking:]), out=leaking)
             if not side_lobes:
                 last_monotone = TABLE_STEPS_PER_UNIT  # monotone up to 90 deg
+        cells = np.empty((len(values) - 1, 2))
+        cells[:, 0] = values[:-1]
+        np.subtract(values[1:], values[:-1], out=cells[:, 1])
         return PistonBeam(
             float(wavenumber_ka),
             bool(side_lobes),
-            np.column_stack([values[:-1], np.diff(values)]),
+            cells,
             values[last_monotone::-1].copy(),
             bool(values[TABLE_STEPS_PER_UNIT] != 0.0),
             leakage,

@@ -37,6 +37,7 @@ import numpy as np
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.sonar.acoustics import speed_of_sound_from_round_trip, speed_of_sound_mps
 from sonar_gym.sonar.echoes import plane_echo_amplitude
+from sonar_gym.sonar.presets import Transducer
 from sonar_gym.sonar.presets import preset as transducer_preset
 from sonar_gym.sonar.pulse_echo import (
     FirstEchoes,
@@ -91,16 +92,29 @@ def pan_angles(start_rad: float, stop_rad: float, increment_rad: float) -> Float
     return start_rad + increment_rad * np.arange(n, dtype=np.float64)
 
 
-@functools.lru_cache(maxsize=256)
+@functools.lru_cache(maxsize=1024)
 def _pan_grid(
     start_rad: float, stop_rad: float, increment_rad: float
 ) -> tuple[FloatArray, FloatArray]:
-    """Pan angles and their unit vectors in {R} (cached: agents repeat their sectors)."""
+    """Pan angles and their unit vectors in {R} (cached: agents repeat their sectors; room for
+    every sector of BeaconScan's default action set, 36 centres x 5 widths x 3 increments)."""
     angles = pan_angles(start_rad, stop_rad, increment_rad)
     directions = np.stack([np.cos(angles), np.sin(angles)], axis=1)
     angles.flags.writeable = False
     directions.flags.writeable = False
     return angles, directions
+
+
+@functools.lru_cache(maxsize=16)
+def _reflector_echo_amplitude(transducer: Transducer, distance_m: float) -> float:
+    """The amplitude the receiver compares with its threshold for the calibration reflector
+    at ``distance_m`` metres: the plane echo, the air's absorption over the round trip and
+    the time-varying gain (cached: it depends on the transducer and the distance alone)."""
+    absorption = 10.0 ** (-transducer.absorption_db_per_m * 2.0 * distance_m / 20.0)
+    amplitude = float(plane_echo_amplitude(distance_m)) * absorption
+    if transducer.time_varying_gain is not None:
+        amplitude *= float(transducer.time_varying_gain.gain(distance_m))
+    return amplitude
 
 
 @dataclass(frozen=True)
@@ -177,10 +191,7 @@ class RotatingSonar(PulseEchoSonar):
         distance = world.scenario.reflector.distance
         transducer = self.transducer
         true_speed = speed_of_sound_mps(world.temperature_c)
-        absorption = 10.0 ** (-transducer.absorption_db_per_m * 2.0 * distance / 20.0)
-        amplitude = float(plane_echo_amplitude(distance)) * absorption
-        if transducer.time_varying_gain is not None:
-            amplitude *= float(transducer.time_varying_gain.gain(distance))
+        amplitude = _reflector_echo_amplitude(transducer, distance)
         echoes = FirstEchoes(
             detected=np.ones(n_pings, dtype=bool),
             path_lengths=np.full(n_pings, distance),

@@ -178,3 +178,39 @@ def test_a_lattice_scanned_across_the_back_is_one_chain_and_a_full_one_a_ring() 
     ring.add(_scan(-179, 5, 72, seed=6), SPEED_MPS)
     (chain,) = ring._chains()
     assert chain.tolist() == list(range(1, 360, 5))
+
+
+def _slots_computed_afresh(angles_rad: np.ndarray, n_slots: int) -> tuple[np.ndarray, int]:
+    """The slots and increment of a pan, as ScanMemory.add computed them on every call."""
+    resolution_rad = 2.0 * math.pi / n_slots
+    position = (wrap_angles(angles_rad) + math.pi) / resolution_rad
+    slots = np.rint(position).astype(np.int64) % n_slots
+    increment = 1
+    if len(slots) > 1:
+        gaps = np.diff(np.sort(slots))
+        gaps = gaps[gaps > 0]
+        increment = int(gaps.min()) if len(gaps) else n_slots
+    return slots, increment
+
+
+def test_remembered_pan_slots_are_those_computed_afresh() -> None:
+    from sonar_gym.sonar.accumulate import _grid_slots
+
+    rng = np.random.default_rng(3)
+    for n_slots in (360, 720, 120):
+        resolution = 2.0 * math.pi / n_slots
+        for _ in range(200):
+            start = int(rng.integers(-n_slots, n_slots))
+            step = int(rng.choice([*range(1, 12), n_slots]))  # n_slots: one slot again and again
+            count = int(rng.integers(1, max(n_slots // step, 3) + 2))
+            angles = resolution * (start + step * np.arange(count))
+            for _ in range(2):  # the second call is remembered
+                slots, increment = _grid_slots(n_slots, angles.shape, angles.tobytes())
+                want_slots, want_increment = _slots_computed_afresh(angles, n_slots)
+                assert slots.tobytes() == want_slots.tobytes() and increment == want_increment
+        for _ in range(2):  # off the grid: refused every time, never remembered
+            with np.testing.assert_raises(ValueError):
+                ScanMemory(resolution).add(
+                    Scan(np.array([0.5 * resolution]), np.array([1.0]), np.array([1.0]), 0.0),
+                    SPEED_MPS,
+                )
