@@ -229,6 +229,7 @@ class DifferentialDriveRobot:
         self.max_substep_m = float(max_substep_m)
         self.max_substep_rad = float(max_substep_rad)
         self.odometry_pose: Pose | None = odometry_pose
+        self._noise_cache: tuple[tuple[OdometryNoise, float, float], FloatArray] | None = None
 
     def reset_odometry(self, pose: Pose | None) -> None:
         """Set the dead-reckoning estimate (``None``: the true pose at the next command)."""
@@ -348,7 +349,12 @@ class DifferentialDriveRobot:
             covariance,
             variance_per_m,
         )
-        self._physics_after(world, motions, blocked, start)
+        if blocked == len(motions):  # every command clear of the shapes: no physics
+            last = motions[-1].tolist()
+            world.place_robot_on_clear_path(Pose.unchecked(*last[_TRUE_POSE]))
+            self.odometry_pose = Pose.unchecked(*last[_ODOMETRY])
+        else:
+            self._physics_after(world, motions, blocked, start)
         return motions, Pose.unchecked(*predicted), predicted_covariance
 
     def _wheel_arguments(
@@ -361,24 +367,12 @@ class DifferentialDriveRobot:
     ) -> tuple[Any, ...]:
         """The arguments of :func:`sonar_gym.drive_kernels.drive_commands` for ``commands_m``
         from the true pose ``start``, drawing each command's numbers from ``rng``."""
-        noise = self.noise
         odometry = start if self.odometry_pose is None else self.odometry_pose
         table = world.static_shape_table
         return (
             commands_m,
             _command_draws(rng, len(commands_m)),
-            np.array(
-                (
-                    noise.encoder_std_m_per_sqrt_m,
-                    noise.scale_error_left,
-                    noise.scale_error_right,
-                    noise.slip_probability_per_m,
-                    noise.slip_fraction_max,
-                    self.max_substep_m,
-                    self.max_substep_rad,
-                ),
-                dtype=np.float64,
-            ),
+            self._noise_arguments(),
             float(self.wheel_base_for(world)),
             substeps,
             INTEGRATIONS.index(self.odometry_integration),
@@ -389,6 +383,31 @@ class DifferentialDriveRobot:
             table.kinds,
             table.shapes,
         )
+
+    def _noise_arguments(self) -> FloatArray:
+        """The read-only ``noise`` array of :func:`sonar_gym.drive_kernels.drive_commands`:
+        the odometry errors, then the substep limits (metres, radians); built again only when
+        one of them is replaced."""
+        key = (self.noise, self.max_substep_m, self.max_substep_rad)
+        cached = self._noise_cache
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        noise = self.noise
+        values = np.array(
+            (
+                noise.encoder_std_m_per_sqrt_m,
+                noise.scale_error_left,
+                noise.scale_error_right,
+                noise.slip_probability_per_m,
+                noise.slip_fraction_max,
+                self.max_substep_m,
+                self.max_substep_rad,
+            ),
+            dtype=np.float64,
+        )
+        values.flags.writeable = False
+        self._noise_cache = (key, values)
+        return values
 
     def _physics_after(
         self, world: World, motions: FloatArray, blocked: int, start: Pose

@@ -326,6 +326,29 @@ def test_drive_draws_a_fixed_number_of_variates() -> None:
     assert a.random() == b.random()
 
 
+@pytest.mark.parametrize(
+    "setting, value",
+    [("noise", OdometryNoise(scale_error_left=0.05)), ("max_substep_m", 0.001)],
+)
+def test_a_replaced_noise_or_substep_limit_takes_effect_at_the_next_drive(
+    setting: str, value: object
+) -> None:
+    used = DifferentialDriveRobot(NOISELESS)
+    used.drive(World(OPEN_ROOM), 0.3, 0.2, rng(3))  # drives under the old setting first
+    fresh = DifferentialDriveRobot(NOISELESS)
+    outcomes = []
+    for robot in (used, fresh):
+        setattr(robot, setting, value)
+        robot.reset_odometry(Pose(0.1, 0.0, 0.2))
+        world = World(OPEN_ROOM, robot_pose=Pose(0.1, 0.0, 0.2))
+        outcomes.append(robot.drive(world, 0.4, 0.6, rng(4)))
+    unchanged = DifferentialDriveRobot(NOISELESS, odometry_pose=Pose(0.1, 0.0, 0.2))
+    before = unchanged.drive(World(OPEN_ROOM, robot_pose=Pose(0.1, 0.0, 0.2)), 0.4, 0.6, rng(4))
+    assert outcomes[0] == outcomes[1]
+    if setting == "noise":
+        assert outcomes[0].true_pose != before.true_pose
+
+
 def test_move_to_reaches_the_target_without_noise() -> None:
     world = World(OPEN_ROOM)
     robot = DifferentialDriveRobot(NOISELESS)

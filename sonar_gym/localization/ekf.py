@@ -376,7 +376,10 @@ def ekf_update_unchecked(
         posterior = correction @ prior @ correction.T + gain @ noise @ gain.T
     else:
         posterior = correction @ prior
-    return Pose(pose.x + dx, pose.y + dy, pose.theta + dtheta), _symmetrised(posterior)
+    x, y, theta = pose.x + dx, pose.y + dy, pose.theta + dtheta
+    if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
+        return Pose.unchecked(x, y, theta), _symmetrised(posterior)
+    return Pose(x, y, theta), _symmetrised(posterior)  # raises, naming the non-finite field
 
 
 def _inverse_or_pseudo_inverse(matrix: FloatArray) -> FloatArray:
