@@ -372,39 +372,45 @@ def convex_loops(
     """
     n = len(starts)
     joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
-    successor = np.full(n, -1)
-    if len(starts):  # (argmax refuses an empty axis)
-        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
-    solid_side = np.zeros(n)
-    encloses = np.zeros(n, dtype=bool)
-    loops = _closed_chains(successor.tolist())
+    successor = [-1] * n
+    if n:  # (argmax refuses an empty axis)
+        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1).tolist()
+    loops = _closed_chains(successor)
     if not loops:
-        return solid_side, encloses
-    # All loops at once, row by row the arithmetic of one loop: its members in loop order, the
-    # rows of each loop reduced from its first row (reduceat).
-    lengths = [len(loop) for loop in loops]
-    firsts = np.cumsum([0, *lengths[:-1]])
-    members = np.array([segment for loop in loops for segment in loop])
-    next_members = np.array([segment for loop in loops for segment in (*loop[1:], loop[0])])
+        return np.zeros(n), np.zeros(n, dtype=bool)
+    # All loops at once, row by row the arithmetic of one loop: its members in loop order; the
+    # few per-loop verdicts on Python lists.
+    members = [segment for loop in loops for segment in loop]
+    firsts = [0] * len(loops)  # the row of each loop's first member
+    next_rows: list[int] = []  # each member's row of the next member of its loop
+    for k, loop in enumerate(loops):
+        firsts[k] = len(next_rows)
+        next_rows += range(firsts[k] + 1, firsts[k] + len(loop))
+        next_rows.append(firsts[k])
     d = ends[members] - starts[members]
-    d_next = ends[next_members] - starts[next_members]
+    d_next = d[next_rows]
     turns = d[:, 0] * d_next[:, 1] - d[:, 1] * d_next[:, 0]
-    convex = np.logical_and.reduceat(turns > 1e-12, firsts) | np.logical_and.reduceat(
-        turns < -1e-12, firsts
-    )
-    interior_left = np.sign(turns[firsts])
     points = np.concatenate([starts, ends, centres])
     offsets = points[None, :, :] - starts[members][:, None, :]
-    sides = np.repeat(interior_left, lengths)[:, None] * (
-        d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0]
-    )
-    enclosure = np.logical_and.reduceat(np.all(sides >= -LOOP_TOLERANCE_M, axis=1), firsts)
-    solid = np.repeat(convex, lengths)
-    solid_side[members[solid]] = np.repeat(
-        np.where(enclosure, -interior_left, interior_left), lengths
-    )[solid]
-    encloses[members[solid]] = np.repeat(enclosure, lengths)[solid]
-    return solid_side, encloses
+    crosses = d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0]
+    turn_list = turns.tolist()
+    # The sign of each loop's first turn: which side of its segments the loop's interior lies.
+    interior_left = [float(np.sign(turn_list[first])) for first in firsts]
+    member_sides = [side for loop, side in zip(loops, interior_left, strict=True) for _ in loop]
+    sides = np.array(member_sides)[:, None] * crosses
+    inside_rows = np.all(sides >= -LOOP_TOLERANCE_M, axis=1).tolist()
+    solid_side = [0.0] * n
+    encloses = [False] * n
+    for loop, side, first in zip(loops, interior_left, firsts, strict=True):
+        rows = slice(first, first + len(loop))
+        loop_turns = turn_list[rows]
+        if not (all(t > 1e-12 for t in loop_turns) or all(t < -1e-12 for t in loop_turns)):
+            continue  # not convex: reflects on both sides
+        enclosure = all(inside_rows[rows])
+        for segment in loop:
+            solid_side[segment] = -side if enclosure else side
+            encloses[segment] = enclosure
+    return np.array(solid_side, dtype=np.float64), np.array(encloses, dtype=bool)
 
 
 def _closed_chains(successor: list[int]) -> list[list[int]]:
