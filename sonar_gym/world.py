@@ -565,11 +565,8 @@ class _ConvexPolygons:
         previous = ring_shift(corners, -1, axis=1)
         edges = corners - previous
         self._polygons = [
-            [
-                (float(p[0]), float(p[1]), float(e[0]), float(e[1]))
-                for p, e in zip(ps, es, strict=True)
-            ]
-            for ps, es in zip(previous, edges, strict=True)
+            [(p[0], p[1], e[0], e[1]) for p, e in zip(ps, es, strict=True)]
+            for ps, es in zip(previous.tolist(), edges.tolist(), strict=True)
         ]
 
     def contain_strictly(self, x: float, y: float) -> bool:

@@ -81,11 +81,16 @@ class EchoTables:
             ``along > 0`` and ``-along > -1``), -1 for the other candidates.
         occluder_bounds: ``(S + C,)`` 0 for segments that may occlude, 1 for enclosure
             segments (never), -1 for circles (always).
+        kind_codes: the EchoKind codes of a plane, a cylinder and an edge.
+
+    What only the pan's echo search reads (``position_and_occlusion_map``, ``radius_padded``,
+    ``twin_comes_last``, ``kinds_template``, ``has_t_junctions``, ``search_map``,
+    ``strict_bounds``, ``occluder_bounds``) is built on first use, once per geometry: the side
+    sonars, whose geometry changes every episode in an env with random obstacles, never ask.
     """
 
     position_map: FloatArray
     occlusion_map: FloatArray
-    position_and_occlusion_map: FloatArray
     n_position_rows: int
     n_segments: int
     n_circles: int
@@ -93,29 +98,105 @@ class EchoTables:
     n_wedges: int
     radius: FloatArray
     radius_sq: FloatArray
-    radius_padded: FloatArray
     solid_side: FloatArray
     encloses: np.ndarray
     twin: np.ndarray
     twin_comes_first: np.ndarray
-    twin_comes_last: np.ndarray
-    kinds_template: np.ndarray
-    has_t_junctions: bool
     rel_rows: slice
     along_rows: slice
     distance_rows: slice
     wedge_a_rows: slice
     wedge_b_rows: slice
     occlusion_rows: slice
-    search_map: FloatArray
     first_test_row: int
     ranges_rows: slice
     amplitudes_rows: slice
-    strict_bounds: FloatArray
-    occluder_bounds: FloatArray
+    kind_codes: tuple[int, int, int] = field(repr=False)
     _inclusive_bounds: dict[tuple[float, float], FloatArray] = field(
         default_factory=dict, repr=False
     )
+
+    # The members below serve the pan's echo search (sonar_gym.sonar.echoes) only; the side
+    # sonars never read them, so each is built on first use, once per geometry.
+
+    @functools.cached_property
+    def position_and_occlusion_map(self) -> FloatArray:
+        """Both maps stacked, so that one product with ``(px, py, 1)`` evaluates them together."""
+        return np.concatenate([self.position_map, self.occlusion_map])
+
+    @functools.cached_property
+    def radius_padded(self) -> FloatArray:
+        """``(S+C+V,)`` the radius of every candidate (0 but for cylinders)."""
+        return np.concatenate([np.zeros(self.n_segments), self.radius, np.zeros(self.n_vertices)])
+
+    @functools.cached_property
+    def twin_comes_last(self) -> np.ndarray:
+        """``(W,)`` whether each wedge vertex's twin has its index or a higher one."""
+        return self.twin >= np.arange(self.n_wedges)
+
+    @functools.cached_property
+    def kinds_template(self) -> np.ndarray:
+        """``(S+C+V,)`` EchoKind codes with every vertex an edge."""
+        plane, cylinder, edge = self.kind_codes
+        return np.concatenate(
+            [
+                np.full(self.n_segments, plane, dtype=np.int8),
+                np.full(self.n_circles, cylinder, dtype=np.int8),
+                np.full(self.n_vertices, edge, dtype=np.int8),
+            ]
+        )
+
+    @functools.cached_property
+    def has_t_junctions(self) -> bool:
+        """Whether any wedge vertex has a twin."""
+        return bool(np.any(self.twin != np.arange(self.n_wedges)))
+
+    @functools.cached_property
+    def search_map(self) -> FloatArray:
+        """``position_and_occlusion_map`` followed by the test rows of the echo search."""
+        n_segments, n_candidates = (
+            self.n_segments,
+            self.n_segments + self.n_circles + self.n_vertices,
+        )
+        distance = self.position_map[self.distance_rows]
+        # The per-candidate test rows (zeros but for segments; see the class docstring).
+        along_all = np.zeros((n_candidates, 3))
+        along_all[:n_segments] = self.position_map[self.along_rows]
+        facing_all = np.zeros((n_candidates, 3))
+        facing_all[:n_segments] = -self.solid_side[:, None] * distance
+        occluder_rows = np.zeros((n_segments + self.n_circles, 3))
+        occluder_rows[:n_segments] = np.where(self.encloses[:, None], 0.0, facing_all[:n_segments])
+        search_map = np.concatenate(
+            [
+                self.position_and_occlusion_map,
+                along_all,
+                -along_all,
+                facing_all,
+                np.zeros((2 * n_candidates, 3)),  # the ranges and amplitudes go here
+                occluder_rows,
+            ]
+        )
+        search_map.flags.writeable = False
+        return search_map
+
+    @functools.cached_property
+    def strict_bounds(self) -> FloatArray:
+        """``(2 N,)`` the bounds of the strict tests of the echo search."""
+        n_candidates = self.n_segments + self.n_circles + self.n_vertices
+        strict_bounds = np.concatenate(
+            [np.zeros(self.n_segments), np.full(2 * n_candidates - self.n_segments, -1.0)]
+        )
+        strict_bounds.flags.writeable = False
+        return strict_bounds
+
+    @functools.cached_property
+    def occluder_bounds(self) -> FloatArray:
+        """``(S + C,)`` the bounds of the occluder tests of the echo search."""
+        occluder_bounds = np.concatenate(
+            [np.where(self.encloses, 1.0, 0.0), np.full(self.n_circles, -1.0)]
+        )
+        occluder_bounds.flags.writeable = False
+        return occluder_bounds
 
     @functools.cached_property
     def search_layout(self) -> np.ndarray:
@@ -248,71 +329,33 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     solid_side, encloses = convex_loops(a, geometry.segment_ends, geometry.circles[:, :2])
     n_rel = 3 * n_candidates
     n_position_rows = len(position_map)
-    position_and_occlusion_map = np.concatenate([position_map, occlusion.reshape(-1, 3)])
-    # The per-candidate test rows of the search map (zeros but for segments; see EchoTables).
-    along_all = np.zeros((n_candidates, 3))
-    along_all[:n_segments] = along
-    facing_all = np.zeros((n_candidates, 3))
-    facing_all[:n_segments] = -solid_side[:, None] * distance
-    occluder_rows = np.zeros((n_segments + n_circles, 3))
-    occluder_rows[:n_segments] = np.where(encloses[:, None], 0.0, facing_all[:n_segments])
-    search_map = np.concatenate(
-        [
-            position_and_occlusion_map,
-            along_all,
-            -along_all,
-            facing_all,
-            np.zeros((2 * n_candidates, 3)),  # the ranges and amplitudes go here
-            occluder_rows,
-        ]
-    )
-    first_test_row = len(position_and_occlusion_map)
+    n_occlusion_rows = 3 * n_rows
+    first_test_row = n_position_rows + n_occlusion_rows
     ranges_start = first_test_row + 3 * n_candidates
-    strict_bounds = np.concatenate(
-        [np.zeros(n_segments), np.full(2 * n_candidates - n_segments, -1.0)]
-    )
-    occluder_bounds = np.concatenate([np.where(encloses, 1.0, 0.0), np.full(n_circles, -1.0)])
-    for array in (search_map, strict_bounds, occluder_bounds):
-        array.flags.writeable = False
     return EchoTables(
         position_map=position_map,
         occlusion_map=occlusion.reshape(-1, 3),
-        position_and_occlusion_map=position_and_occlusion_map,
-        n_position_rows=len(position_map),
+        n_position_rows=n_position_rows,
         n_segments=n_segments,
         n_circles=n_circles,
         n_vertices=n_vertices,
         n_wedges=n_wedges,
         radius=geometry.circles[:, 2].copy(),
         radius_sq=geometry.circles[:, 2] ** 2,
-        radius_padded=np.concatenate(
-            [np.zeros(n_segments), geometry.circles[:, 2], np.zeros(n_vertices)]
-        ),
         solid_side=solid_side,
         encloses=encloses,
         twin=twin,
         twin_comes_first=twin < np.arange(n_wedges),
-        twin_comes_last=twin >= np.arange(n_wedges),
-        kinds_template=np.concatenate(
-            [
-                np.full(n_segments, plane, dtype=np.int8),
-                np.full(n_circles, cylinder, dtype=np.int8),
-                np.full(n_vertices, edge, dtype=np.int8),
-            ]
-        ),
-        has_t_junctions=bool(np.any(twin != np.arange(n_wedges))),
         rel_rows=slice(0, n_rel),
         along_rows=slice(n_rel, n_rel + n_segments),
         distance_rows=slice(n_rel + n_segments, n_rel + 2 * n_segments),
         wedge_a_rows=slice(n_rel + 2 * n_segments, n_rel + 2 * n_segments + n_wedges),
         wedge_b_rows=slice(n_rel + 2 * n_segments + n_wedges, n_position_rows),
-        occlusion_rows=slice(n_position_rows, len(position_and_occlusion_map)),
-        search_map=search_map,
+        occlusion_rows=slice(n_position_rows, first_test_row),
         first_test_row=first_test_row,
         ranges_rows=slice(ranges_start, ranges_start + n_candidates),
         amplitudes_rows=slice(ranges_start + n_candidates, ranges_start + 2 * n_candidates),
-        strict_bounds=strict_bounds,
-        occluder_bounds=occluder_bounds,
+        kind_codes=(plane, cylinder, edge),
     )
 
 
@@ -329,39 +372,45 @@ def convex_loops(
     """
     n = len(starts)
     joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
-    successor = np.full(n, -1)
-    if len(starts):  # (argmax refuses an empty axis)
-        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1)
-    solid_side = np.zeros(n)
-    encloses = np.zeros(n, dtype=bool)
-    loops = _closed_chains(successor.tolist())
+    successor = [-1] * n
+    if n:  # (argmax refuses an empty axis)
+        successor = np.where(joins.sum(axis=1) == 1, joins.argmax(axis=1), -1).tolist()
+    loops = _closed_chains(successor)
     if not loops:
-        return solid_side, encloses
-    # All loops at once, row by row the arithmetic of one loop: its members in loop order, the
-    # rows of each loop reduced from its first row (reduceat).
-    lengths = [len(loop) for loop in loops]
-    firsts = np.cumsum([0, *lengths[:-1]])
-    members = np.array([segment for loop in loops for segment in loop])
-    next_members = np.array([segment for loop in loops for segment in (*loop[1:], loop[0])])
+        return np.zeros(n), np.zeros(n, dtype=bool)
+    # All loops at once, row by row the arithmetic of one loop: its members in loop order; the
+    # few per-loop verdicts on Python lists.
+    members = [segment for loop in loops for segment in loop]
+    firsts = [0] * len(loops)  # the row of each loop's first member
+    next_rows: list[int] = []  # each member's row of the next member of its loop
+    for k, loop in enumerate(loops):
+        firsts[k] = len(next_rows)
+        next_rows += range(firsts[k] + 1, firsts[k] + len(loop))
+        next_rows.append(firsts[k])
     d = ends[members] - starts[members]
-    d_next = ends[next_members] - starts[next_members]
+    d_next = d[next_rows]
     turns = d[:, 0] * d_next[:, 1] - d[:, 1] * d_next[:, 0]
-    convex = np.logical_and.reduceat(turns > 1e-12, firsts) | np.logical_and.reduceat(
-        turns < -1e-12, firsts
-    )
-    interior_left = np.sign(turns[firsts])
     points = np.concatenate([starts, ends, centres])
     offsets = points[None, :, :] - starts[members][:, None, :]
-    sides = np.repeat(interior_left, lengths)[:, None] * (
-        d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0]
-    )
-    enclosure = np.logical_and.reduceat(np.all(sides >= -LOOP_TOLERANCE_M, axis=1), firsts)
-    solid = np.repeat(convex, lengths)
-    solid_side[members[solid]] = np.repeat(
-        np.where(enclosure, -interior_left, interior_left), lengths
-    )[solid]
-    encloses[members[solid]] = np.repeat(enclosure, lengths)[solid]
-    return solid_side, encloses
+    crosses = d[:, None, 0] * offsets[..., 1] - d[:, None, 1] * offsets[..., 0]
+    turn_list = turns.tolist()
+    # The sign of each loop's first turn: which side of its segments the loop's interior lies.
+    interior_left = [float(np.sign(turn_list[first])) for first in firsts]
+    member_sides = [side for loop, side in zip(loops, interior_left, strict=True) for _ in loop]
+    sides = np.array(member_sides)[:, None] * crosses
+    inside_rows = np.all(sides >= -LOOP_TOLERANCE_M, axis=1).tolist()
+    solid_side = [0.0] * n
+    encloses = [False] * n
+    for loop, side, first in zip(loops, interior_left, firsts, strict=True):
+        rows = slice(first, first + len(loop))
+        loop_turns = turn_list[rows]
+        if not (all(t > 1e-12 for t in loop_turns) or all(t < -1e-12 for t in loop_turns)):
+            continue  # not convex: reflects on both sides
+        enclosure = all(inside_rows[rows])
+        for segment in loop:
+            solid_side[segment] = -side if enclosure else side
+            encloses[segment] = enclosure
+    return np.array(solid_side, dtype=np.float64), np.array(encloses, dtype=bool)
 
 
 def _closed_chains(successor: list[int]) -> list[list[int]]:
