@@ -229,7 +229,6 @@ class DifferentialDriveRobot:
         self.max_substep_m = float(max_substep_m)
         self.max_substep_rad = float(max_substep_rad)
         self.odometry_pose: Pose | None = odometry_pose
-        self._noise_cache: tuple[tuple[OdometryNoise, float, float], FloatArray] | None = None
 
     def reset_odometry(self, pose: Pose | None) -> None:
         """Set the dead-reckoning estimate (``None``: the true pose at the next command)."""
@@ -385,15 +384,10 @@ class DifferentialDriveRobot:
         )
 
     def _noise_arguments(self) -> FloatArray:
-        """The read-only ``noise`` array of :func:`sonar_gym.drive_kernels.drive_commands`:
-        the odometry errors, then the substep limits (metres, radians); built again only when
-        one of them is replaced."""
-        key = (self.noise, self.max_substep_m, self.max_substep_rad)
-        cached = self._noise_cache
-        if cached is not None and cached[0] == key:
-            return cached[1]
+        """The ``noise`` array of :func:`sonar_gym.drive_kernels.drive_commands`: the odometry
+        errors, then the substep limits (metres, radians)."""
         noise = self.noise
-        values = np.array(
+        return np.array(
             (
                 noise.encoder_std_m_per_sqrt_m,
                 noise.scale_error_left,
@@ -405,9 +399,6 @@ class DifferentialDriveRobot:
             ),
             dtype=np.float64,
         )
-        values.flags.writeable = False
-        self._noise_cache = (key, values)
-        return values
 
     def _physics_after(
         self, world: World, motions: FloatArray, blocked: int, start: Pose
