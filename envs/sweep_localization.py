@@ -181,8 +181,10 @@ class _Episode:
     last_ranges: np.ndarray | None = None
     last_sector: int = 0
     last_fix_ok: bool = False
-    true_track: list[np.ndarray] = field(default_factory=list)
-    estimate_track: list[np.ndarray] = field(default_factory=list)
+    true_track: list[tuple[float, float]] = field(default_factory=list)
+    """The true positions after each drive ({W}, metres; for rendering)."""
+    estimate_track: list[tuple[float, float]] = field(default_factory=list)
+    """The EKF positions after each drive ({W}, metres; for rendering)."""
     scanned: tuple[tuple[Sweep, Pose], ...] = ()
     """The last decision's sweeps with the true poses they were taken at (for rendering)."""
 
@@ -468,8 +470,8 @@ class SweepLocalizationEnv(SonarEnv):
             estimate=estimate,
             covariance=covariance,
         )
-        self._episode.true_track.append(start.position)
-        self._episode.estimate_track.append(estimate.position)
+        self._episode.true_track.append((start.x, start.y))
+        self._episode.estimate_track.append((estimate.x, estimate.y))
         return self._info(_RUNNING)
 
     def _apply_action(self, action: Any) -> StepOutcome:
@@ -592,8 +594,9 @@ class SweepLocalizationEnv(SonarEnv):
         episode.estimate, episode.covariance = leg.estimate, leg.covariance
         episode.distance_since_fix_m = sum((episode.distance_since_fix_m, *leg.rolled_m))
         episode.progress_m = station_m
-        episode.true_track.append(episode.world.robot_pose.position)
-        episode.estimate_track.append(episode.estimate.position)
+        truth, estimate = episode.world.robot_pose, episode.estimate
+        episode.true_track.append((truth.x, truth.y))
+        episode.estimate_track.append((estimate.x, estimate.y))
 
     # --- observation and info ---------------------------------------------------------
     def _observe(self) -> np.ndarray:
