@@ -491,17 +491,17 @@ class SweepLocalizationEnv(SonarEnv):
             step_sensing_s, fix_info = self._sense_and_fix(episode, n_sweeps, sector, next_station)
         self._drive_to(episode, next_station)
         episode.sensing_time_s += step_sensing_s
-        true_pose = episode.world.robot_pose
+        done = episode.decisions >= len(stations)
+        info = self._info("ok" if done else _RUNNING, episode.world.robot_pose)
+        # the errors of the EKF estimate against the truth, as the info reports them
         error_loss = (
-            position_error_m(episode.estimate, true_pose) / POSITION_UNIT_M
-            + heading_error_rad(episode.estimate, true_pose) / HEADING_UNIT_RAD
+            info["position_error_m"] / POSITION_UNIT_M
+            + info["heading_error_rad"] / HEADING_UNIT_RAD
         )
         terms = {
             "pose_error": -min(error_loss, config.max_error_loss),
             "sensing_cost": -(config.sensing_cost_per_s * step_sensing_s),
         }
-        done = episode.decisions >= len(stations)
-        info = self._info("ok" if done else _RUNNING, true_pose)
         info.update(fix_info)
         info.update(
             n_sweeps=n_sweeps, sector=SECTOR_NAMES[sector], step_sensing_time_s=step_sensing_s
