@@ -25,6 +25,7 @@ from sonar_gym.envs.features import (
     ObservationSpec,
     RangeBins,
     ScaledPosition,
+    clipped,
 )
 from sonar_gym.envs.config import (
     build_config,
@@ -75,6 +76,19 @@ _STD_SCALES = (POSITION_STD_SCALE_M, POSITION_STD_SCALE_M, HEADING_STD_SCALE_RAD
 MAX_MAP_CELLS = 4_000_000
 """Largest voting map the env builds: cells of the scenario's bounds (100 m x 100 m of 5 cm)."""
 _RUNNING = "running"
+_OBSERVATION_ORDER = (
+    "estimate_xy",
+    "estimate_heading",
+    "estimate_std",
+    "distance_since_fix",
+    "route_progress",
+    "last_sweep_ranges",
+    "last_sweep_sector",
+    "last_fix_ok",
+    "route_heading",
+    "steps_remaining",
+)
+"""The observation's features in vector order."""
 
 
 @dataclass(frozen=True)
@@ -167,8 +181,10 @@ class _Episode:
     last_ranges: np.ndarray | None = None
     last_sector: int = 0
     last_fix_ok: bool = False
-    true_track: list[np.ndarray] = field(default_factory=list)
-    estimate_track: list[np.ndarray] = field(default_factory=list)
+    true_track: list[tuple[float, float]] = field(default_factory=list)
+    """The true positions after each drive ({W}, metres; for rendering)."""
+    estimate_track: list[tuple[float, float]] = field(default_factory=list)
+    """The EKF positions after each drive ({W}, metres; for rendering)."""
     scanned: tuple[tuple[Sweep, Pose], ...] = ()
     """The last decision's sweeps with the true poses they were taken at (for rendering)."""
 
@@ -378,19 +394,8 @@ class SweepLocalizationEnv(SonarEnv):
                 ]
             )
         )
-        # the scalar features on either side of the range bins, each written in one go
-        self._belief_run = self.observation_spec.run(
-            (
-                "estimate_xy",
-                "estimate_heading",
-                "estimate_std",
-                "distance_since_fix",
-                "route_progress",
-            )
-        )
-        self._status_run = self.observation_spec.run(
-            ("last_sweep_sector", "last_fix_ok", "route_heading", "steps_remaining")
-        )
+        if self.observation_spec.run(_OBSERVATION_ORDER) != slice(0, self.observation_spec.size):
+            raise AssertionError("_OBSERVATION_ORDER must list every feature in vector order")
         self._table1_route = Route.through(TABLE_1_TRUE_POSITIONS_M)
         # One world for every episode: ``World.reset_episode`` keeps its static geometry.
         self._world = World(self._scenario, temperature_c=config.temperature_c)
@@ -465,8 +470,8 @@ class SweepLocalizationEnv(SonarEnv):
             estimate=estimate,
             covariance=covariance,
         )
-        self._episode.true_track.append(start.position)
-        self._episode.estimate_track.append(estimate.position)
+        self._episode.true_track.append((start.x, start.y))
+        self._episode.estimate_track.append((estimate.x, estimate.y))
         return self._info(_RUNNING)
 
     def _apply_action(self, action: Any) -> StepOutcome:
@@ -486,17 +491,17 @@ class SweepLocalizationEnv(SonarEnv):
             step_sensing_s, fix_info = self._sense_and_fix(episode, n_sweeps, sector, next_station)
         self._drive_to(episode, next_station)
         episode.sensing_time_s += step_sensing_s
-        true_pose = episode.world.robot_pose
+        done = episode.decisions >= len(stations)
+        info = self._info("ok" if done else _RUNNING, episode.world.robot_pose)
+        # the errors of the EKF estimate against the truth, as the info reports them
         error_loss = (
-            position_error_m(episode.estimate, true_pose) / POSITION_UNIT_M
-            + heading_error_rad(episode.estimate, true_pose) / HEADING_UNIT_RAD
+            info["position_error_m"] / POSITION_UNIT_M
+            + info["heading_error_rad"] / HEADING_UNIT_RAD
         )
         terms = {
             "pose_error": -min(error_loss, config.max_error_loss),
             "sensing_cost": -(config.sensing_cost_per_s * step_sensing_s),
         }
-        done = episode.decisions >= len(stations)
-        info = self._info("ok" if done else _RUNNING, true_pose)
         info.update(fix_info)
         info.update(
             n_sweeps=n_sweeps, sector=SECTOR_NAMES[sector], step_sensing_time_s=step_sensing_s
@@ -589,30 +594,16 @@ class SweepLocalizationEnv(SonarEnv):
         episode.estimate, episode.covariance = leg.estimate, leg.covariance
         episode.distance_since_fix_m = sum((episode.distance_since_fix_m, *leg.rolled_m))
         episode.progress_m = station_m
-        episode.true_track.append(episode.world.robot_pose.position)
-        episode.estimate_track.append(episode.estimate.position)
+        truth, estimate = episode.world.robot_pose, episode.estimate
+        episode.true_track.append((truth.x, truth.y))
+        episode.estimate_track.append((estimate.x, estimate.y))
 
     # --- observation and info ---------------------------------------------------------
     def _observe(self) -> np.ndarray:
         episode = self._require_episode()
-        observation = self.observation_spec.writer()
         estimate = episode.estimate
         low, high = self._bounds
         variances = episode.covariance.diagonal().tolist()
-        observation.write_run(
-            self._belief_run,
-            [
-                *ScaledPosition.float_values((estimate.x, estimate.y), low, high),
-                *Heading.values(estimate.theta),
-                *[
-                    min(max(math.sqrt(max(variance, 0.0)) / scale, 0.0), 1.0)
-                    for variance, scale in zip(variances, _STD_SCALES, strict=True)
-                ],
-                min(episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0),
-                min(episode.progress_m / max(episode.route.length_m, 1e-9), 1.0),
-            ],
-        )
-        observation["last_sweep_ranges"] = self._sweep_bins.values(episode.last_ranges)
         station_x, station_y = self._next_station_point(episode)
         ahead_x, ahead_y = station_x - estimate.x, station_y - estimate.y
         bearing = (
@@ -620,17 +611,25 @@ class SweepLocalizationEnv(SonarEnv):
             if ahead_x != 0.0 or ahead_y != 0.0
             else 0.0
         )
-        remaining = len(episode.decision_stations_m) - episode.decisions
-        observation.write_run(
-            self._status_run,
+        decisions = len(episode.decision_stations_m)
+        # every entry in the order of _OBSERVATION_ORDER, made a float32 vector in one go
+        return self.observation_spec.vector_of(
             [
+                *ScaledPosition.float_values((estimate.x, estimate.y), low, high),
+                *Heading.values(estimate.theta),
+                *[
+                    clipped(math.sqrt(0.0 if variance < 0.0 else variance) / scale, 0.0, 1.0)
+                    for variance, scale in zip(variances, _STD_SCALES, strict=True)
+                ],
+                min(episode.distance_since_fix_m / DISTANCE_SCALE_M, 1.0),
+                min(episode.progress_m / max(episode.route.length_m, 1e-9), 1.0),
+                *self._sweep_bins.values(episode.last_ranges).tolist(),
                 *Heading.values(SECTOR_CENTRES_RAD[episode.last_sector]),
                 float(episode.last_fix_ok),
                 *Heading.values(bearing),
-                remaining / len(episode.decision_stations_m),
-            ],
+                (decisions - episode.decisions) / decisions,
+            ]
         )
-        return observation.vector.clip(-1.0, 1.0)
 
     def _next_station_point(self, episode: _Episode) -> tuple[float, float]:
         stations = episode.decision_stations_m

@@ -61,9 +61,13 @@ class Route:
     def xy_at(self, s_m: float) -> tuple[float, float]:
         """:meth:`point_at` as Python floats ``(x, y)``."""
         cumulative, vertices = self._as_floats
-        s = min(max(s_m, 0.0), cumulative[-1])
+        # min(max(value, low), high) as its two comparisons: the same object, no builtin calls
+        end, last = cumulative[-1], len(vertices) - 2
+        s = 0.0 if s_m < 0.0 else s_m
+        s = end if end < s else s
         index = bisect.bisect_right(cumulative, s) - 1  # np.searchsorted(..., side="right")
-        index = min(max(index, 0), len(vertices) - 2)
+        index = 0 if index < 0 else index
+        index = last if last < index else index
         span = cumulative[index + 1] - cumulative[index]
         fraction = 0.0 if span <= 0.0 else (s - cumulative[index]) / span
         (x0, y0), (x1, y1) = vertices[index], vertices[index + 1]

@@ -520,11 +520,12 @@ def move_commands(
 def _command_draws(rng: np.random.Generator, count: int) -> FloatArray:
     """The ``6 count`` numbers of ``count`` :meth:`DifferentialDriveRobot.drive` commands:
     per command two standard normals, then four uniforms, drawn from ``rng`` in that order."""
-    draws = np.empty((count, 6))
-    for command in draws:
-        rng.standard_normal(out=command[:2])
-        rng.random(out=command[2:])
-    return draws.reshape(-1)
+    draws = np.empty(6 * count)
+    normal, uniform = rng.standard_normal, rng.random
+    for start in range(0, 6 * count, 6):  # one slice each: no row views of a 2-d table
+        normal(out=draws[start : start + 2])
+        uniform(out=draws[start + 2 : start + 6])
+    return draws
 
 
 def _turn_in_place(angle_rad: float, wheel_base_m: float) -> tuple[float, float]:

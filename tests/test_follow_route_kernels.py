@@ -15,6 +15,7 @@ from sonar_gym.polyline import Route, follow_route
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, _command_draws
 from sonar_gym.world import World
+from tests.command_draws_reference import command_draws_reference
 from tests.follow_route_reference import follow_route_reference
 from tests.test_drive_command_kernels import ROOM
 
@@ -128,4 +129,15 @@ def test_the_draws_of_a_run_are_drives_draws_in_its_order() -> None:
             ]
         )
         assert np.array_equal(_command_draws(fast, count), expected)
+        assert fast.bit_generator.state == reference.bit_generator.state
+
+
+@pytest.mark.parametrize("count", [1, 2, 3, 7])
+def test_the_draws_have_the_bits_of_the_table_form(count: int) -> None:
+    fast, reference = np.random.default_rng(count), np.random.default_rng(count)
+    for _ in range(5):
+        got, expected = _command_draws(fast, count), command_draws_reference(reference, count)
+        assert got.shape == expected.shape == (6 * count,)
+        assert got.flags.c_contiguous
+        assert got.tobytes() == expected.tobytes()
         assert fast.bit_generator.state == reference.bit_generator.state

@@ -368,10 +368,16 @@ def ekf_update_unchecked(
             wrap_angle(measured_pose.theta - pose.theta),
         ]
     )[:rows]
-    innovation_covariance = observation @ prior @ observation.T + noise
-    gain = prior @ observation.T @ _inverse_or_pseudo_inverse(innovation_covariance)
+    if rows == 3 and prior.flags.c_contiguous and _kept_by_identity(prior):
+        # H = I: H P H^T and P H^T are P itself, bit for bit
+        innovation_covariance = prior + noise
+        gain = prior @ _inverse_or_pseudo_inverse(innovation_covariance)
+    else:
+        innovation_covariance = observation @ prior @ observation.T + noise
+        gain = prior @ observation.T @ _inverse_or_pseudo_inverse(innovation_covariance)
     dx, dy, dtheta = (gain @ innovation).tolist()
-    correction = _IDENTITY - gain @ observation
+    held = rows == 3 and _kept_by_identity(gain)
+    correction = _IDENTITY - (gain if held else gain @ observation)
     if joseph_form:
         posterior = correction @ prior @ correction.T + gain @ noise @ gain.T
     else:
@@ -380,6 +386,16 @@ def ekf_update_unchecked(
     if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
         return Pose.unchecked(x, y, theta), _symmetrised(posterior)
     return Pose(x, y, theta), _symmetrised(posterior)  # raises, naming the non-finite field
+
+
+def _kept_by_identity(matrix: FloatArray) -> bool:
+    """Whether ``I @ matrix`` and ``matrix @ I`` give back ``matrix`` bit for bit: so when every
+    entry is finite and nonzero. Each entry of such a product sums that entry and products
+    with 0, signed zeros, which leave a nonzero sum as it is in any order of summation; a zero
+    entry could come back with the other sign, a non-finite one as NaN. (The C order that the
+    product's result has is the caller's to check where the layout matters.)"""
+    values = matrix.ravel().tolist()
+    return all(values) and all(map(math.isfinite, values))
 
 
 def _inverse_or_pseudo_inverse(matrix: FloatArray) -> FloatArray:

@@ -19,6 +19,7 @@ from sonar_gym.polyline import leg_is_free as _leg_is_free
 from sonar_gym.envs.sweep_localization import (
     HEADING_STD_SCALE_RAD,
     POSITION_STD_SCALE_M,
+    SweepLocalizationEnv,
     _relative_pose,
 )
 from sonar_gym.localization.kim_grid import occupancy_grid_of
@@ -381,3 +382,26 @@ max = [50.05, 50]
     )
     with pytest.raises(ValueError, match=r"argument 'scenario'.*100\.1 m x 100 m.*4,000,000"):
         gym.make(ENV_ID, scenario=str(path))
+
+
+def test_the_tracks_hold_the_positions_after_each_drive_as_their_arrays_did() -> None:
+    env = gym.make("SonarGym/SweepLocalization-v0").unwrapped
+    assert isinstance(env, SweepLocalizationEnv)
+    env.reset(seed=5)
+    episode = env._require_episode()
+    expected_true = [episode.world.robot_pose.position]
+    expected_estimate = [episode.estimate.position]
+    for n_sweeps in (0, 2, 1):
+        drives = len(episode.true_track)
+        env.step(env.encode_action(n_sweeps, "front"))
+        assert len(episode.true_track) > drives
+        expected_true.append(episode.world.robot_pose.position)
+        expected_estimate.append(episode.estimate.position)
+    for track, expected in (
+        (episode.true_track, expected_true),
+        (episode.estimate_track, expected_estimate),
+    ):
+        drawn = np.array(track)
+        assert drawn.dtype == np.float64 and drawn.shape == (len(track), 2)
+        assert drawn[0].tobytes() == expected[0].tobytes()
+        assert drawn[-1].tobytes() == expected[-1].tobytes()

@@ -46,3 +46,39 @@ def test_ekf_update_matches_reference_bit_for_bit(rows: int, joseph_form: bool) 
             want_pose.theta,
         )
         assert got.tobytes() == want.tobytes()  # signed zeros too
+
+
+def _layouts(prior: np.ndarray) -> list[np.ndarray]:
+    """``prior`` in C order, in Fortran order and as a strided view."""
+    padded = np.zeros((6, 6))
+    padded[::2, ::2] = prior
+    return [np.ascontiguousarray(prior), np.asfortranarray(prior), padded[::2, ::2]]
+
+
+@pytest.mark.parametrize("joseph_form", [False, True])
+def test_ekf_update_matches_reference_for_signed_zeros_and_layouts(joseph_form: bool) -> None:
+    rng = np.random.default_rng(5 + joseph_form)
+    for trial in range(400):
+        factor = rng.normal(0.0, 0.05, (3, 3))
+        prior = factor @ factor.T
+        prior = 0.5 * (prior + prior.T)
+        if trial % 3 == 0:  # zeros of either sign off the diagonal
+            sign = -1.0 if trial % 2 else 1.0
+            prior[0, 1] = prior[1, 0] = sign * 0.0
+        if trial % 5 == 0:
+            prior[1, 2] = prior[2, 1] = -0.0
+        if trial % 11 == 0:  # entries of the smallest and largest magnitudes
+            prior[0, 2] = prior[2, 0] = 5e-324 if trial % 2 else 1e300
+        noise = np.diag(rng.uniform(1e-5, 1e-2, 3))
+        if trial % 4 == 0:
+            noise[0, 1] = noise[1, 0] = -0.0
+        estimate, fix = _pose(rng), _pose(rng)
+        for layout in _layouts(prior):
+            got_pose, got = ekf_update_unchecked(estimate, layout, fix, noise, joseph_form)
+            want_pose, want = ekf_update_reference(estimate, layout, fix, noise, joseph_form)
+            assert (got_pose.x, got_pose.y, got_pose.theta) == (
+                want_pose.x,
+                want_pose.y,
+                want_pose.theta,
+            )
+            assert got.tobytes() == want.tobytes()
