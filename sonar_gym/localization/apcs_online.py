@@ -491,6 +491,45 @@ class APCSTracker:
             checked_positive(range_variance_m2, "range_variance_m2"),
             checked_positive(bearing_variance_rad2, "bearing_variance_rad2"),
         )
+        self._set_up(measurement_variances, correction_method, params)
+
+    @classmethod
+    def unchecked(
+        cls,
+        wall_map: WallMap,
+        estimate: Pose,
+        covariance: FloatArray,
+        *,
+        wheel_base_m: float,
+        variance_per_m: float,
+        range_variance_m2: float,
+        bearing_variance_rad2: float,
+        measurement_variances: str = "fixed",
+        correction_method: str = "paper",
+        params: APCSParameters = DEFAULT_PARAMETERS,
+    ) -> APCSTracker:
+        """The tracker the constructor makes of arguments it accepts, without the checks.
+
+        For a caller whose arguments are valid by construction: a
+        :class:`~sonar_gym.localization.apcs_walls.WallMap`, a finite float64 ``(3, 3)``
+        covariance within the constructor's symmetry tolerance and positive definite (it is
+        copied), a finite positive wheel base (metres) and variances (m^2, rad^2), and
+        ``measurement_variances``, ``correction_method`` among the constructor's choices.
+        """
+        tracker = cls.__new__(cls)
+        tracker.wall_map = wall_map
+        tracker.estimate = estimate
+        tracker.covariance = np.array(covariance, dtype=np.float64)
+        tracker.wheel_base_m = float(wheel_base_m)
+        tracker.variance_per_m = float(variance_per_m)
+        tracker.fixed_variances = (float(range_variance_m2), float(bearing_variance_rad2))
+        tracker._set_up(measurement_variances, correction_method, params)
+        return tracker
+
+    def _set_up(
+        self, measurement_variances: str, correction_method: str, params: APCSParameters
+    ) -> None:
+        """The settings and the two empty side streams, the last step of construction."""
         self.measurement_variances = measurement_variances
         self.correction_method = correction_method
         self.params = params
