@@ -786,7 +786,10 @@ def _sensor_positions(poses: FloatArray, side: str, offset_m: float) -> FloatArr
         return poses[:, :2].copy()
     sign = 1.0 if side == "left" else -1.0
     angle = poses[:, 2] + sign * math.pi / 2.0
-    return poses[:, :2] + offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+    beam = np.empty((len(poses), 2))  # np.column_stack's table, without its Python overhead
+    beam[:, 0] = np.cos(angle)
+    beam[:, 1] = np.sin(angle)
+    return poses[:, :2] + offset_m * beam
 
 
 __all__ = [
