@@ -368,11 +368,16 @@ def corrected_pose(
     status, corrected, corrected_covariance, message = step(
         pose.as_array(), prior_covariance, wall, r, xi, sigma_r, sigma_xi
     )
-    if status == OK and not (
-        np.isfinite(corrected).all() and np.isfinite(corrected_covariance).all()
-    ):
-        status, corrected_covariance = NUMERICAL_FAILURE, prior_covariance
-        message = "the correction overflowed"
+    if status == OK:
+        # Plain floats: the finiteness test and the pose of a three-element vector cost less
+        # than numpy's per-call overhead.
+        x, y, theta = pose_values = corrected.tolist()
+        if not (
+            all(map(math.isfinite, pose_values))
+            and all(map(math.isfinite, corrected_covariance.ravel().tolist()))
+        ):
+            status, corrected_covariance = NUMERICAL_FAILURE, prior_covariance
+            message = "the correction overflowed"
     if status != OK:
         return CorrectionResult(
             status, None, message, covariance=_readonly(prior_covariance), method=method
@@ -380,7 +385,7 @@ def corrected_pose(
     corrected_covariance.setflags(write=False)  # the step's own new array: no copy needed
     return CorrectionResult(
         OK,
-        Pose.from_array(corrected),
+        Pose.unchecked(x, y, theta),  # finite floats: Pose.from_array's pose
         covariance=corrected_covariance,
         method=method,
     )

@@ -174,6 +174,11 @@ def nearest_facing_walls(
 # --------------------------------------------------------------------------------------------
 
 
+_RawGroup = tuple[list[tuple[float, float]], list[float]]
+"""A closed group before its verdict: its ERPs ``(x, y)`` (metres, in the frame of the
+estimate) and their reflection directions (radians), in the order taken."""
+
+
 class WallStream:
     """On-line ERPs and ERP groups of one side sonar (sec. 4.2.1-4.2.2), reading by reading.
 
@@ -284,19 +289,24 @@ class WallStream:
     def _accept_erp(self, point_x: float, point_y: float, phi: float) -> tuple[ClosedGroup, ...]:
         """Add one ERP (plain floats, metres and radians) to the open group; returns the
         verdicts of the groups it closed. The reading itself is stored by the caller."""
+        return tuple(self._verdict(group) for group in self._grouped(point_x, point_y, phi))
+
+    def _grouped(self, point_x: float, point_y: float, phi: float) -> tuple[_RawGroup, ...]:
+        """Add one ERP (plain floats, metres and radians) to the open group; returns the groups
+        it closed as their ERPs and reflection directions, before any verdict."""
         # Plain floats: this runs once per reading, where numpy's per-call cost dominates.
         group_points = self._group_points
-        closed: tuple[ClosedGroup, ...] = ()
+        closed: tuple[_RawGroup, ...] = ()
         if group_points:
             last_x, last_y = group_points[-1]
             step_x, step_y = point_x - last_x, point_y - last_y
             if step_x * step_x + step_y * step_y > self.params.grouping_distance_squared_m2:
-                closed = (self._close(),)
+                closed = (self._take_group(),)
                 group_points = self._group_points
         group_points.append((point_x, point_y))
         self._group_directions.append(phi)
         if len(group_points) >= self.params.max_group_size:
-            closed = (*closed, self._close())
+            closed = (*closed, self._take_group())
         return closed
 
     def add(
@@ -346,9 +356,18 @@ class WallStream:
         self._group_directions = [direction + turn for direction in self._group_directions]
 
     def _close(self) -> ClosedGroup:
-        points = np.array(self._group_points)
-        directions = self._group_directions
+        return self._verdict(self._take_group())
+
+    def _take_group(self) -> _RawGroup:
+        """The open group's ERPs and reflection directions; the stream starts a new group."""
+        group = (self._group_points, self._group_directions)
         self._group_points, self._group_directions = [], []
+        return group
+
+    def _verdict(self, group: _RawGroup) -> ClosedGroup:
+        """A closed group with its verdict (:func:`fit_group_points`, after the size test)."""
+        group_points, directions = group
+        points = np.array(group_points)
         indices = tuple(range(len(points)))
         if len(points) < self.params.min_group_size:  # fit_wall_group's first verdict
             return ClosedGroup(WallFit(GROUP_TOO_FEW_POINTS, indices), points)
@@ -356,6 +375,14 @@ class WallStream:
             points, apcs_kernels.wrapped_angles(np.array(directions)), indices, self.params
         )
         return ClosedGroup(fit, points)
+
+    def _wall_verdict(self, group: _RawGroup) -> ClosedGroup | None:
+        """:meth:`_verdict` of a closed group if it holds a verified wall, else ``None``
+        (without building the verdict of a group too small to fit)."""
+        if len(group[0]) < self.params.min_group_size:
+            return None
+        closed = self._verdict(group)
+        return closed if closed.fit.wall is not None else None
 
 
 # --------------------------------------------------------------------------------------------
@@ -464,6 +491,45 @@ class APCSTracker:
             checked_positive(range_variance_m2, "range_variance_m2"),
             checked_positive(bearing_variance_rad2, "bearing_variance_rad2"),
         )
+        self._set_up(measurement_variances, correction_method, params)
+
+    @classmethod
+    def unchecked(
+        cls,
+        wall_map: WallMap,
+        estimate: Pose,
+        covariance: FloatArray,
+        *,
+        wheel_base_m: float,
+        variance_per_m: float,
+        range_variance_m2: float,
+        bearing_variance_rad2: float,
+        measurement_variances: str = "fixed",
+        correction_method: str = "paper",
+        params: APCSParameters = DEFAULT_PARAMETERS,
+    ) -> APCSTracker:
+        """The tracker the constructor makes of arguments it accepts, without the checks.
+
+        For a caller whose arguments are valid by construction: a
+        :class:`~sonar_gym.localization.apcs_walls.WallMap`, a finite float64 ``(3, 3)``
+        covariance within the constructor's symmetry tolerance and positive definite (it is
+        copied), a finite positive wheel base (metres) and variances (m^2, rad^2), and
+        ``measurement_variances``, ``correction_method`` among the constructor's choices.
+        """
+        tracker = cls.__new__(cls)
+        tracker.wall_map = wall_map
+        tracker.estimate = estimate
+        tracker.covariance = np.array(covariance, dtype=np.float64)
+        tracker.wheel_base_m = float(wheel_base_m)
+        tracker.variance_per_m = float(variance_per_m)
+        tracker.fixed_variances = (float(range_variance_m2), float(bearing_variance_rad2))
+        tracker._set_up(measurement_variances, correction_method, params)
+        return tracker
+
+    def _set_up(
+        self, measurement_variances: str, correction_method: str, params: APCSParameters
+    ) -> None:
+        """The settings and the two empty side streams, the last step of construction."""
         self.measurement_variances = measurement_variances
         self.correction_method = correction_method
         self.params = params
@@ -576,16 +642,17 @@ class APCSTracker:
                     continue
                 point_x, point_y = erp_coordinates[2 * row], erp_coordinates[2 * row + 1]
                 result.erps.append((point_x, point_y, side))
-                groups = self.streams[side]._accept_erp(point_x, point_y, erp_phis[row])
-                if groups:
-                    command = sample_list[m]
+                closed = self.streams[side]._grouped(point_x, point_y, erp_phis[row])
+                if closed:
+                    walls = self._verified_walls(side, closed, result)
                     # Only a verified wall reads the estimate (most closed groups are dropped);
                     # the end of the run sets it in any case.
-                    if any(group.fit.wall is not None for group in groups):
+                    if walls:
+                        command = sample_list[m]
                         self._store_readings(unstored, pending, headings, range_lists, first_sample)
                         self.estimate = Pose.unchecked(*poses[command + 1].tolist())
                         self.covariance = covariances[command + 1]
-                    corrected = self.handle_groups(side, groups, command, result)
+                        corrected = self.handle_groups(side, walls, command, result)
             self._store_readings(unstored, pending, headings, range_lists, first_sample)
             if corrected:
                 command = sample_list[events[event - 1][0]]
@@ -610,6 +677,22 @@ class APCSTracker:
             self.estimate = Pose.unchecked(*poses[limit].tolist())
             self.covariance = covariances[limit].copy()
         return result
+
+    def _verified_walls(
+        self, side: str, closed: Sequence[_RawGroup], result: RunResult
+    ) -> list[ClosedGroup]:
+        """The groups of ``closed`` (from ``side``'s stream) that hold a verified wall, in
+        order; the others are counted in ``result.dropped``, as :meth:`handle_groups` counts
+        them (it only counts a dropped group, so its verdict object is not built)."""
+        stream = self.streams[side]
+        walls = []
+        for group in closed:
+            verdict = stream._wall_verdict(group)
+            if verdict is None:
+                result.dropped[side] += 1
+            else:
+                walls.append(verdict)
+        return walls
 
     def _store_readings(
         self,
@@ -703,7 +786,10 @@ def _sensor_positions(poses: FloatArray, side: str, offset_m: float) -> FloatArr
         return poses[:, :2].copy()
     sign = 1.0 if side == "left" else -1.0
     angle = poses[:, 2] + sign * math.pi / 2.0
-    return poses[:, :2] + offset_m * np.column_stack([np.cos(angle), np.sin(angle)])
+    beam = np.empty((len(poses), 2))  # np.column_stack's table, without its Python overhead
+    beam[:, 0] = np.cos(angle)
+    beam[:, 1] = np.sin(angle)
+    return poses[:, :2] + offset_m * beam
 
 
 __all__ = [

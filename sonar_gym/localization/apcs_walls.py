@@ -521,9 +521,11 @@ def _chosen_roots(
     outside ``valid_range_m`` taken as dropouts: the loops of
     :mod:`~sonar_gym.localization.apcs_kernels` with numpy's trigonometry between them."""
     low, high = valid_range_m
-    first, second = directions[:-1], directions[1:]
+    # numpy's sine and cosine act element by element: those of the first and the second
+    # reading of every pair are slices of those of all the readings.
+    sines, cosines = np.sin(directions), np.cos(directions)
     sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x = apcs_kernels.pair_geometry(
-        positions, ranges, low, high, np.sin(first), np.sin(second), np.cos(first), np.cos(second)
+        positions, ranges, low, high, sines[:-1], sines[1:], cosines[:-1], cosines[1:]
     )
     return apcs_kernels.chosen_roots(  # type: ignore[no-any-return]
         np.arctan2(sin_alpha, cos_alpha),  # alpha of eqs (5)-(6)

@@ -9,6 +9,7 @@ import pickle
 import numpy as np
 import pytest
 
+from sonar_gym.localization import apcs_correction
 from sonar_gym.localization.apcs_correction import (
     HEADING_DEGENERATE,
     NUMERICAL_FAILURE,
@@ -22,6 +23,7 @@ from sonar_gym.localization.apcs_correction import (
 from sonar_gym.localization.apcs_walls import WallVector
 from sonar_gym.localization.result import OK
 from sonar_gym.pose import Pose
+from tests.localization import apcs_correction_reference
 from tests.localization.apcs_correction_reference import (
     corrected_pose_copied,
     observe_wall_arrays,
@@ -121,3 +123,39 @@ def test_observed_wall_matches_the_array_form() -> None:
         for pose in poses:
             got, expected = observed_wall(wall, pose), observe_wall_arrays(wall, pose)
             assert pickle.dumps(got) == pickle.dumps(expected)
+
+
+@pytest.mark.parametrize(
+    ("pose_values", "covariance_entry"),
+    [
+        ((1.0, 2.0, 0.5), math.inf),  # a finite pose, an overflowed covariance
+        ((1.0, 2.0, 0.5), math.nan),
+        ((1.0, math.inf, 0.5), 0.0),  # an overflowed pose, a finite covariance
+        ((math.nan, 2.0, 0.5), 0.0),
+        ((1.0, 2.0, -math.inf), 0.0),
+        ((1.0, 2.0, 7.0), 0.0),  # finite: the heading wraps as Pose.from_array wraps it
+        ((-0.0, 1e308, -math.pi), 0.0),
+    ],
+)
+def test_corrected_pose_screens_a_step_as_the_copying_form(
+    pose_values: tuple[float, float, float],
+    covariance_entry: float,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Each non-finite value of a step's pose or covariance fails the correction alone."""
+
+    def step(*_: object) -> tuple[str, np.ndarray, np.ndarray, str]:
+        covariance = np.diag([1e-4, 2e-4, 3e-5])
+        covariance[1, 2] = covariance_entry
+        return OK, np.array(pose_values), covariance, ""
+
+    monkeypatch.setattr(apcs_correction, "_paper_step", step)
+    monkeypatch.setattr(apcs_correction_reference, "_paper_step", step)
+    prior = validated_covariance(np.diag([0.01, 0.02, 0.003]))
+    prior.setflags(write=False)
+    case = (Pose(0.0, 0.0, 0.0), prior, WallVector((0.0, 1.0), (5.0, 1.0)), 1.0, 0.2, 1e-4, 1e-3)
+    got = corrected_pose(*case)
+    expected = corrected_pose_copied(*case)
+    assert _result_bits(got) == _result_bits(expected)
+    finite = all(map(math.isfinite, (*pose_values, covariance_entry)))
+    assert got.status == (OK if finite else NUMERICAL_FAILURE)

@@ -1,0 +1,72 @@
+"""The APCS stream's glue gives exactly the bits of the forms it replaced: the pair geometry
+with each reading's sine and cosine taken once, and the sensor positions without
+``np.column_stack``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
+from sonar_gym.localization.apcs_online import _sensor_positions
+from sonar_gym.localization.apcs_walls import _chosen_roots
+from tests.localization.apcs_glue_reference import chosen_roots_sliced, sensor_positions_stacked
+
+
+def _readings(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A side sensor driving a wobbly line past a wall, with dropouts, out-of-range readings,
+    jumps, stops and directions of many turns."""
+    steps = rng.choice([0.0, 0.03, 0.06], size=count, p=[0.1, 0.6, 0.3])
+    headings = np.cumsum(rng.normal(0.0, 0.05, count))
+    positions = np.column_stack(
+        [np.cumsum(steps * np.cos(headings)), np.cumsum(steps * np.sin(headings))]
+    )
+    ranges = 1.0 + 0.002 * np.arange(count) + rng.normal(0.0, 0.003, count)
+    ranges[rng.random(count) < 0.1] = np.nan
+    ranges[rng.random(count) < 0.05] = 6.0  # beyond the sensing range
+    ranges[rng.random(count) < 0.05] = 0.1  # inside the minimum range
+    ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
+    turns = 2.0 * np.pi * rng.integers(-3, 4, count)
+    return positions, headings + np.pi / 2.0 + turns, ranges
+
+
+def test_chosen_roots_match_the_sliced_form() -> None:
+    rng = np.random.default_rng(20261207)
+    pairs_seen = 0
+    for _ in range(400):
+        positions, directions, ranges = _readings(rng, int(rng.integers(2, 70)))
+        got = _chosen_roots(positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m)
+        expected = chosen_roots_sliced(
+            positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m
+        )
+        for array, reference in zip(got, expected, strict=True):
+            assert array.dtype == reference.dtype
+            assert array.tobytes() == reference.tobytes()
+        pairs_seen += len(got[1])
+    assert pairs_seen > 1000
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("offset_m", [0.0, 0.12, -0.05])
+def test_sensor_positions_match_the_stacked_form(side: str, offset_m: float) -> None:
+    rng = np.random.default_rng(7)
+    for count in (0, 1, 2, 5, 33):
+        poses = np.column_stack(
+            [rng.uniform(-20.0, 20.0, (count, 2)), rng.uniform(-10.0, 10.0, count)]
+        )
+        got = _sensor_positions(poses, side, offset_m)
+        expected = sensor_positions_stacked(poses, side, offset_m)
+        assert got.shape == expected.shape == (count, 2)
+        assert got.tobytes() == expected.tobytes()
+
+
+def test_numpy_sine_and_cosine_of_a_slice_are_the_slice_of_theirs() -> None:
+    """What the pair geometry relies on: numpy's sine and cosine of each reading do not
+    depend on the readings around it (on SIMD builds too: a vector's tail rounds as its body)."""
+    rng = np.random.default_rng(11)
+    for count in [*range(2, 80), 257]:
+        directions = rng.uniform(-25.0, 25.0, count)
+        for function in (np.sin, np.cos):
+            whole = function(directions)
+            assert whole[:-1].tobytes() == function(directions[:-1]).tobytes()
+            assert whole[1:].tobytes() == function(directions[1:]).tobytes()
