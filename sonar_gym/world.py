@@ -476,14 +476,15 @@ class World:
         length = math.dist(a, b)
         if length <= 2.0 * _ENDPOINT_TOLERANCE_M:
             return True
-        hit = self.space.segment_query_first(a, b, 0.0, STATIC_ONLY)
+        space = self.space
+        hit = space.segment_query_first(a, b, 0.0, STATIC_ONLY)
         if hit is None:
             return True
         low, high = _ENDPOINT_TOLERANCE_M / length, 1.0 - _ENDPOINT_TOLERANCE_M / length
         if low < hit.alpha < high:
             return False
         return all(
-            not low < info.alpha < high for info in self.space.segment_query(a, b, 0.0, STATIC_ONLY)
+            not low < info.alpha < high for info in space.segment_query(a, b, 0.0, STATIC_ONLY)
         )
 
     # --- motion --------------------------------------------------------------------------
