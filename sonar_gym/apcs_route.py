@@ -17,6 +17,7 @@ their echoes, so the random streams stand where the shorter run would have left 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -29,7 +30,7 @@ from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResul
 from sonar_gym.phase_timer import PhaseTimer
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.robot import DifferentialDriveRobot
-from sonar_gym.scenario import Box, Scenario
+from sonar_gym.scenario import Box, Room, Scenario, Wall
 from sonar_gym.sonar.pulse_echo import FirstEchoes
 from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.straight_drive import CommandDraws, drive_commands
@@ -495,12 +496,8 @@ def with_wall_obstacles(
     if room is None:
         raise ValueError(f"argument 'scenario': {scenario.name!r} has no room")
     boxes: list[Box] = []
-    taken: dict[str, list[tuple[float, float]]] = {"left": [], "right": []}
-    for wall in scenario.walls:  # keep clear of the scenario's own free walls
-        for side, y_wall in (("left", room.max[1]), ("right", room.min[1])):
-            if min(abs(wall.a[1] - y_wall), abs(wall.b[1] - y_wall)) < 0.5:
-                taken[side].append((min(wall.a[0], wall.b[0]), max(wall.a[0], wall.b[0])))
-    low_x, high_x = x_range_m
+    taken = {side: list(spans) for side, spans in _free_wall_spans(room, scenario.walls).items()}
+    low_x, high_x = float(x_range_m[0]), float(x_range_m[1])
     for _ in range(count):
         for _attempt in range(50):
             side = SIDE_NAMES[int(rng.integers(2))]
@@ -516,6 +513,21 @@ def with_wall_obstacles(
         y_centre = room.max[1] - depth / 2.0 if side == "left" else room.min[1] + depth / 2.0
         boxes.append(Box((start_x + length / 2.0, y_centre), (length, depth), 0.0, mapped=False))
     return dataclasses.replace(scenario, boxes=scenario.boxes + tuple(boxes))
+
+
+@functools.lru_cache(maxsize=8)
+def _free_wall_spans(
+    room: Room, walls: tuple[Wall, ...]
+) -> dict[str, tuple[tuple[float, float], ...]]:
+    """Per long wall of ``room`` (``"left"``: ``y = max``, ``"right"``: ``y = min``), the x
+    spans ``(low, high)`` (metres) of the free walls with an end within 0.5 m of it, in
+    scenario order; built once per room and walls, as every episode asks for the same."""
+    taken: dict[str, list[tuple[float, float]]] = {"left": [], "right": []}
+    for wall in walls:
+        for side, y_wall in (("left", room.max[1]), ("right", room.min[1])):
+            if min(abs(wall.a[1] - y_wall), abs(wall.b[1] - y_wall)) < 0.5:
+                taken[side].append((min(wall.a[0], wall.b[0]), max(wall.a[0], wall.b[0])))
+    return {side: tuple(spans) for side, spans in taken.items()}
 
 
 __all__ = [

@@ -6,6 +6,12 @@ robot is a dynamic circle of ``scenario.robot.radius``. The sonar does not query
 ping: it reads :attr:`World.geometry`, a flat numpy copy of the same static content
 (:mod:`sonar_gym.geometry`), built once and rebuilt by :meth:`World.rebuild_geometry`.
 
+The space is built on first use (:attr:`World.space`): a world whose robot is only teleported
+and whose free-pose tests are decided far from every shape never needs it. Until then the robot
+body has only been teleported, which leaves nothing of it but its pose, so the space built late
+is the one an eager build would hold at that moment: the same shapes added in the same order,
+the robot body at its pose.
+
 Everything is in metres, radians and seconds, in the world frame {W}. The robot pose is the
 pose of the robot frame {R}: the body's position and angle, the angle wrapped to (-pi, pi].
 
@@ -36,7 +42,7 @@ import numpy.typing as npt
 import pymunk
 
 from sonar_gym.geometry import StaticGeometry, ring_shift, static_geometry
-from sonar_gym.path_clearance import StaticShapeTable
+from sonar_gym.path_clearance import StaticShapeTable, arc_is_clear
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
 from sonar_gym.scenario import Scenario
 
@@ -113,8 +119,6 @@ class World:
 
     Attributes:
         scenario: the scenario this world was built from.
-        space: the ``pymunk.Space`` (static shapes in category :data:`STATIC_CATEGORY`, the
-            robot in :data:`ROBOT_CATEGORY`).
         geometry: the :class:`~sonar_gym.geometry.StaticGeometry` of the static content.
         static_shape_table: the static pymunk shapes as arrays, for the compiled clearance
             test of planned motions (:mod:`sonar_gym.path_clearance`).
@@ -135,6 +139,23 @@ class World:
 
     def _build(self, scenario: Scenario) -> None:
         self.scenario = scenario
+        self.rebuild_geometry()
+        self._index_static_content(scenario)
+        self._space: pymunk.Space | None = None  # built on first use, see _build_space
+        self._static_shapes: list[pymunk.Shape] = []
+        self._robot_body: pymunk.Body | None = None
+        self._robot_shape: pymunk.Circle | None = None
+
+        self._commanded_velocity: tuple[float, float] = (0.0, 0.0)
+        self._commanded_angular_velocity = 0.0
+        self._robot_is_fresh = True  # not stepped by the space since it was made
+        self._placed_pose: Pose | None = None  # the pose teleported to, until the body moves
+
+    def _build_space(self) -> pymunk.Space:
+        """Build the pymunk space as :meth:`_build` would have eagerly: the static shapes, then
+        a new robot body at the origin, then the body teleported to the pose it was last
+        teleported to (a body not yet in a space has been teleported only: see
+        :meth:`_teleport`)."""
         space = pymunk.Space()
         space.gravity = (0.0, 0.0)
         space.damping = 1.0
@@ -142,17 +163,14 @@ class World:
         # Chipmunk has no speculative contacts: a substep may end inside a wall it was not yet
         # touching. Remove the whole overlap in the next substep (the default corrects ~6 %).
         space.collision_bias = 0.0
-        self.space = space
-        self._static_shapes: list[pymunk.Shape] = []
-        self.rebuild_geometry()
-        self._add_static_shapes(scenario)
-
-        self._commanded_velocity: tuple[float, float] = (0.0, 0.0)
-        self._commanded_angular_velocity = 0.0
-        self._robot_body, self._robot_shape = self._new_robot()
-        self._robot_is_fresh = True  # not stepped by the space since it was made
-        self._placed_pose: Pose | None = None  # the pose teleported to, until the body moves
-        space.add(self._robot_body, self._robot_shape)
+        self._space = space
+        self._add_static_shapes(space)
+        body, shape = self._new_robot()
+        space.add(body, shape)
+        self._robot_body, self._robot_shape = body, shape
+        if self._placed_pose is not None:
+            _move_fresh_body(space, body, self._placed_pose)
+        return space
 
     def _new_robot(self) -> tuple[pymunk.Body, pymunk.Circle]:
         radius = self.scenario.robot.radius
@@ -164,12 +182,21 @@ class World:
         shape.filter = pymunk.ShapeFilter(categories=ROBOT_CATEGORY, mask=STATIC_CATEGORY)
         return body, shape
 
-    def _add_static_shapes(self, scenario: Scenario) -> None:
+    def _index_static_content(self, scenario: Scenario) -> None:
         # The geometry lists the segments (room, walls, box sides from each box's first corner)
-        # and the cylinders in that order, as the same floats: the shapes and the box polygons
-        # are made from it. New pymunk shapes are already frictionless and inelastic; only
-        # their filter needs setting.
-        static_body = self.space.static_body
+        # and the cylinders in that order, as the same floats: the shape table, the box
+        # polygons and the pymunk shapes (_add_static_shapes) are made from it.
+        geometry = self.geometry
+        self.static_shape_table = StaticShapeTable.of_outlines(
+            geometry.segment_starts, geometry.segment_ends, geometry.circles
+        )
+        box_sides = geometry.segment_starts[geometry.n_segments - 4 * len(scenario.boxes) :]
+        self._box_polygons = _ConvexPolygons(box_sides.reshape(-1, 4, 2))  # the boxes' corners
+
+    def _add_static_shapes(self, space: pymunk.Space) -> None:
+        # New pymunk shapes are already frictionless and inelastic; only their filter needs
+        # setting.
+        static_body = space.static_body
         geometry = self.geometry
         shapes: list[pymunk.Shape] = [
             pymunk.Segment(static_body, a, b, 0.0)
@@ -183,13 +210,8 @@ class World:
         for shape in shapes:
             shape.filter = _STATIC_FILTER
         if shapes:
-            self.space.add(*shapes)
+            space.add(*shapes)
         self._static_shapes = shapes
-        self.static_shape_table = StaticShapeTable.of_outlines(
-            geometry.segment_starts, geometry.segment_ends, geometry.circles
-        )
-        box_sides = geometry.segment_starts[geometry.n_segments - 4 * len(scenario.boxes) :]
-        self._box_polygons = _ConvexPolygons(box_sides.reshape(-1, 4, 2))  # the boxes' corners
 
     def rebuild_geometry(self) -> None:
         """Rebuild :attr:`geometry` from :attr:`scenario` (after the static content changed).
@@ -269,23 +291,39 @@ class World:
         return self.scenario.robot.radius
 
     @property
+    def space(self) -> pymunk.Space:
+        """The ``pymunk.Space`` (static shapes in category :data:`STATIC_CATEGORY`, the robot in
+        :data:`ROBOT_CATEGORY`), built on first use."""
+        space = self._space
+        return self._build_space() if space is None else space
+
+    @property
     def robot_body(self) -> pymunk.Body:
         """The robot's dynamic pymunk body (read it; move it only with the methods of this
         class, which keep :attr:`robot_pose` in step with it)."""
-        return self._robot_body
+        return self._body()
 
     @property
     def static_shapes(self) -> tuple[pymunk.Shape, ...]:
         """The static pymunk shapes, in the order room, walls, box sides, cylinders."""
+        self._body()
         return tuple(self._static_shapes)
+
+    def _body(self) -> pymunk.Body:
+        """The robot body, building the space first if it is not built yet."""
+        if self._robot_body is None:
+            self._build_space()
+        assert self._robot_body is not None
+        return self._robot_body
 
     @property
     def robot_pose(self) -> Pose:
         """The true robot pose in {W}, from the pymunk body (metres, radians)."""
         if self._placed_pose is not None:  # the body holds exactly these floats
             return self._placed_pose
-        x, y = self._robot_body.position
-        x, y, theta = float(x), float(y), float(self._robot_body.angle)
+        body = self._body()
+        x, y = body.position
+        x, y, theta = float(x), float(y), float(body.angle)
         if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
             return Pose.unchecked(x, y, theta)  # read many times a step: skip the checks
         return Pose(x, y, theta)  # raises, naming the non-finite field
@@ -310,17 +348,21 @@ class World:
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
         # happens next depends only on the pose, never on the history of the space. A body
         # the space has not stepped since it was made is still in that state: it only moves.
+        # Before the space is built, the pose is all there is to keep (see _build_space).
         self._placed_pose = pose  # pose.theta is wrapped: the body reads back this very pose
-        if self._robot_is_fresh:
-            self._robot_body.position = (pose.x, pose.y)
-            self._robot_body.angle = pose.theta
-            self.space.reindex_shapes_for_body(self._robot_body)
+        space = self._space
+        if space is None:
             return
-        self.space.remove(self._robot_body, self._robot_shape)
+        if self._robot_is_fresh:
+            _move_fresh_body(space, self._body(), pose)
+            return
+        old_shape = self._robot_shape
+        assert old_shape is not None  # a body that has moved is in the built space
+        space.remove(self._body(), old_shape)
         body, shape = self._new_robot()
         body.position = (pose.x, pose.y)
         body.angle = pose.theta
-        self.space.add(body, shape)
+        space.add(body, shape)
         self._robot_body, self._robot_shape = body, shape
         self._robot_is_fresh = True
 
@@ -354,10 +396,15 @@ class World:
             return False
         if self._box_polygons.contain_strictly(x, y):
             return False
-        for info in self.space.point_query((x, y), r, STATIC_ONLY):
-            if info.distance < inner:
-                return False
-        return True
+        space = self._space
+        if space is None:
+            table = self.static_shape_table
+            # A disc farther than the clearance margin from every shape is free, which pymunk
+            # would confirm: no need to build the space for it.
+            if arc_is_clear(x, y, x, y, 0.0, 0.0, 1.0, r, table.bounds, table.kinds, table.shapes):
+                return True
+            space = self._build_space()
+        return all(info.distance >= inner for info in space.point_query((x, y), r, STATIC_ONLY))
 
     def sample_free_pose(
         self,
@@ -429,14 +476,15 @@ class World:
         length = math.dist(a, b)
         if length <= 2.0 * _ENDPOINT_TOLERANCE_M:
             return True
-        hit = self.space.segment_query_first(a, b, 0.0, STATIC_ONLY)
+        space = self.space
+        hit = space.segment_query_first(a, b, 0.0, STATIC_ONLY)
         if hit is None:
             return True
         low, high = _ENDPOINT_TOLERANCE_M / length, 1.0 - _ENDPOINT_TOLERANCE_M / length
         if low < hit.alpha < high:
             return False
         return all(
-            not low < info.alpha < high for info in self.space.segment_query(a, b, 0.0, STATIC_ONLY)
+            not low < info.alpha < high for info in space.segment_query(a, b, 0.0, STATIC_ONLY)
         )
 
     # --- motion --------------------------------------------------------------------------
@@ -463,7 +511,8 @@ class World:
                 f"got shape {steps.shape}"
             )
         self._teleport(self.robot_pose)
-        body = self._robot_body
+        body = self._body()
+        space = self.space
         collided = False
         path_length = 0.0
         previous = body.position
@@ -477,12 +526,12 @@ class World:
             vx, vy, omega = velocities[k] if k < len(steps) else zero
             self._commanded_velocity = (float(vx), float(vy))
             self._commanded_angular_velocity = float(omega)
-            self.space.step(MOTION_SUBSTEP_S)
+            space.step(MOTION_SUBSTEP_S)
             position = body.position
             path_length += math.dist(position, previous)
             previous = position
             if not collided:
-                collided = self._has_contact_impulse()
+                collided = _has_contact_impulse(body)
         self._commanded_velocity = (0.0, 0.0)
         self._commanded_angular_velocity = 0.0
         body.velocity = (0.0, 0.0)
@@ -493,18 +542,6 @@ class World:
     def _impose_velocity(self, body: pymunk.Body, gravity: Any, damping: float, dt: float) -> None:
         body.velocity = self._commanded_velocity
         body.angular_velocity = self._commanded_angular_velocity
-
-    def _has_contact_impulse(self) -> bool:
-        found = False
-
-        def visit(arbiter: pymunk.Arbiter) -> None:
-            nonlocal found
-            jx, jy = arbiter.total_impulse
-            if abs(jx) + abs(jy) > _CONTACT_IMPULSE_EPS:
-                found = True
-
-        self._robot_body.each_arbiter(visit)
-        return found
 
     # --- pickling ------------------------------------------------------------------------
 
@@ -526,6 +563,27 @@ class World:
             f"World(scenario={self.scenario.name!r}, temperature_c={self._temperature_c}, "
             f"robot_pose={self.robot_pose})"
         )
+
+
+def _has_contact_impulse(body: pymunk.Body) -> bool:
+    """Whether a contact of ``body`` pushed back on it in the last step."""
+    found = False
+
+    def visit(arbiter: pymunk.Arbiter) -> None:
+        nonlocal found
+        jx, jy = arbiter.total_impulse
+        if abs(jx) + abs(jy) > _CONTACT_IMPULSE_EPS:
+            found = True
+
+    body.each_arbiter(visit)
+    return found
+
+
+def _move_fresh_body(space: pymunk.Space, body: pymunk.Body, pose: Pose) -> None:
+    """Teleport ``body``, which ``space`` has not stepped since it was added, to ``pose``."""
+    body.position = (pose.x, pose.y)
+    body.angle = pose.theta
+    space.reindex_shapes_for_body(body)
 
 
 def _as_point(value: Any, name: str) -> tuple[float, float]:

@@ -9,7 +9,7 @@ import tomllib
 import numpy as np
 import pytest
 
-from sonar_gym.apcs_route import LegCommand, check_route_clearance
+from sonar_gym.apcs_route import LegCommand, check_route_clearance, with_wall_obstacles
 from sonar_gym.maps import map_ahead_features, map_wall_vectors
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, OdometryNoise
@@ -19,6 +19,7 @@ from sonar_gym.sonar.swept import SideSonars
 from sonar_gym.straight_drive import drive_straight_run, turn_run
 from sonar_gym.straight_drive_kernels import clearance
 from sonar_gym.world import World
+from tests.wall_obstacles_reference import reference_with_wall_obstacles
 
 NOISE = OdometryNoise(0.0005, 0.003, -0.002, 0.3, 0.3)  # slips are frequent on purpose
 
@@ -171,3 +172,20 @@ def test_clearance_within_a_bound_is_exact_up_to_it_and_above_it_beyond(within_m
         close = exact <= within_m
         np.testing.assert_array_equal(bounded[close], exact[close])
         assert np.all(bounded[~close] > within_m)
+
+
+@pytest.mark.parametrize("name", ["apcs_corridor", "beom_cho_lab", "kim_arena"])
+def test_wall_obstacles_are_drawn_as_the_reference_draws_them(name: str) -> None:
+    scenario = load_scenario(name)
+    assert scenario.room is not None
+    (x0, _), (x1, _) = scenario.room.min, scenario.room.max
+    x_range = (x0 + 0.5, np.float64(x1) - 0.2)
+    for seed in range(40):
+        count = seed % 6
+        rng, reference_rng = np.random.default_rng(seed), np.random.default_rng(seed)
+        drawn = with_wall_obstacles(scenario, rng, count, (0.3, 1.0), (0.05, 0.35), x_range)
+        expected = reference_with_wall_obstacles(
+            scenario, reference_rng, count, (0.3, 1.0), (0.05, 0.35), x_range
+        )
+        assert drawn == expected
+        assert rng.bit_generator.state == reference_rng.bit_generator.state
