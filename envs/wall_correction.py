@@ -495,7 +495,7 @@ class WallCorrectionEnv(SonarEnv):
         motion_rng = np.random.default_rng(int(rng.integers(2**63)))
         sensor_rng = np.random.default_rng(int(rng.integers(2**63)))
         robot = DifferentialDriveRobot(noise, odometry_pose=estimate)
-        tracker = APCSTracker(
+        tracker = APCSTracker.unchecked(  # the config and draws above are valid
             self._wall_table_map,
             estimate,
             covariance,
