@@ -34,6 +34,7 @@ and rebuilds the space from them.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -65,6 +66,20 @@ _ENDPOINT_TOLERANCE_M = 1e-6
 OVERLAP_TOLERANCE_M = 1e-5
 """Overlap below which a footprint still counts as free (pymunk lets contacts rest ~1e-6 m deep)."""
 _SETTLE_STEPS = 1
+
+
+def _body_setter(name: str) -> Callable[[pymunk.Body, Any], None]:
+    """The setter of ``pymunk.Body``'s property ``name``, to call directly:
+    ``body.position = ...`` goes through pymunk's ``__setattr__`` hook first, which adds as much
+    time again and changes nothing."""
+    setter: Callable[[pymunk.Body, Any], None] = vars(pymunk.Body)[name].fset
+    return setter
+
+
+_SET_POSITION = _body_setter("position")
+_SET_ANGLE = _body_setter("angle")
+_SET_VELOCITY = _body_setter("velocity")
+_SET_ANGULAR_VELOCITY = _body_setter("angular_velocity")
 
 Region = tuple[tuple[float, float], tuple[float, float]]
 
@@ -360,8 +375,8 @@ class World:
         assert old_shape is not None  # a body that has moved is in the built space
         space.remove(self._body(), old_shape)
         body, shape = self._new_robot()
-        body.position = (pose.x, pose.y)
-        body.angle = pose.theta
+        _SET_POSITION(body, (pose.x, pose.y))
+        _SET_ANGLE(body, pose.theta)
         space.add(body, shape)
         self._robot_body, self._robot_shape = body, shape
         self._robot_is_fresh = True
@@ -534,14 +549,14 @@ class World:
                 collided = _has_contact_impulse(body)
         self._commanded_velocity = (0.0, 0.0)
         self._commanded_angular_velocity = 0.0
-        body.velocity = (0.0, 0.0)
-        body.angular_velocity = 0.0
-        body.angle = wrap_angle(body.angle)
+        _SET_VELOCITY(body, (0.0, 0.0))
+        _SET_ANGULAR_VELOCITY(body, 0.0)
+        _SET_ANGLE(body, wrap_angle(body.angle))
         return MotionOutcome(self.robot_pose, collided, path_length)
 
     def _impose_velocity(self, body: pymunk.Body, gravity: Any, damping: float, dt: float) -> None:
-        body.velocity = self._commanded_velocity
-        body.angular_velocity = self._commanded_angular_velocity
+        _SET_VELOCITY(body, self._commanded_velocity)
+        _SET_ANGULAR_VELOCITY(body, self._commanded_angular_velocity)
 
     # --- pickling ------------------------------------------------------------------------
 
@@ -581,8 +596,8 @@ def _has_contact_impulse(body: pymunk.Body) -> bool:
 
 def _move_fresh_body(space: pymunk.Space, body: pymunk.Body, pose: Pose) -> None:
     """Teleport ``body``, which ``space`` has not stepped since it was added, to ``pose``."""
-    body.position = (pose.x, pose.y)
-    body.angle = pose.theta
+    _SET_POSITION(body, (pose.x, pose.y))
+    _SET_ANGLE(body, pose.theta)
     space.reindex_shapes_for_body(body)
 
 
