@@ -309,7 +309,7 @@ class APCSRoute:
             draws,
             commanded,
             # a turn in place rolls the wheels apart, a straight step both alike
-            np.flatnonzero(commanded[:, 0] == commanded[:, 1]).tolist(),
+            (commanded[:, 0] == commanded[:, 1]).nonzero()[0].tolist(),
             stops[:, 0].tolist(),
             stops[:, 1].tolist(),
         )
