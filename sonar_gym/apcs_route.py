@@ -16,6 +16,7 @@ their echoes, so the random streams stand where the shorter run would have left 
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import functools
 import math
@@ -140,15 +141,36 @@ class EpisodeTrace:
 
 @dataclass(frozen=True)
 class _Plan:
-    """Planned commands: ``(K, 2)`` ``(d_left, d_right)`` (metres), whether each is a straight
-    step, the command counts at the steering points (``stops``) with the waypoint aimed at
-    from each, the draws."""
+    """Planned commands: ``(K, 2)`` ``(d_left, d_right)`` (metres), the ascending indices of
+    the straight steps among them, the command counts at the steering points (``stops``) with
+    the waypoint aimed at from each, the draws."""
 
     draws: CommandDraws
     commanded: FloatArray
-    straight: list[bool]
+    straight_indices: list[int]
     stops: list[int]
     next_waypoint: list[int]
+
+
+def first_sample_step(counter: int, steps_per_sample: int) -> int:
+    """Which straight step (0 = the first) takes the first reading, for a sampling sonar.
+
+    Every straight step adds one to the count of steps since the last reading, ``counter``
+    before the first; a step that brings it to ``steps_per_sample`` or more takes a reading
+    and sets it to 0, so the readings fall on every ``max(steps_per_sample, 1)``-th straight
+    step from this one on.
+    """
+    return max(steps_per_sample - counter - 1, 0)
+
+
+def counter_after(counter: int, steps_per_sample: int, first: int, straight_steps: int) -> int:
+    """The count of straight steps since the last reading after ``straight_steps`` straight
+    steps, starting from ``counter``, with the readings from straight step ``first`` on every
+    ``max(steps_per_sample, 1)``-th (``first`` past the steps: no reading, as without a
+    sampling sonar)."""
+    if straight_steps <= first:
+        return counter + straight_steps
+    return (straight_steps - 1 - first) % max(steps_per_sample, 1)
 
 
 class APCSRoute:
@@ -287,7 +309,7 @@ class APCSRoute:
             draws,
             commanded,
             # a turn in place rolls the wheels apart, a straight step both alike
-            (commanded[:, 0] == commanded[:, 1]).tolist(),
+            (commanded[:, 0] == commanded[:, 1]).nonzero()[0].tolist(),
             stops[:, 0].tolist(),
             stops[:, 1].tolist(),
         )
@@ -298,16 +320,10 @@ class APCSRoute:
         """Drive, sense and track ``plan``; returns the waypoint to plan for next."""
         commanded = plan.commanded
         motion = drive_commands(self.robot, self.world, commanded, plan.draws, self.motion_rng)
-        samples: list[int] = []
-        counters: list[int] = []
+        straight = plan.straight_indices
         counter = self.steps_since_sample
-        for index, straight in enumerate(plan.straight):
-            if straight:
-                counter += 1
-                if active_sides and counter >= steps_per_sample:
-                    counter = 0
-                    samples.append(index)
-            counters.append(counter)
+        first = first_sample_step(counter, steps_per_sample) if active_sides else len(straight)
+        samples = straight[first :: max(steps_per_sample, 1)]
         sensor_state = self.sensor_rng.bit_generator.state
         readings, echoes = self._read(motion.true_poses, samples, active_sides)
         with self._timed("localization"):
@@ -337,7 +353,9 @@ class APCSRoute:
                     ),
                     self.sensor_rng,
                 )
-        self.steps_since_sample = counters[consumed - 1]
+        self.steps_since_sample = counter_after(
+            counter, steps_per_sample, first, bisect.bisect_left(straight, consumed)
+        )
         listen_s = self.sonars.transducer.listen_time_s * len(kept)  # both sonars fire together
         self.sensing_time_s += listen_s
         summary.sensing_time_s += listen_s

@@ -98,6 +98,32 @@ class WallVector:
         object.__setattr__(self, "start", start)
         object.__setattr__(self, "end", end)
         object.__setattr__(self, "name", str(self.name))
+        self._derive(start, end)
+
+    @classmethod
+    def unchecked(
+        cls, start: tuple[float, float], end: tuple[float, float], name: str
+    ) -> WallVector:
+        """The wall vector of ``start``, ``end`` (``(x, y)`` tuples of floats, metres in {W})
+        and ``name``, without the conversions of the constructor: equal to
+        ``WallVector(start, end, name)``, with the ValueError it raises for end points that
+        coincide or (through it) are not finite."""
+        if not math.isfinite(start[0] + start[1] + end[0] + end[1]):
+            return cls(start, end, name)  # its message names the end point that is not finite
+        if math.hypot(end[0] - start[0], end[1] - start[1]) <= ZERO_LENGTH_M:
+            raise ValueError(
+                f"WallVector.start and WallVector.end coincide ({start}): a wall must have "
+                f"positive length"
+            )
+        wall = object.__new__(cls)
+        object.__setattr__(wall, "start", start)
+        object.__setattr__(wall, "end", end)
+        object.__setattr__(wall, "name", name)
+        wall._derive(start, end)
+        return wall
+
+    def _derive(self, start: tuple[float, float], end: tuple[float, float]) -> None:
+        """Set what the matching derives from the end points."""
         length = math.hypot(end[0] - start[0], end[1] - start[1])
         unit = ((end[0] - start[0]) / length, (end[1] - start[1]) / length)
         # Not fields: derived once, for the per-wall arithmetic of the matching (sec. 4.3).
@@ -618,6 +644,27 @@ class DetectedWall:
         # Not a field: the segment, made once for the matching (sec. 4.3) and the observation.
         object.__setattr__(self, "_vector", segment)
 
+    @classmethod
+    def unchecked(
+        cls,
+        start: tuple[float, float],
+        end: tuple[float, float],
+        erp_indices: tuple[int, ...],
+        residual_variance_m2: float,
+    ) -> DetectedWall:
+        """The wall of float end points ``start``, ``end`` (metres in {W}), a tuple of ints
+        ``erp_indices`` and a float ``residual_variance_m2`` (m^2), without the conversions
+        of the constructor: equal to ``DetectedWall(start, end, erp_indices,
+        residual_variance_m2)``, with its ValueError (:meth:`WallVector.unchecked`)."""
+        segment = WallVector.unchecked(start, end, "detected")
+        wall = object.__new__(cls)
+        object.__setattr__(wall, "start", start)
+        object.__setattr__(wall, "end", end)
+        object.__setattr__(wall, "erp_indices", erp_indices)
+        object.__setattr__(wall, "residual_variance_m2", residual_variance_m2)
+        object.__setattr__(wall, "_vector", segment)
+        return wall
+
     @property
     def vector(self) -> WallVector:
         """The detected segment ``T_s -> T_e`` as a wall vector named ``"detected"``."""
@@ -782,7 +829,8 @@ def fit_group_points(
     centroid_x, centroid_y = centroid.tolist()
     start = (centroid_x + extent_start * along_x, centroid_y + extent_start * along_y)  # T_s
     end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
-    wall = DetectedWall(start, end, indices, residual_variance)
+    # floats from the fit, a tuple of ints: what the constructor's conversions would give
+    wall = DetectedWall.unchecked(start, end, indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)
 
 

@@ -4,6 +4,7 @@ form it replaced (Yamamoto et al. sec. 4.2.2-4.2.3, Fig. 6)."""
 from __future__ import annotations
 
 import pickle
+import struct
 import warnings
 
 import numpy as np
@@ -22,10 +23,26 @@ from sonar_gym.pose import wrap_angles
 from tests.localization.apcs_fit_reference import fit_group_points_arrays
 
 
+def _canonical(value: object) -> object:
+    """``value`` as new tuples of plain values, every float by its type and bits."""
+    if isinstance(value, float):
+        return (type(value).__name__, struct.pack("<d", value))
+    if isinstance(value, tuple):
+        return tuple(_canonical(item) for item in value)
+    return (type(value).__name__, value)
+
+
 def _bits(fit: WallFit) -> bytes:
     """Every field of the verdict, floats by their bits (``-0.0`` differs from ``0.0``)."""
     wall = fit.wall
-    wall_fields = None if wall is None else (wall.start, wall.end, wall.erp_indices)
+    wall_fields = None
+    if wall is not None:  # every attribute of the wall and of its segment, in order
+        wall_fields = [
+            (name, _canonical(value))
+            for owner in (wall, wall.vector)
+            for name, value in owner.__dict__.items()
+            if name != "_vector"
+        ]
     return pickle.dumps((fit.status, fit.erp_indices, fit.residual_variance_m2, wall_fields))
 
 
