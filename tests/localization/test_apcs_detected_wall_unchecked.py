@@ -5,21 +5,12 @@ errors for end points that coincide or are not finite."""
 from __future__ import annotations
 
 import math
-import struct
 
 import numpy as np
 import pytest
 
 from sonar_gym.localization.apcs_walls import ZERO_LENGTH_M, DetectedWall, WallVector
-
-
-def _canonical(value: object) -> object:
-    """``value`` with every float as its type and bits (``-0.0``, NaN and ``0.0`` apart)."""
-    if isinstance(value, float):
-        return (type(value).__name__, struct.pack("<d", value))
-    if isinstance(value, tuple):
-        return tuple(_canonical(item) for item in value)
-    return (type(value).__name__, value)
+from tests.localization.float_bits import canonical
 
 
 def _bits(wall: DetectedWall | WallVector) -> list[object]:
@@ -27,7 +18,7 @@ def _bits(wall: DetectedWall | WallVector) -> list[object]:
     their bits."""
     owners = (wall, wall.vector) if isinstance(wall, DetectedWall) else (wall,)
     return [
-        (type(owner).__name__, name, _canonical(value))
+        (type(owner).__name__, name, canonical(value))
         for owner in owners
         for name, value in owner.__dict__.items()
         if name != "_vector"

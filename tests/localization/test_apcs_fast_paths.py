@@ -29,22 +29,14 @@ from sonar_gym.localization.apcs import (
 from sonar_gym.localization.apcs_online import APCSTracker, WallStream
 from sonar_gym.pose import Pose
 from sonar_gym.localization.apcs_walls import fit_group_points, newest_reflection_points
+from tests.localization.side_readings import wobbly_side_readings
 
 
 def _readings(seed: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A side sensor driving a wobbly line past a wall with dropouts, jumps and stops."""
+    """Wobbly side readings, a tenth of their directions turned by 7 pi (facing away)."""
     rng = np.random.default_rng(seed)
-    steps = rng.choice([0.0, 0.03, 0.06], size=count, p=[0.1, 0.6, 0.3])
-    headings = np.cumsum(rng.normal(0.0, 0.02, count))
-    positions = np.column_stack(
-        [np.cumsum(steps * np.cos(headings)), np.cumsum(steps * np.sin(headings))]
-    )
-    ranges = 1.0 + 0.002 * np.arange(count) + rng.normal(0.0, 0.003, count)
-    ranges[rng.random(count) < 0.1] = np.nan
-    ranges[rng.random(count) < 0.05] = 6.0  # beyond the sensing range
-    ranges[rng.random(count) < 0.05] = 0.1  # inside the minimum range
-    ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
-    return positions, headings + np.pi / 2.0 + 7.0 * np.pi * (rng.random(count) < 0.1), ranges
+    positions, directions, ranges = wobbly_side_readings(rng, count, heading_std_rad=0.02)
+    return positions, directions + 7.0 * np.pi * (rng.random(count) < 0.1), ranges
 
 
 def test_newest_reflection_points_are_those_of_estimated_reflection_points() -> None:

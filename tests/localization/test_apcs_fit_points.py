@@ -4,7 +4,6 @@ form it replaced (Yamamoto et al. sec. 4.2.2-4.2.3, Fig. 6)."""
 from __future__ import annotations
 
 import pickle
-import struct
 import warnings
 
 import numpy as np
@@ -21,15 +20,7 @@ from sonar_gym.localization.apcs_walls import (
 )
 from sonar_gym.pose import wrap_angles
 from tests.localization.apcs_fit_reference import fit_group_points_arrays
-
-
-def _canonical(value: object) -> object:
-    """``value`` as new tuples of plain values, every float by its type and bits."""
-    if isinstance(value, float):
-        return (type(value).__name__, struct.pack("<d", value))
-    if isinstance(value, tuple):
-        return tuple(_canonical(item) for item in value)
-    return (type(value).__name__, value)
+from tests.localization.float_bits import canonical
 
 
 def _bits(fit: WallFit) -> bytes:
@@ -38,7 +29,7 @@ def _bits(fit: WallFit) -> bytes:
     wall_fields = None
     if wall is not None:  # every attribute of the wall and of its segment, in order
         wall_fields = [
-            (name, _canonical(value))
+            (name, canonical(value))
             for owner in (wall, wall.vector)
             for name, value in owner.__dict__.items()
             if name != "_vector"

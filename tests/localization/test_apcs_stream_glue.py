@@ -11,23 +11,14 @@ from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.localization.apcs_online import _sensor_positions
 from sonar_gym.localization.apcs_walls import _chosen_roots
 from tests.localization.apcs_glue_reference import chosen_roots_sliced, sensor_positions_stacked
+from tests.localization.side_readings import wobbly_side_readings
 
 
 def _readings(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A side sensor driving a wobbly line past a wall, with dropouts, out-of-range readings,
-    jumps, stops and directions of many turns."""
-    steps = rng.choice([0.0, 0.03, 0.06], size=count, p=[0.1, 0.6, 0.3])
-    headings = np.cumsum(rng.normal(0.0, 0.05, count))
-    positions = np.column_stack(
-        [np.cumsum(steps * np.cos(headings)), np.cumsum(steps * np.sin(headings))]
-    )
-    ranges = 1.0 + 0.002 * np.arange(count) + rng.normal(0.0, 0.003, count)
-    ranges[rng.random(count) < 0.1] = np.nan
-    ranges[rng.random(count) < 0.05] = 6.0  # beyond the sensing range
-    ranges[rng.random(count) < 0.05] = 0.1  # inside the minimum range
-    ranges[rng.random(count) < 0.1] += 0.5  # a discontinuity
+    """Wobbly side readings whose directions are turned by whole turns, many of them."""
+    positions, directions, ranges = wobbly_side_readings(rng, count, heading_std_rad=0.05)
     turns = 2.0 * np.pi * rng.integers(-3, 4, count)
-    return positions, headings + np.pi / 2.0 + turns, ranges
+    return positions, directions + turns, ranges
 
 
 def test_chosen_roots_match_the_sliced_form() -> None:

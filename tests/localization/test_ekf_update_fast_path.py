@@ -38,14 +38,17 @@ def test_ekf_update_matches_reference_bit_for_bit(rows: int, joseph_form: bool) 
         estimate, fix = _pose(rng), _pose(rng)
         if trial % 7 == 0:  # heading innovations at the wrap
             fix = Pose(fix.x, fix.y, estimate.theta + math.pi)
-        got_pose, got = ekf_update_unchecked(estimate, prior, fix, noise, joseph_form)
-        want_pose, want = ekf_update_reference(estimate, prior, fix, noise, joseph_form)
-        assert (got_pose.x, got_pose.y, got_pose.theta) == (
-            want_pose.x,
-            want_pose.y,
-            want_pose.theta,
-        )
-        assert got.tobytes() == want.tobytes()  # signed zeros too
+        _assert_same_update(estimate, prior, fix, noise, joseph_form)
+
+
+def _assert_same_update(
+    estimate: Pose, prior: np.ndarray, fix: Pose, noise: np.ndarray, joseph_form: bool
+) -> None:
+    """The update gives the reference's pose and covariance bit for bit (signed zeros too)."""
+    got_pose, got = ekf_update_unchecked(estimate, prior, fix, noise, joseph_form)
+    want_pose, want = ekf_update_reference(estimate, prior, fix, noise, joseph_form)
+    assert (got_pose.x, got_pose.y, got_pose.theta) == (want_pose.x, want_pose.y, want_pose.theta)
+    assert got.tobytes() == want.tobytes()
 
 
 def _layouts(prior: np.ndarray) -> list[np.ndarray]:
@@ -74,11 +77,4 @@ def test_ekf_update_matches_reference_for_signed_zeros_and_layouts(joseph_form: 
             noise[0, 1] = noise[1, 0] = -0.0
         estimate, fix = _pose(rng), _pose(rng)
         for layout in _layouts(prior):
-            got_pose, got = ekf_update_unchecked(estimate, layout, fix, noise, joseph_form)
-            want_pose, want = ekf_update_reference(estimate, layout, fix, noise, joseph_form)
-            assert (got_pose.x, got_pose.y, got_pose.theta) == (
-                want_pose.x,
-                want_pose.y,
-                want_pose.theta,
-            )
-            assert got.tobytes() == want.tobytes()
+            _assert_same_update(estimate, layout, fix, noise, joseph_form)
