@@ -108,13 +108,11 @@ class WallVector:
         and ``name``, without the conversions of the constructor: equal to
         ``WallVector(start, end, name)``, with the ValueError it raises for end points that
         coincide or (through it) are not finite."""
-        if not math.isfinite(start[0] + start[1] + end[0] + end[1]):
-            return cls(start, end, name)  # its message names the end point that is not finite
-        if math.hypot(end[0] - start[0], end[1] - start[1]) <= ZERO_LENGTH_M:
-            raise ValueError(
-                f"WallVector.start and WallVector.end coincide ({start}): a wall must have "
-                f"positive length"
-            )
+        if not (
+            math.isfinite(start[0] + start[1] + end[0] + end[1])
+            and math.hypot(end[0] - start[0], end[1] - start[1]) > ZERO_LENGTH_M
+        ):
+            return cls(start, end, name)  # it raises, naming what is wrong
         wall = object.__new__(cls)
         object.__setattr__(wall, "start", start)
         object.__setattr__(wall, "end", end)
