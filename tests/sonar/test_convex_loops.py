@@ -10,16 +10,18 @@ from sonar_gym.geometry import build_static_geometry
 from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, builtin_names, load_scenario
 from sonar_gym.sonar.echo_tables import convex_loops
 from tests.random_static_scenarios import random_scenario
+from tests.sonar.convex_loops_arrays_reference import reference_array_convex_loops
 from tests.sonar.convex_loops_reference import reference_convex_loops
 
 
 def _assert_same_loops(scenario_name: str, geometry_args: tuple[np.ndarray, ...]) -> None:
     solid_side, encloses = convex_loops(*geometry_args)
-    expected_side, expected_encloses = reference_convex_loops(*geometry_args)
-    assert solid_side.dtype == expected_side.dtype, scenario_name
-    assert solid_side.tobytes() == expected_side.tobytes(), scenario_name
-    assert encloses.dtype == expected_encloses.dtype, scenario_name
-    assert np.array_equal(encloses, expected_encloses), scenario_name
+    for reference in (reference_convex_loops, reference_array_convex_loops):
+        expected_side, expected_encloses = reference(*geometry_args)
+        assert solid_side.dtype == expected_side.dtype, scenario_name
+        assert solid_side.tobytes() == expected_side.tobytes(), scenario_name
+        assert encloses.dtype == expected_encloses.dtype, scenario_name
+        assert np.array_equal(encloses, expected_encloses), scenario_name
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -84,3 +86,25 @@ def test_convex_loops_equal_the_reference_on_closed_chains_of_free_walls(
         geometry = build_static_geometry(scenario)
         args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
         _assert_same_loops("chains", args)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_convex_loops_equal_the_references_on_forked_and_touching_chains(seed: int) -> None:
+    """Chains whose ends meet several starts (forks: no successor), loops that a walk enters
+    from outside, and loops a point of the geometry touches from outside (on a side's line,
+    outside the loop)."""
+    rng = np.random.default_rng(seed)
+    corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (2.0, 0.0), (2.0, 1.0), (0.5, 2.0)]
+    for _ in range(150):
+        picks = rng.integers(len(corners), size=int(rng.integers(3, 12)))
+        walls = [
+            Wall(corners[a], corners[b])
+            for a, b in zip(picks[:-1], picks[1:], strict=True)
+            if a != b
+        ]
+        if rng.random() < 0.5:  # a square loop, sometimes with a fork at a corner
+            walls += _chain((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.0, 0.0))
+        room = Room((-3.0, -3.0), (3.0, 3.0)) if rng.random() < 0.5 else None
+        geometry = build_static_geometry(Scenario("forks", room, tuple(walls)))
+        args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
+        _assert_same_loops("forks", args)
