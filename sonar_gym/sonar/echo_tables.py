@@ -23,7 +23,7 @@ import numpy as np
 
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
-from sonar_gym.sonar.loop_kernels import solid_sides
+from sonar_gym.sonar.loop_kernels import closer_than, solid_sides
 
 PATH_END_TOLERANCE = 1e-9
 """Fraction of a path, at its far end, in which a crossing does not count as an occlusion."""
@@ -321,7 +321,7 @@ def _build(geometry: StaticGeometry, plane: int, cylinder: int, edge: int) -> Ec
     occlusion[circles, 1, 2] = geometry.circles[:, 1]
 
     wedge_points = vertices[:n_wedges]
-    same_point = _pairwise_distances(wedge_points, wedge_points) < LOOP_TOLERANCE_M
+    same_point = _closer_than(wedge_points, wedge_points, LOOP_TOLERANCE_M)
     np.fill_diagonal(same_point, False)
     # The first other vertex at the same point, else the vertex itself.
     twin = np.arange(n_wedges)
@@ -372,8 +372,18 @@ def convex_loops(
     both sides. Which end meets which start is measured here (numpy's ``hypot``); the chains
     and verdicts are a compiled loop (:func:`~sonar_gym.sonar.loop_kernels.solid_sides`).
     """
-    joins = _pairwise_distances(ends, starts) < LOOP_TOLERANCE_M  # [i, j]: end i meets start j
+    joins = _closer_than(ends, starts, LOOP_TOLERANCE_M)  # [i, j]: end i meets start j
     return solid_sides(starts, ends, centres, joins, LOOP_TOLERANCE_M)  # type: ignore[no-any-return]
+
+
+def _closer_than(from_points: FloatArray, to_points: FloatArray, tolerance_m: float) -> np.ndarray:
+    """``_pairwise_distances(from_points, to_points) < tolerance_m``, decided by a compiled
+    loop (:func:`~sonar_gym.sonar.loop_kernels.closer_than`) unless a pair lies at a hair from
+    the tolerance, when numpy measures them all."""
+    closer, undecided = closer_than(from_points, to_points, tolerance_m)
+    if undecided:
+        closer = _pairwise_distances(from_points, to_points) < tolerance_m
+    return closer  # type: ignore[no-any-return]
 
 
 def _pairwise_distances(from_points: FloatArray, to_points: FloatArray) -> FloatArray:

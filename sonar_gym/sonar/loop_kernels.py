@@ -142,3 +142,34 @@ def solid_sides(
         if size >= 3 and successor[loop[size - 1]] == first:
             settle_loop(starts, ends, centres, loop[:size], loop_tolerance_m, solid_side, encloses)
     return solid_side, encloses
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.boolean, 2, "C"), types.boolean)),
+    TABLE,  # from_points
+    TABLE,  # to_points
+    types.float64,  # tolerance_m
+)
+def closer_than(
+    from_points: FloatArray, to_points: FloatArray, tolerance_m: float
+) -> tuple[np.ndarray, bool]:
+    """``[i, j]``: whether ``hypot`` of ``to_points[j] - from_points[i]`` is below
+    ``tolerance_m`` (metres), and whether any pair was left undecided (its answer then False).
+
+    A pair decides without ``hypot``: one coordinate difference at least ``tolerance_m`` (or
+    NaN) puts the length (``hypot``, within an ulp) at or above it (no); both under half of it
+    put the length under ``0.71 tolerance_m`` (yes). A pair in between is left to the caller.
+    """
+    n_from, n_to = from_points.shape[0], to_points.shape[0]
+    closer = np.zeros((n_from, n_to), dtype=np.bool_)
+    undecided = False
+    half = 0.5 * tolerance_m
+    for i in range(n_from):
+        for j in range(n_to):
+            dx = abs(to_points[j, 0] - from_points[i, 0])
+            dy = abs(to_points[j, 1] - from_points[i, 1])
+            if dx < half and dy < half:
+                closer[i, j] = True
+            elif not (dx >= tolerance_m or dy >= tolerance_m or dx != dx or dy != dy):
+                undecided = True
+    return closer, undecided
