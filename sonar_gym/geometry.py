@@ -18,17 +18,22 @@ Primitives:
 from __future__ import annotations
 
 import functools
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
 
+from sonar_gym.geometry_kernels import ALONG_COSINE, corner_arms
 from sonar_gym.pose import FloatArray
 from sonar_gym.scenario import Room, Scenario, Vec2, Wall
 
 _MERGE_TOLERANCE_M = 1e-6
 _FLUSH_TOLERANCE_M = 1e-3
 GEOMETRY_CACHE_SIZE = 32
+_ALL_PAIRS_MAX = 1024
+"""Up to this many (point, segment) pairs, :meth:`_SegmentIndex.near_pairs` tests every pair
+instead of asking the k-d tree (cheaper for a room's few walls and a few boxes)."""
 """How many scenarios' geometries :func:`static_geometry` keeps."""
 
 
@@ -200,7 +205,8 @@ class _SegmentIndex:
         self.starts, self.ends = starts, ends
         self.spans = ends - starts
         self.lengths = _norms(self.spans)
-        n = len(starts)
+        n = self.n_segments = len(starts)
+        self._all_pairs: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # per number of points
         if n == 0:
             self._tree: cKDTree | None = None
             return
@@ -208,7 +214,8 @@ class _SegmentIndex:
         pieces = np.maximum(np.ceil(self.lengths / spacing).astype(np.int64), 1)
         per_segment = pieces + 1
         owner = np.repeat(np.arange(n), per_segment)
-        self._owner: list[int] = owner.tolist()  # the segment of each sample, read by near()
+        self._owner_array = owner  # the segment of each sample, read by near_pairs()
+        self._owner: list[int] = owner.tolist()  # the same, read by near()
         first = np.repeat(np.cumsum(per_segment) - per_segment, per_segment)
         fraction = (np.arange(len(owner)) - first) / np.repeat(pieces, per_segment)
         samples = starts[owner] + self.spans[owner] * fraction[:, None]
@@ -223,6 +230,37 @@ class _SegmentIndex:
         owner = self._owner
         return [sorted({owner[sample] for sample in h}) for h in hits]
 
+    def near_pairs(self, points: FloatArray, tolerance_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Pairs ``(point index, segment index)``, two int64 arrays in no particular order (a
+        pair may repeat), that hold every pair of :meth:`near`.
+
+        With few segments and points (at most :data:`_ALL_PAIRS_MAX` pairs) that is every pair,
+        a superset that passes the same segments: a segment passing within ``tolerance_m`` of
+        a point (ends included, as :func:`_segments_containing` tests) lies within
+        ``sqrt(2) tolerance_m`` of its nearest end sample, or ``sqrt(reach^2 + tolerance_m^2)``
+        of its nearest sample, so the tree's radius ``reach + tolerance_m`` finds it when
+        ``reach >= tolerance_m``; only then are all pairs used.
+        """
+        if self._tree is None or len(points) == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        n_points = len(points)
+        if n_points * self.n_segments <= _ALL_PAIRS_MAX and self._reach >= tolerance_m:
+            pairs = self._all_pairs.get(n_points)
+            if pairs is None:
+                pairs = (
+                    np.repeat(np.arange(n_points), self.n_segments),
+                    np.tile(np.arange(self.n_segments), n_points),
+                )
+                for array in pairs:
+                    array.setflags(write=False)
+                self._all_pairs[n_points] = pairs
+            return pairs
+        hits = self._tree.query_ball_point(points, self._reach + tolerance_m)
+        counts = [len(h) for h in hits]
+        samples = np.fromiter(itertools.chain.from_iterable(hits), np.int64, sum(counts))
+        point_index = np.repeat(np.arange(len(points)), counts)
+        return point_index, self._owner_array[samples]
+
 
 def _box_corner_arms(
     box_corners: FloatArray, walls: _SegmentIndex
@@ -233,24 +271,43 @@ def _box_corner_arms(
     edge, which equal arms encode. A corner standing on a wall (a table pushed against it)
     is hidden; instead the box's side leaving the wall and the wall form a concave 90 deg
     dihedral there, which the arms ``(side away from the wall, wall away from the box)``
-    encode.
+    encode. A compiled loop decides the corners (:func:`~sonar_gym.geometry_kernels.corner_arms`);
+    those it leaves undecided, at a hair from a threshold, are tested here as numpy rounds.
     """
     points = box_corners.reshape(-1, 2)
     to_next = (ring_shift(box_corners, 1, axis=1) - box_corners).reshape(-1, 2)
     to_previous = (ring_shift(box_corners, -1, axis=1) - box_corners).reshape(-1, 2)
     to_next /= _norms(to_next)[:, None]
     to_previous /= _norms(to_previous)[:, None]
-    arms = np.stack([to_next, to_next], axis=1)
-    candidates = walls.near(points, _FLUSH_TOLERANCE_M)
-    for k, point in enumerate(points):
-        wall = _segment_containing(point, walls, candidates[k], _FLUSH_TOLERANCE_M)
-        if wall is None:
-            continue
-        along_wall_next = abs(float(wall @ to_next[k])) > 0.99
-        leaving = to_previous[k] if along_wall_next else to_next[k]
-        flush_side = to_next[k] if along_wall_next else to_previous[k]
-        arms[k] = [leaving, -flush_side]
+    point_index, segment = walls.near_pairs(points, _FLUSH_TOLERANCE_M)
+    arms, undecided = corner_arms(
+        points,
+        to_next,
+        to_previous,
+        walls.starts,
+        walls.spans,
+        walls.lengths,
+        point_index,
+        segment,
+        _FLUSH_TOLERANCE_M,
+    )
+    for k in np.flatnonzero(undecided).tolist():
+        arms[k] = _one_corner_arms(points[k], to_next[k], to_previous[k], walls)
     return points.copy(), arms
+
+
+def _one_corner_arms(
+    point: FloatArray, to_next: FloatArray, to_previous: FloatArray, walls: _SegmentIndex
+) -> FloatArray:
+    """``(2, 2)`` arms of one box corner (see :func:`_box_corner_arms`), tested with numpy."""
+    [candidates] = walls.near(point[None, :], _FLUSH_TOLERANCE_M)
+    wall = _segment_containing(point, walls, candidates, _FLUSH_TOLERANCE_M)
+    if wall is None:
+        return np.stack([to_next, to_next])
+    along_wall_next = abs(float(wall @ to_next)) > ALONG_COSINE
+    leaving = to_previous if along_wall_next else to_next
+    flush_side = to_next if along_wall_next else to_previous
+    return np.stack([leaving, -flush_side])
 
 
 def _segment_containing(
@@ -346,10 +403,16 @@ def ring_shift(values: np.ndarray, step: int, axis: int = 0) -> np.ndarray:
     return np.concatenate((values[tuple(after)], values[tuple(before)]), axis=axis)
 
 
+def _dots(first: FloatArray, second: FloatArray) -> FloatArray:
+    """``(N,)`` dot products of the rows of two ``(N, 2)`` arrays, each rounded as ``a @ b``
+    of the two rows (the batched product takes the same dot product per row)."""
+    return np.matmul(first[:, None, :], second[:, :, None])[:, 0, 0]
+
+
 def _norms(vectors: FloatArray) -> FloatArray:
     """``(N,)`` Euclidean lengths of ``(N, 2)`` vectors, rounded as ``np.linalg.norm`` of each.
 
     A batched matrix product rounds like the dot product ``np.linalg.norm`` uses, so the
     geometry stays bit-identical to a per-vector build.
     """
-    return np.sqrt(np.matmul(vectors[:, None, :], vectors[:, :, None])[:, 0, 0])
+    return np.sqrt(_dots(vectors, vectors))

@@ -23,7 +23,7 @@ import numpy as np
 import pymunk
 from numba import types
 
-from sonar_gym.compiled import INDICES, TABLE, compiled
+from sonar_gym.compiled import INDICES, TABLE, compiled, nan_max, nan_min
 from sonar_gym.pose import FloatArray
 
 PATH_CLEARANCE_M = 1e-3
@@ -91,32 +91,60 @@ class StaticShapeTable:
 
         pymunk maps a point to {W} as ``1 x + 0 y + 0``: the same number, but for ``-0.0``,
         which becomes ``0.0``. The bounding boxes and circle centres are of mapped points; a
-        segment's end points are kept as given.
+        segment's end points are kept as given. One compiled loop
+        (:func:`_outline_table`) fills the three arrays.
         """
-        a = segment_starts + 0.0  # as mapped to {W} by the static body
-        b = segment_ends + 0.0
-        centres, radii = circles[:, :2] + 0.0, circles[:, 2:3]
-        bounds = np.concatenate(
-            [
-                np.concatenate([np.minimum(a, b), np.maximum(a, b)], axis=1),
-                np.concatenate([centres - radii, centres + radii], axis=1),
-            ]
-        )
-        n_segments, n_circles = len(a), len(centres)
-        kinds = np.concatenate(
-            [
-                np.full(n_segments, SEGMENT, dtype=np.int64),
-                np.full(n_circles, CIRCLE, dtype=np.int64),
-            ]
-        )
-        rows = np.zeros((n_segments + n_circles, 5))
-        rows[:n_segments, :2] = segment_starts
-        rows[:n_segments, 2:4] = segment_ends
-        rows[n_segments:, :2] = centres
-        rows[n_segments:, 2:3] = radii
+        bounds, kinds, rows = _outline_table(segment_starts, segment_ends, circles)
         for array in (bounds, kinds, rows):
             array.setflags(write=False)
         return cls(bounds, kinds, rows)
+
+
+def _outline_table_loop(
+    segment_starts: FloatArray, segment_ends: FloatArray, circles: FloatArray
+) -> tuple[FloatArray, np.ndarray, FloatArray]:
+    """``(bounds, kinds, rows)`` of :meth:`StaticShapeTable.of_outlines`, element by element:
+    the mapped points (``x + 0.0``, never ``-0.0``, so the minimum and maximum meet no signed
+    zeros), numpy's NaN-keeping minimum and maximum, a circle's box as its mapped centre minus
+    and plus its radius."""
+    n_segments, n_circles = segment_starts.shape[0], circles.shape[0]
+    bounds = np.empty((n_segments + n_circles, 4))
+    kinds = np.empty(n_segments + n_circles, dtype=np.int64)
+    rows = np.zeros((n_segments + n_circles, 5))
+    for i in range(n_segments):
+        for axis in range(2):
+            a = segment_starts[i, axis] + 0.0
+            b = segment_ends[i, axis] + 0.0
+            bounds[i, axis] = nan_min(a, b)
+            bounds[i, 2 + axis] = nan_max(a, b)
+            rows[i, axis] = segment_starts[i, axis]
+            rows[i, 2 + axis] = segment_ends[i, axis]
+        kinds[i] = SEGMENT
+    for k in range(n_circles):
+        i = n_segments + k
+        radius = circles[k, 2]
+        for axis in range(2):
+            centre = circles[k, axis] + 0.0
+            bounds[i, axis] = centre - radius
+            bounds[i, 2 + axis] = centre + radius
+            rows[i, axis] = centre
+        rows[i, 2] = radius
+        kinds[i] = CIRCLE
+    return bounds, kinds, rows
+
+
+_outline_table = compiled(
+    types.Tuple(
+        (
+            types.Array(types.float64, 2, "C"),
+            types.Array(types.int64, 1, "C"),
+            types.Array(types.float64, 2, "C"),
+        )
+    ),
+    TABLE,
+    TABLE,
+    TABLE,
+)(_outline_table_loop)
 
 
 def _point_segment_distance(

@@ -9,9 +9,14 @@ import numpy as np
 import pytest
 
 from sonar_gym import geometry as geometry_module
+from sonar_gym import geometry_kernels
 from sonar_gym.geometry import build_static_geometry, static_geometry
 from sonar_gym.random_room import random_scenario
 from sonar_gym.scenario import Box, Scenario, builtin_names, load_scenario, scenario_from_dict
+from sonar_gym.apcs_route import with_wall_obstacles
+from tests.box_corner_arms_reference import (
+    reference_box_corner_arms,
+)
 from tests.random_static_scenarios import random_scenario as random_static_scenario
 
 ROOM = {"room": {"min": [0.0, 0.0], "max": [4.0, 3.0]}}
@@ -403,3 +408,96 @@ def test_box_corners_against_walls_take_the_walls_direction() -> None:
                     break
             assert (found is None) == (expected is None)
             assert found is None or found.tobytes() == expected.tobytes()
+
+
+def _box_corner_cases() -> list[tuple[np.ndarray, geometry_module._SegmentIndex]]:
+    """Box corners with the indexed walls they are tested against: the WallCorrection rooms'
+    random wall boxes, random scenarios, cluttered rooms and boxes placed flush, off by a hair
+    or at the tolerance from random walls."""
+    cases = []
+    rooms = [cluttered_walls(seed, 30) for seed in range(3)]
+    rooms += [random_static_scenario(np.random.default_rng(seed)) for seed in range(150)]
+    rooms += [load_scenario(name) for name in builtin_names()]
+    rng = np.random.default_rng(21)
+    for scenario in rooms:
+        walls = geometry_module._wall_corners(scenario.room, scenario.walls).index
+        corners = np.array([box.corners for box in scenario.boxes], dtype=np.float64)
+        cases.append((corners.reshape(-1, 4, 2), walls))
+        if scenario.room is not None:
+            for _ in range(4):
+                obstacles = with_wall_obstacles(
+                    scenario, rng, 4, (0.3, 1.0), (0.05, 0.35), tuple(sorted(rng.uniform(-3, 3, 2)))
+                )
+                corners = np.array([box.corners for box in obstacles.boxes], dtype=np.float64)
+                cases.append((corners.reshape(-1, 4, 2), walls))
+    for _ in range(300):
+        starts = rng.uniform(-3.0, 3.0, size=(5, 2))
+        walls = geometry_module._SegmentIndex(starts, starts + rng.normal(size=(5, 2)))
+        pick = rng.integers(5, size=3)
+        direction = walls.spans[pick] / walls.lengths[pick][:, None]
+        normal = np.stack([-direction[:, 1], direction[:, 0]], axis=1)
+        along = rng.uniform(-0.1, 1.1, size=(3, 1)) * walls.spans[pick]
+        gap = rng.choice([0.0, 1e-3, -1e-3, 5e-4, 2e-3, 1e-9], size=(3, 1))
+        first = walls.starts[pick] + along + gap * normal
+        size = rng.uniform(0.01, 0.5, size=(3, 2, 1))
+        corners = np.stack(
+            [
+                first,
+                first + size[:, 0] * direction,
+                first + size[:, 0] * direction + size[:, 1] * normal,
+                first + size[:, 1] * normal,
+            ],
+            axis=1,
+        )
+        cases.append((corners, walls))
+    return cases
+
+
+def test_box_corner_arms_equal_the_per_corner_reference_bit_for_bit() -> None:
+    """The compiled corner test with its numpy fallback gives the per-corner reference's bits,
+    over flush, clear and borderline corners (some of which the compiled loop leaves
+    undecided)."""
+    on_walls = undecided_cases = 0
+    for corners, walls in _box_corner_cases():
+        points, arms = geometry_module._box_corner_arms(corners.copy(), walls)
+        expected_points, expected_arms = reference_box_corner_arms(corners.copy(), walls)
+        assert points.tobytes() == expected_points.tobytes()
+        assert arms.tobytes() == expected_arms.tobytes()
+        on_walls += int(np.any(arms[:, 0] != arms[:, 1]))
+        undecided_cases += int(np.any(_undecided_corners(corners, walls)))
+    assert on_walls > 100
+    assert undecided_cases > 10
+
+
+def _undecided_corners(corners: np.ndarray, walls: geometry_module._SegmentIndex) -> np.ndarray:
+    """The corners the compiled loop leaves to numpy."""
+    points = corners.reshape(-1, 2)
+    to_next = geometry_module.ring_shift(corners, 1, axis=1).reshape(-1, 2) - points
+    point_index, segment = walls.near_pairs(points, 1e-3)
+    _, undecided = geometry_kernels.corner_arms(
+        points,
+        to_next,
+        to_next,
+        walls.starts,
+        walls.spans,
+        walls.lengths,
+        point_index,
+        segment,
+        1e-3,
+    )
+    return undecided
+
+
+def test_segment_pairs_hold_the_k_d_trees_candidates() -> None:
+    """Every pair: the tree's candidates among them; tree pairs when the points are many."""
+    rng = np.random.default_rng(4)
+    for n_segments in (3, 12, 40, 300):
+        starts = rng.uniform(-3.0, 3.0, size=(n_segments, 2))
+        walls = geometry_module._SegmentIndex(starts, starts + rng.normal(size=(n_segments, 2)))
+        points = rng.uniform(-3.0, 3.0, size=(int(rng.integers(1, 60)), 2))
+        point_index, segment = walls.near_pairs(points, 1e-3)
+        pairs = set(zip(point_index.tolist(), segment.tolist(), strict=True))
+        for k, candidates in enumerate(walls.near(points, 1e-3)):
+            assert {(k, i) for i in candidates} <= pairs
+        if len(points) * n_segments > geometry_module._ALL_PAIRS_MAX:
+            assert len(pairs) < len(points) * n_segments

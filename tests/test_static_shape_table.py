@@ -11,6 +11,7 @@ import pytest
 from sonar_gym.geometry import build_static_geometry
 from sonar_gym.path_clearance import StaticShapeTable
 from sonar_gym.world import World, _ConvexPolygons
+from tests.outline_table_reference import reference_of_outlines
 from tests.random_static_scenarios import random_scenario
 from tests.world_shapes_reference import reference_static_shapes
 
@@ -88,3 +89,28 @@ def test_a_worlds_shapes_and_box_polygons_equal_those_made_from_its_scenario(see
         table = StaticShapeTable.of(world.static_shapes)
         for name in ("bounds", "kinds", "shapes"):
             assert _same_bits(getattr(world.static_shape_table, name), getattr(table, name))
+
+
+def test_the_table_of_the_outlines_equals_the_array_form_bit_for_bit() -> None:
+    """Against the numpy form it replaced: scenarios' outlines, and raw outlines with signed
+    zeros, infinities and NaNs."""
+    rng = np.random.default_rng(12)
+    cases = []
+    for _ in range(200):
+        geometry = build_static_geometry(random_scenario(rng))
+        cases.append((geometry.segment_starts, geometry.segment_ends, geometry.circles))
+    specials = np.array([0.0, -0.0, np.inf, -np.inf, np.nan, 1.5, -2.25, 1e-300])
+    for _ in range(200):
+        n_segments, n_circles = rng.integers(0, 6, size=2)
+        values = rng.choice(specials, size=4 * n_segments + 3 * n_circles)
+        values = np.where(rng.random(values.shape) < 0.5, values, rng.normal(size=values.shape))
+        starts = values[: 2 * n_segments].reshape(-1, 2)
+        ends = values[2 * n_segments : 4 * n_segments].reshape(-1, 2)
+        cases.append((starts, ends, values[4 * n_segments :].reshape(-1, 3)))
+    for starts, ends, circles in cases:
+        table = StaticShapeTable.of_outlines(starts, ends, circles)
+        with np.errstate(invalid="ignore"):  # inf - inf in the numpy form
+            expected = reference_of_outlines(starts, ends, circles)
+        for name in ("bounds", "kinds", "shapes"):
+            assert _same_bits(getattr(table, name), getattr(expected, name)), name
+            assert not getattr(table, name).flags.writeable
