@@ -304,7 +304,6 @@ class APCSRoute:
             REAIM_TOLERANCE_RAD,
         )
         draws.extend(normals, uniforms)
-        draws.finish(rng)
         return _Plan(
             draws,
             commanded,

@@ -3,7 +3,8 @@ from the estimate, and the drive of commands where no physics is needed, alone o
 prediction over its encoder increments (numba, :mod:`sonar_gym.compiled`).
 
 numba's ``Generator`` draws from the caller's bit generator with numpy's own algorithms, so
-the loops take the same numbers, in the same order, as
+the loops (handed the generator by :mod:`sonar_gym.generator_handles`, which spares each call
+numba's conversion of the ``Generator`` object) take the same numbers, in the same order, as
 :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` (two standard normals, then four
 uniforms, per command) and leave the generator in the same state. The arithmetic is the
 Python loops' (``math.cos`` and ``math.sin`` are libm's in both; headings wrap as
@@ -18,6 +19,12 @@ import numpy as np
 from numba import types
 
 from sonar_gym.compiled import INDICES, NUMBERS, TABLE, compiled, wrap_angle
+from sonar_gym.generator_handles import (
+    GENERATOR_HANDLE,
+    GeneratorHandle,
+    generator_handle,
+    handle_generator,
+)
 from sonar_gym.odometry_kernels import predict_commands
 from sonar_gym.path_clearance import arc_is_clear
 from sonar_gym.pose import FloatArray
@@ -44,14 +51,19 @@ _draw_into_compiled = compiled(
 )(_draw_into)
 
 
-@compiled(_DRAWS, _GENERATOR, types.int64)  # type: ignore[misc]
-def draw_commands(rng: np.random.Generator, count: int) -> tuple[FloatArray, FloatArray]:
-    """The random numbers of ``count`` drive commands: ``(count, 2)`` standard normals and
-    ``(count, 4)`` uniforms, drawn command by command from ``rng``."""
+@compiled(_DRAWS, GENERATOR_HANDLE, types.int64)  # type: ignore[misc]
+def _draw_commands_compiled(handle: GeneratorHandle, count: int) -> tuple[FloatArray, FloatArray]:
     normals = np.empty((count, 2))
     uniforms = np.empty((count, 4))
-    _draw_into_compiled(rng, normals, uniforms)
+    _draw_into_compiled(handle_generator(handle), normals, uniforms)
     return normals, uniforms
+
+
+def draw_commands(rng: np.random.Generator, count: int) -> tuple[FloatArray, FloatArray]:
+    """The random numbers of ``count`` drive commands: ``(count, 2)`` standard normals and
+    ``(count, 4)`` uniforms, drawn command by command from ``rng`` (in one compiled loop,
+    handed ``rng`` by :func:`~sonar_gym.generator_handles.generator_handle`)."""
+    return _draw_commands_compiled(generator_handle(rng), count)  # type: ignore[no-any-return]
 
 
 def _grown_rows(table: FloatArray, rows: int) -> FloatArray:
@@ -77,7 +89,7 @@ _PLAN = types.Tuple(
 
 @compiled(  # type: ignore[misc]
     _PLAN,
-    _GENERATOR,
+    GENERATOR_HANDLE,
     TABLE,  # targets
     types.int64,  # waypoint
     types.UniTuple(types.float64, 3),  # pose
@@ -87,8 +99,8 @@ _PLAN = types.Tuple(
     types.float64,  # encoder_std_m_per_sqrt_m
     types.float64,  # tolerance_rad
 )
-def plan_to_targets(
-    rng: np.random.Generator,
+def _plan_to_targets_compiled(
+    handle: GeneratorHandle,
     targets: FloatArray,
     waypoint: int,
     pose: tuple[float, float, float],
@@ -98,23 +110,7 @@ def plan_to_targets(
     encoder_std_m_per_sqrt_m: float,
     tolerance_rad: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray, tuple[float, float, float]]:
-    """Plan, from ``pose`` (the estimate, {W}), the drive commands to ``targets[waypoint:]``.
-
-    Steering points come every ``steps_per_aim`` straight commands of ``step_m`` per wheel
-    and at the start of each target: there the remaining straight commands are
-    ``round(distance / step_m)`` (to the nearest, ties to even, as Python's ``round``) and the
-    bearing to the target is taken; a bearing off by more than ``tolerance_rad`` is first
-    turned in place (wheels ``-+ turn l / 2``). A target fewer than half a step away is
-    passed. Every command draws its numbers (two normals, four uniforms, as
-    :func:`draw_commands`) and is dead-reckoned with its encoder reading ``d + encoder_std
-    sqrt(|d|) normal`` per wheel (midpoint integration).
-
-    Returns the ``(K, 2)`` commanded increments ``(d_left, d_right)`` (metres), their
-    ``(K, 2)`` normals and ``(K, 4)`` uniforms, the steering points as rows ``(commands
-    planned so far, target aimed at from there)`` and the end pose. The distance is libm's
-    ``hypot``, which can differ from Python's ``math.hypot`` by one rounding; that changes
-    the count only for a distance within one rounding of a half step.
-    """
+    rng = handle_generator(handle)
     capacity = 64
     commanded = np.empty((capacity, 2))
     normals = np.empty((capacity, 2))
@@ -172,6 +168,47 @@ def plan_to_targets(
         uniforms[:count].copy(),
         stops[:n_stops].copy(),
         (x, y, theta),
+    )
+
+
+def plan_to_targets(
+    rng: np.random.Generator,
+    targets: FloatArray,
+    waypoint: int,
+    pose: tuple[float, float, float],
+    step_m: float,
+    steps_per_aim: int,
+    wheel_base_m: float,
+    encoder_std_m_per_sqrt_m: float,
+    tolerance_rad: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray, tuple[float, float, float]]:
+    """Plan, from ``pose`` (the estimate, {W}), the drive commands to ``targets[waypoint:]``.
+
+    Steering points come every ``steps_per_aim`` straight commands of ``step_m`` per wheel
+    and at the start of each target: there the remaining straight commands are
+    ``round(distance / step_m)`` (to the nearest, ties to even, as Python's ``round``) and the
+    bearing to the target is taken; a bearing off by more than ``tolerance_rad`` is first
+    turned in place (wheels ``-+ turn l / 2``). A target fewer than half a step away is
+    passed. Every command draws its numbers (two normals, four uniforms, as
+    :func:`draw_commands`) and is dead-reckoned with its encoder reading ``d + encoder_std
+    sqrt(|d|) normal`` per wheel (midpoint integration).
+
+    Returns the ``(K, 2)`` commanded increments ``(d_left, d_right)`` (metres), their
+    ``(K, 2)`` normals and ``(K, 4)`` uniforms, the steering points as rows ``(commands
+    planned so far, target aimed at from there)`` and the end pose. The distance is libm's
+    ``hypot``, which can differ from Python's ``math.hypot`` by one rounding; that changes
+    the count only for a distance within one rounding of a half step.
+    """
+    return _plan_to_targets_compiled(  # type: ignore[no-any-return]
+        generator_handle(rng),
+        targets,
+        waypoint,
+        pose,
+        step_m,
+        steps_per_aim,
+        wheel_base_m,
+        encoder_std_m_per_sqrt_m,
+        tolerance_rad,
     )
 
 

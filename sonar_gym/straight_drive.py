@@ -99,7 +99,6 @@ def drive_run(
         raise ValueError(f"argument 'count' must be an integer >= 0; got {count!r}")
     draws = CommandDraws.start(rng)
     draws.extend(*drive_kernels.draw_commands(rng, int(count)))
-    draws.finish(rng)
     commanded = np.tile([d_left_m, d_right_m], (int(count), 1))
     return drive_commands(robot, world, commanded, draws, rng)
 
@@ -191,8 +190,8 @@ def drive_commands(
 
     Each command is what :meth:`~sonar_gym.robot.DifferentialDriveRobot.drive` does with
     those numbers; commands whose planned path comes near a static shape go through ``drive``
-    itself (the generator replayed from the command's state). ``rng`` ends in the state after
-    the last command.
+    itself (the generator replayed from the command's state). ``rng`` comes in the state after
+    the last command's draws (nothing drew from it since) and ends there.
     """
     commanded = np.asarray(commanded, dtype=np.float64).reshape(-1, 2)
     count = len(commanded)
@@ -223,6 +222,7 @@ def drive_commands(
     true_poses = np.empty((count, 3))
     collided = np.zeros(count, dtype=bool)
     first = 0
+    replayed = False
     while first < count:
         free = first + _free_commands(
             world, ground[first:], ground_turn[first:], true_poses[first:]
@@ -232,11 +232,13 @@ def drive_commands(
         if free == count:
             break
         draws.rewind(rng, free)
+        replayed = True
         result = robot.drive(world, commanded[free, 0], commanded[free, 1], rng)
         true_poses[free] = result.true_pose.as_array()
         collided[free] = result.collided
         first = free + 1
-    draws.rewind(rng, count)
+    if replayed:
+        draws.rewind(rng, count)
 
     # The odometry: each command's encoder increments split over its substeps (midpoint).
     odometry_poses = straight_drive_kernels.odometry_poses(

@@ -435,6 +435,17 @@ def _readout_constants(sonar: SideSonars, speed_mps: float) -> FloatArray:
     return constants
 
 
+def map_at_points(linear_map: FloatArray, homogeneous: FloatArray) -> FloatArray:
+    """``homogeneous @ linear_map.T``: ``(P, M)`` the ``(M, 3)`` map of an echo table at each
+    of the ``(P, 3)`` points ``(x, y, 1)`` ({W}, metres), as a transposed view.
+
+    Taken as ``(linear_map @ homogeneous.T).T``: BLAS forms every entry as the same
+    three-term sum either way (the tests check the bits), and for a few dozen points against
+    a few hundred map rows this order costs OpenBLAS less than half as much.
+    """
+    return (linear_map @ homogeneous.T).T  # type: ignore[no-any-return]
+
+
 def _side_first_echoes(
     sonar: SideSonars, world: WorldLike, homogeneous: FloatArray, sensor_frames: FloatArray
 ) -> FirstEchoes:
@@ -457,7 +468,7 @@ def _side_first_echoes(
     beam = air.beam
     tables = echo_tables(world.geometry, EchoKind.PLANE, EchoKind.CYLINDER, EchoKind.EDGE)
     layout = tables.search_layout[:4]
-    mapped = homogeneous @ tables.position_map.T  # (P, M)
+    mapped = map_at_points(tables.position_map, homogeneous)  # (P, M)
     rel, ranges, safe, amplitudes, centre_distance, concave = side_kernels.side_ranges(
         mapped, layout, tables.radius, air.edge_law
     )
@@ -483,7 +494,7 @@ def _side_first_echoes(
         beam.main_lobe_cells,
     )
     sensor_rows, candidate_rows, path_sensors = side_kernels.heard_paths(heard, homogeneous)
-    matrix = (path_sensors @ tables.occlusion_map.T).reshape(
+    matrix = map_at_points(tables.occlusion_map, path_sensors).reshape(
         len(sensor_rows), 3 * tables.n_segments + tables.n_circles, 3
     )
     detected, path_lengths, first_amplitudes = side_kernels.side_first(
