@@ -31,10 +31,10 @@ from sonar_gym.scenario import Room, Scenario, Vec2, Wall
 _MERGE_TOLERANCE_M = 1e-6
 _FLUSH_TOLERANCE_M = 1e-3
 GEOMETRY_CACHE_SIZE = 32
+"""How many scenarios' geometries :func:`static_geometry` keeps."""
 _ALL_PAIRS_MAX = 1024
 """Up to this many (point, segment) pairs, :meth:`_SegmentIndex.near_pairs` tests every pair
 instead of asking the k-d tree (cheaper for a room's few walls and a few boxes)."""
-"""How many scenarios' geometries :func:`static_geometry` keeps."""
 
 
 @dataclass(frozen=True, eq=False)
