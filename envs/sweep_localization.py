@@ -517,7 +517,8 @@ class SweepLocalizationEnv(SonarEnv):
     ) -> tuple[float, dict[str, Any]]:
         """Take the sweeps between short moves, localize, correct the EKF."""
         config = self.config
-        first_estimate, first_covariance = episode.estimate, episode.covariance.copy()
+        # the filter's arrays are replaced, never written in place: no copy needed
+        first_estimate, first_covariance = episode.estimate, episode.covariance
         first_truth = episode.world.robot_pose
         sweeps: list[Sweep] = []
         scanned: list[tuple[Sweep, Pose]] = []
@@ -537,7 +538,8 @@ class SweepLocalizationEnv(SonarEnv):
                 )
             duration_s += sweep_duration_s
             odometry = _relative_pose(first_estimate, episode.estimate)
-            sweeps.append(Sweep.unchecked(angles, ranges, offset, odometry))
+            # the grid's read-only angles and the sweep's fresh ranges: no copies needed
+            sweeps.append(Sweep.handed_over(angles, ranges, offset, odometry))
             scanned.append((sweeps[-1], true_pose))
         episode.last_ranges = sweeps[-1].ranges / self.sonar.transducer.max_range_m
         episode.last_sector = sector

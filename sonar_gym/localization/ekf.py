@@ -253,7 +253,10 @@ def _state_covariance(covariance: npt.ArrayLike, name: str) -> FloatArray:
 
 
 def _symmetrised(matrix: FloatArray) -> FloatArray:
-    return 0.5 * (matrix + matrix.T)
+    """``0.5 * (matrix + matrix.T)``, the halving done in place on the sum (the same products)."""
+    total = matrix + matrix.T
+    total *= 0.5
+    return total
 
 
 def predict(

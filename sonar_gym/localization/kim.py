@@ -386,10 +386,10 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
     sweep_frames = np.array(frames)
     max_range = math.inf if max_range_m is None else float(max_range_m)
     beam = kim_kernels.echo_beams(angles, ranges, counts, sweep_frames, max_range)
-    end_x, end_y, length = kim_kernels.echo_end_points(
+    rows = kim_kernels.echo_end_points(
         ranges, counts, sweep_frames, np.cos(beam), np.sin(beam), max_range
     )
-    return _Readings(end_x, end_y, beam, length)
+    return _Readings(rows[0], rows[1], beam, rows[2])
 
 
 def _direction_index(

@@ -168,6 +168,34 @@ class EchoCandidates:
     _tables: EchoTables = field(repr=False)
     threshold: float = 0.0
 
+    @classmethod
+    def unchecked(
+        cls,
+        position: FloatArray,
+        directions: FloatArray,
+        path_lengths: FloatArray,
+        amplitudes: FloatArray,
+        primitive_indices: np.ndarray,
+        concave: np.ndarray,
+        tables: EchoTables,
+        threshold: float,
+    ) -> EchoCandidates:
+        """The candidates of these fields, in the order of the attributes, set as the frozen
+        dataclass's constructor sets them (it has no checks) at a fraction of its cost: for
+        :func:`echo_candidates`, which runs once per sensor position."""
+        candidates = object.__new__(cls)
+        candidates.__dict__.update(
+            position=position,
+            directions=directions,
+            path_lengths=path_lengths,
+            amplitudes=amplitudes,
+            _primitive_indices=primitive_indices,
+            _concave=concave,
+            _tables=tables,
+            threshold=threshold,
+        )
+        return candidates
+
     def __len__(self) -> int:
         return len(self.path_lengths)
 
@@ -227,14 +255,16 @@ def echo_candidates(
     mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
     # Ranges (planes and vertices |rel|, a cylinder its centre distance minus its radius,
     # written into the map's ranges rows), the cylinders' offsets moved to their echo points,
-    # and the on-axis laws of the module docstring, candidate by candidate.
-    concave, centre_distance, safe, on_axis = kernels.on_axis_echoes(
+    # and the on-axis laws of the module docstring (written into the map's amplitudes rows),
+    # candidate by candidate.
+    concave, distances = kernels.on_axis_echoes(
         mapped,
         tables.search_layout,
         tables.radius_padded,
         tables.radius,
         edge_law_constants(edge_law, wavenumber),
     )
+    centre_distance, safe = distances[: tables.n_circles], distances[tables.n_circles :]
     # Air absorption 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10) and the receiver's gain
     # as factors here; the amplitudes, their products, are written by the tests' loop below.
     absorption = (
@@ -256,7 +286,6 @@ def echo_candidates(
     keep, kept, occluders = kernels.audible_candidates(
         mapped,
         tables.search_layout,
-        on_axis,
         absorption,
         gain,
         tables.strict_bounds,
@@ -270,15 +299,15 @@ def echo_candidates(
     keep, directions, path_lengths, kept_amplitudes = _unoccluded_nearest_first(
         tables, mapped, keep, kept, centre_distance, occluders
     )
-    return EchoCandidates(
-        position=np.array((px, py)),
-        directions=directions,
-        path_lengths=path_lengths,
-        amplitudes=kept_amplitudes,
-        _primitive_indices=keep,
-        _concave=concave,
-        _tables=tables,
-        threshold=max(detection_threshold, 0.0),
+    return EchoCandidates.unchecked(
+        np.array((px, py)),
+        directions,
+        path_lengths,
+        kept_amplitudes,
+        keep,
+        concave,
+        tables,
+        max(detection_threshold, 0.0),
     )
 
 

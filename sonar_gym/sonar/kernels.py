@@ -218,15 +218,8 @@ def unoccluded(
 
 
 @compiled(  # type: ignore[misc]
-    types.Tuple(
-        (
-            types.Array(types.boolean, 1, "C"),
-            types.Array(types.float64, 1, "C"),
-            types.Array(types.float64, 1, "C"),
-            types.Array(types.float64, 1, "C"),
-        )
-    ),
-    types.Array(types.float64, 1, "C"),  # mapped (ranges and scaled cylinder offsets written)
+    types.Tuple((types.Array(types.boolean, 1, "C"), types.Array(types.float64, 1, "C"))),
+    types.Array(types.float64, 1, "C"),  # mapped (ranges, offsets, on-axis amplitudes written)
     INDICES,  # layout
     NUMBERS,  # radius_padded
     NUMBERS,  # radius
@@ -238,14 +231,16 @@ def on_axis_echoes(
     radius_padded: FloatArray,
     radius: FloatArray,
     edge_law: FloatArray,
-) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
+) -> tuple[np.ndarray, FloatArray]:
     """The ranges and on-axis echo laws of :func:`sonar_gym.sonar.echoes.echo_candidates`,
-    candidate by candidate: ``(concave (W,), centre distances (C,), ranges clipped at 1 nm
-    (N,), on-axis amplitudes before air and gain (N,))``, in metres and 1/m.
+    candidate by candidate: ``(concave (W,), distances (C + N,))``, the distances being the
+    centre distances ``(C,)``, then the ranges clipped at 1 nm ``(N,)``, in metres.
 
     ``mapped`` is the search map's product at the sensor: its ``(rel_x, rel_y, 1)`` rows come
-    first (one per candidate); the ranges are written into its ranges rows and the cylinders'
-    offsets scaled to their echo points, in place.
+    first (one per candidate); the ranges are written into its ranges rows, the cylinders'
+    offsets scaled to their echo points and the on-axis amplitudes before air and gain (1/m)
+    written into its amplitudes rows, in place. (One returned array, not one per quantity:
+    each array a compiled call returns costs about a microsecond to hand back.)
 
     Args:
         layout: ``(S, C, W, V, first ranges row, first wedge-side row a, b)``.
@@ -259,12 +254,14 @@ def on_axis_echoes(
     weak, edge_constant = edge_law[0] > 0.0, edge_law[1]
     n_specular = n_segments + n_circles
     n_candidates = n_specular + n_vertices
+    amplitudes_start = ranges_start + n_candidates
     concave = np.empty(n_wedges, dtype=np.bool_)
     for wedge in range(n_wedges):
         side = nan_min(mapped[wedge_a_start + wedge], mapped[wedge_b_start + wedge])
         concave[wedge] = side > 0.0
-    safe = np.empty(n_candidates)
-    centre_distance = np.empty(n_circles)
+    distances = np.empty(n_circles + n_candidates)
+    centre_distance = distances[:n_circles]
+    safe = distances[n_circles:]
     for candidate in range(n_candidates):
         distance = np.hypot(mapped[3 * candidate], mapped[3 * candidate + 1])
         reach = distance - radius_padded[candidate]
@@ -276,7 +273,7 @@ def on_axis_echoes(
             shrink = 1.0 - radius[circle] / nan_max(distance, 1e-12)
             mapped[3 * candidate] = mapped[3 * candidate] * shrink
             mapped[3 * candidate + 1] = mapped[3 * candidate + 1] * shrink
-    on_axis = np.empty(n_candidates)
+    on_axis = mapped[amplitudes_start : amplitudes_start + n_candidates]
     for candidate in range(n_candidates):
         inverse_square = 0.5 / safe[candidate]
         if candidate < n_segments:
@@ -292,7 +289,7 @@ def on_axis_echoes(
                 on_axis[candidate] = inverse_square
             else:
                 on_axis[candidate] = edge
-    return concave, centre_distance, safe, on_axis
+    return concave, distances
 
 
 @compiled(  # type: ignore[misc]
@@ -441,7 +438,6 @@ def nearest_first(
     ),
     types.Array(types.float64, 1, "C"),  # mapped (amplitudes written)
     INDICES,  # layout
-    NUMBERS,  # on_axis
     NUMBERS,  # absorption
     NUMBERS,  # gain
     NUMBERS,  # strict_bounds
@@ -455,7 +451,6 @@ def nearest_first(
 def audible_candidates(
     mapped: FloatArray,
     layout: np.ndarray,
-    on_axis: FloatArray,
     absorption: FloatArray,
     gain: FloatArray,
     strict_bounds: FloatArray,
@@ -473,12 +468,11 @@ def audible_candidates(
 
     ``mapped`` is the search map's product at the sensor after :func:`on_axis_echoes`; each
     candidate's amplitude, ``on_axis x absorption x gain`` in that order (1/m), is written into
-    its amplitudes row, then :func:`passing_candidates` tests the rows from the first test row
-    on.
+    its amplitudes row over the on-axis amplitude :func:`on_axis_echoes` left there, then
+    :func:`passing_candidates` tests the rows from the first test row on.
 
     Args:
         layout: :func:`on_axis_echoes`' ``(S, C, W, V, first ranges row, ...)``.
-        on_axis: ``(N,)`` on-axis amplitudes before air and gain (1/m).
         absorption, gain: ``(N,)`` air absorption and receiver gain factors, each empty when
             it is 1.
         strict_bounds, inclusive_bounds, concave, twin, twin_comes_last, has_t_junctions:
@@ -493,7 +487,7 @@ def audible_candidates(
     ranges_start = layout[4]
     amplitudes_start = ranges_start + n_candidates
     for candidate in range(n_candidates):
-        amplitude = on_axis[candidate]
+        amplitude = mapped[amplitudes_start + candidate]
         if absorption.shape[0] > 0:
             amplitude = amplitude * absorption[candidate]
         if gain.shape[0] > 0:

@@ -304,7 +304,7 @@ class PulseEchoSonar:
             return last[3]
         candidates = self._search_candidates(world, robot_pose, sensor_xy)
         for array in (candidates.directions, candidates.path_lengths, candidates.amplitudes):
-            array.flags.writeable = False
+            array.setflags(write=False)
         _LAST_CANDIDATES["entry"] = (geometry, self.transducer, key, candidates)
         return candidates
 

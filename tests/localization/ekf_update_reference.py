@@ -41,3 +41,9 @@ def ekf_update_reference(
     else:
         posterior = correction @ prior
     return Pose.from_array(state), 0.5 * (posterior + posterior.T)
+
+
+def symmetrised_reference(matrix: FloatArray) -> FloatArray:
+    """``sonar_gym.localization.ekf._symmetrised`` as it was written before it halved the sum
+    in place."""
+    return 0.5 * (matrix + matrix.T)

@@ -48,3 +48,29 @@ def test_an_unchecked_sweep_is_the_checked_one() -> None:
     for array, source in ((unchecked.angles, angles), (unchecked.ranges, ranges)):
         assert not array.flags.writeable
         assert not np.shares_memory(array, source)  # a copy: the caller's array stays its own
+
+
+def test_a_handed_over_sweep_is_the_checked_one_on_the_given_arrays() -> None:
+    angles = np.radians(np.arange(-45.0, 46.0, 1.0))
+    angles.setflags(write=False)  # as a sweep grid's angles are
+    readings = np.empty((2, angles.size))  # ranges come as a row of the readings, as pinged
+    readings[0] = np.where(
+        np.arange(angles.size) % 7 == 0, np.nan, 0.3 + 0.01 * np.arange(angles.size)
+    )
+    ranges = readings[0]
+    odometry = Pose(0.1, -0.05, 0.3)
+    checked = Sweep(angles, ranges.copy(), (0.04, 0.0), odometry)
+    handed = Sweep.handed_over(angles, ranges, np.array((0.04, 0.0)), odometry)
+    assert handed.angles is angles and handed.ranges is ranges
+    assert np.array_equal(handed.angles, checked.angles)
+    assert np.array_equal(handed.ranges, checked.ranges, equal_nan=True)
+    assert type(handed.sensor_offset[0]) is float
+    assert handed.sensor_offset == checked.sensor_offset == (0.04, 0.0)
+    assert handed.odometry == checked.odometry
+    assert not handed.angles.flags.writeable and not handed.ranges.flags.writeable
+    readings[1] = 1.0  # the other row stays the caller's
+    sweeps = [handed, Sweep.unchecked(angles, ranges, (0.04, 0.0), Pose(0.2, 0.0, 0.1))]
+    gathered = kim._gather_readings(sweeps, 0.7)
+    expected = kim._gather_readings([checked, sweeps[1]], 0.7)
+    for name in ("end_x", "end_y", "beam_rad", "range_m"):
+        assert getattr(gathered, name).tobytes() == getattr(expected, name).tobytes()

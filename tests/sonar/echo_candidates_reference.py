@@ -23,6 +23,7 @@ from sonar_gym.sonar.echoes import (
     edge_law_constants,
 )
 from sonar_gym.sonar.receiver import TimeVaryingGain
+from tests.sonar.echo_search_kernels_reference import on_axis_echoes_reference
 
 
 def echo_candidates_reference(
@@ -66,7 +67,7 @@ def echo_candidates_reference(
     # Ranges (planes and vertices |rel|, a cylinder its centre distance minus its radius,
     # written into the map's ranges rows), the cylinders' offsets moved to their echo points,
     # and the on-axis laws of the module docstring, candidate by candidate.
-    concave, centre_distance, safe, on_axis = kernels.on_axis_echoes(
+    concave, centre_distance, safe, on_axis = on_axis_echoes_reference(
         mapped,
         tables.search_layout,
         tables.radius_padded,
