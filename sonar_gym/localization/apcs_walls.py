@@ -536,6 +536,41 @@ def newest_reflection_rows(
     )
 
 
+def newest_reflection_table(
+    readings: FloatArray, valid_range_m: tuple[float, float], skipped: int
+) -> FloatArray:
+    """:func:`newest_reflection_rows` with each reading's sensor position, as one table.
+
+    Args:
+        readings: ``(4, N)`` sensor positions (metres in {W}), beam-axis directions (radians)
+            and ranges (metres, NaN for a dropout), as
+            :func:`~sonar_gym.localization.apcs_kernels.reading_table` gives them.
+        valid_range_m: ranges outside are dropouts, metres.
+        skipped: 0 or 1, the readings before the first row.
+
+    Returns:
+        ``(N - skipped, 6)`` rows of
+        :data:`~sonar_gym.localization.apcs_kernels.ERP_COLUMNS`: the sensor position, the
+        ERP and its direction as :func:`newest_reflection_rows` gives them, and whether there
+        is one (1.0 or 0.0).
+    """
+    low, high = valid_range_m
+    # numpy's sine and cosine act element by element: those of the first and the second
+    # reading of every pair are those of all the readings.
+    directions = readings[2]
+    pairs = apcs_kernels.pair_table(readings, low, high, np.sin(directions), np.cos(directions))
+    roots = apcs_kernels.root_table(
+        pairs,
+        np.arctan2(pairs[0], pairs[1]),  # alpha of eqs (5)-(6)
+        np.arccos(pairs[2]),  # the offset of the roots of eq. (4)
+        np.arctan2(pairs[4], pairs[5]),  # the pair's mean beam axis
+    )
+    phi = roots[0]
+    return apcs_kernels.erp_table(  # type: ignore[no-any-return]
+        readings, roots, np.cos(phi), np.sin(phi), skipped
+    )
+
+
 def _chosen_roots(
     positions: FloatArray,
     directions: FloatArray,
