@@ -702,9 +702,12 @@ class APCSTracker:
         order; the others are counted in ``result.dropped``, as :meth:`handle_groups` counts
         them (it only counts a dropped group, so its verdict object is not built)."""
         stream = self.streams[side]
+        min_group_size = self.params.min_group_size
         walls = []
         for group in closed:
-            verdict = stream._wall_verdict(group)
+            # most closed groups are too small to fit: dropped without a call
+            too_small = len(group[0]) < min_group_size
+            verdict = None if too_small else stream._wall_verdict(group)
             if verdict is None:
                 result.dropped[side] += 1
             else:
