@@ -20,7 +20,8 @@ three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
 3. :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
    reading.
 
-:func:`wrapped_angles` wraps a closed group's reflection directions before its fit.
+:func:`wrapped_angles` wraps a closed group's reflection directions before its fit, and
+:func:`centred_group` gives the group's centroid and its ERPs relative to it.
 
 The on-line tracker (:class:`~sonar_gym.localization.apcs_online.APCSTracker`) runs the same
 loops as :func:`reading_table`, :func:`pair_table`, :func:`root_table` and :func:`erp_table`,
@@ -414,3 +415,26 @@ def erp_table(
         table[row, 4] = wrap_to_pi(roots[0, k])
         table[row, 5] = 1.0
     return table
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, types.float64, types.float64)),
+    TABLE,  # members
+)
+def centred_group(members: FloatArray) -> tuple[FloatArray, float, float]:
+    """``(members - centroid, centroid_x, centroid_y)`` of a group's ``(n, 2)`` ERPs (metres),
+    ``n >= 1``: the centroid as ``np.add.reduce(members, axis=0) / n`` gives it (numpy adds
+    the rows one after the other, from 0.0), ``(n, 2)`` the ERPs relative to it."""
+    count = members.shape[0]
+    sum_x = 0.0
+    sum_y = 0.0
+    for i in range(count):
+        sum_x += members[i, 0]
+        sum_y += members[i, 1]
+    centroid_x = sum_x / count
+    centroid_y = sum_y / count
+    centred = np.empty((count, 2))
+    for i in range(count):
+        centred[i, 0] = members[i, 0] - centroid_x
+        centred[i, 1] = members[i, 1] - centroid_y
+    return centred, centroid_x, centroid_y
