@@ -87,8 +87,9 @@ def rejection_reason(match: MatchResult) -> str | None:
         return None
     if match.status == AMBIGUOUS:
         return AMBIGUOUS
-    closest = match.closest_check
-    return "empty_map" if closest is None else closest.reason
+    # the closest check's reason alone, without building the check (only an empty map has none)
+    checks = match.checks
+    return "empty_map" if len(checks) == 0 else checks.closest_reason
 
 
 @dataclass(frozen=True)

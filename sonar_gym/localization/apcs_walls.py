@@ -1138,6 +1138,25 @@ class WallChecks(Sequence[WallCheck]):
             if (reason := _FIRST_FAILED[tuple(passed)]) is not None
         }
 
+    def rejection_summary(self) -> str:
+        """``"index: reason"`` of every wall in :attr:`rejections`, in map order, joined by
+        ``", "`` (the list a no-match message gives), without building the dict."""
+        return ", ".join(
+            [
+                f"{index}: {reason}"
+                for index, passed in enumerate(self._conditions.tolist())
+                if (reason := _FIRST_FAILED[tuple(passed)]) is not None
+            ]
+        )
+
+    @property
+    def closest_reason(self) -> str | None:
+        """The :attr:`~WallCheck.reason` of :attr:`closest` (``None`` for an empty map),
+        without building the check."""
+        if self._closest < 0:
+            return None
+        return _FIRST_FAILED[tuple(self._conditions[self._closest].tolist())]
+
     @property
     def closest(self) -> WallCheck | None:
         """The check of the wall that came closest to matching, ``None`` for an empty map.
