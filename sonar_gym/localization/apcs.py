@@ -206,7 +206,7 @@ def _match_and_correct(
     """Fig. 2 after the checks: match, observe the wall, ``correct(wall, r, xi)``."""
     match = match_wall(detected, wall_map, params)
     if not match.matched or match.wall is None:
-        reasons = ", ".join(f"{index}: {reason}" for index, reason in match.rejections.items())
+        reasons = match.checks.rejection_summary()
         message = (
             "more than one map wall matches"
             if match.status == AMBIGUOUS

@@ -20,7 +20,13 @@ three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
 3. :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
    reading.
 
-:func:`wrapped_angles` wraps a closed group's reflection directions before its fit.
+:func:`wrapped_angles` wraps a closed group's reflection directions before its fit, and
+:func:`centred_group` gives the group's centroid and its ERPs relative to it.
+
+The on-line tracker (:class:`~sonar_gym.localization.apcs_online.APCSTracker`) runs the same
+loops as :func:`reading_table`, :func:`pair_table`, :func:`root_table` and :func:`erp_table`,
+each returning one table instead of several arrays (each array a loop returns costs a Python
+object), the rows numpy's trigonometry reads contiguous.
 
 Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
 """
@@ -243,3 +249,192 @@ def wrapped_angles(angles: FloatArray) -> FloatArray:
     for index in range(angles.shape[0]):
         wrapped[index] = wrap_to_pi(angles[index])
     return wrapped
+
+
+# A run of readings as one table, for the on-line tracker: the loops above, each returning one
+# array, in the same arithmetic.
+
+READING_ROWS = ("x", "y", "direction", "range")
+"""The rows of :func:`reading_table`'s output: sensor position (metres), beam-axis direction
+(radians) and range (metres)."""
+PAIR_ROWS = ("sin_alpha", "cos_alpha", "cosine", "solvable", "beam_y", "beam_x")
+"""The rows of :func:`pair_table`'s output, :func:`pair_geometry`'s outputs in order
+(``solvable`` as 1.0 or 0.0)."""
+ERP_COLUMNS = ("sensor_x", "sensor_y", "erp_x", "erp_y", "direction", "valid")
+"""The columns of :func:`erp_table`'s output: the reading's sensor position (metres), its ERP
+(metres), the reflection direction (radians) and whether it gives an ERP (1.0 or 0.0)."""
+
+
+@compiled(  # type: ignore[misc]
+    _TABLE_OUT,
+    TABLE,  # positions
+    NUMBERS,  # headings
+    NUMBERS,  # ranges
+    types.float64,  # beam_offset
+    types.boolean,  # has_previous
+    types.UniTuple(types.float64, 4),  # previous
+)
+def reading_table(
+    positions: FloatArray,
+    headings: FloatArray,
+    ranges: FloatArray,
+    beam_offset: float,
+    has_previous: bool,
+    previous: tuple[float, float, float, float],
+) -> FloatArray:
+    """:func:`stream_readings` as one ``(4, N)`` table, rows :data:`READING_ROWS`, each row
+    contiguous (``N = n + 1`` with a previous reading, else ``n``)."""
+    count = positions.shape[0]
+    first = 1 if has_previous else 0
+    table = np.empty((4, count + first))
+    if has_previous:
+        table[0, 0], table[1, 0] = previous[0], previous[1]
+        table[2, 0], table[3, 0] = previous[2], previous[3]
+    for i in range(count):
+        table[0, first + i] = positions[i, 0]
+        table[1, first + i] = positions[i, 1]
+        table[2, first + i] = headings[i] + beam_offset
+        table[3, first + i] = ranges[i]
+    return table
+
+
+@compiled(  # type: ignore[misc]
+    _TABLE_OUT,
+    TABLE,  # readings
+    types.float64,  # low
+    types.float64,  # high
+    NUMBERS,  # sines
+    NUMBERS,  # cosines
+)
+def pair_table(
+    readings: FloatArray, low: float, high: float, sines: FloatArray, cosines: FloatArray
+) -> FloatArray:
+    """:func:`pair_geometry` of the readings of a :func:`reading_table` as one
+    ``(6, max(N - 1, 0))`` table, rows :data:`PAIR_ROWS`, each row contiguous.
+
+    Args:
+        readings: ``(4, N)`` a :func:`reading_table`.
+        low, high: the valid ranges, metres.
+        sines, cosines: ``(N,)`` numpy's ``sin`` and ``cos`` of the readings' directions.
+    """
+    count = max(readings.shape[1] - 1, 0)
+    table = np.empty((6, count))
+    for i in range(count):
+        dx = readings[0, i + 1] - readings[0, i]
+        dy = readings[1, i + 1] - readings[1, i]
+        baseline = math.sqrt(dy * dy + dx * dx)  # |P1P2|, the corrected root of eq. (4)
+        moved = baseline > _ZERO_LENGTH_M
+        safe_baseline = baseline if moved else 1.0
+        table[0, i] = dx / safe_baseline  # eq. (5)
+        table[1, i] = dy / safe_baseline  # eq. (6)
+        first, second = readings[3, i], readings[3, i + 1]
+        ranged = (
+            low <= first <= high
+            and low <= second <= high
+            and math.isfinite(first)
+            and math.isfinite(second)
+        )
+        range_step = (second if ranged else 0.0) - (first if ranged else 0.0)
+        value = -range_step / safe_baseline
+        solvable = ranged and moved and abs(value) <= 1.0
+        table[2, i] = value if solvable else 0.0
+        table[3, i] = 1.0 if solvable else 0.0
+        table[4, i] = sines[i] + sines[i + 1]
+        table[5, i] = cosines[i] + cosines[i + 1]
+    return table
+
+
+@compiled(  # type: ignore[misc]
+    _TABLE_OUT,
+    TABLE,  # pairs
+    NUMBERS,  # alpha
+    NUMBERS,  # offset
+    NUMBERS,  # beam_axis
+)
+def root_table(
+    pairs: FloatArray, alpha: FloatArray, offset: FloatArray, beam_axis: FloatArray
+) -> FloatArray:
+    """:func:`chosen_roots` of a :func:`pair_table` as one ``(2, K)`` table: the chosen
+    roots ``phi`` (radians) and the indices of their pairs (as floats, exact), each row
+    contiguous.
+
+    Args:
+        pairs: ``(6, N - 1)`` a :func:`pair_table`.
+        alpha, offset, beam_axis: ``(N - 1,)`` as :func:`chosen_roots` takes them.
+    """
+    count = 0
+    for i in range(pairs.shape[1]):
+        if pairs[3, i] != 0.0:
+            count += 1
+    table = np.empty((2, count))
+    k = 0
+    for i in range(pairs.shape[1]):
+        if pairs[3, i] == 0.0:
+            continue
+        phi_plus = wrap_to_pi(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
+        phi_minus = wrap_to_pi(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
+        off_axis_plus = abs(wrap_to_pi(phi_plus - beam_axis[i]))
+        off_axis_minus = abs(wrap_to_pi(phi_minus - beam_axis[i]))
+        table[0, k] = phi_plus if off_axis_plus <= off_axis_minus else phi_minus
+        table[1, k] = i
+        k += 1
+    return table
+
+
+@compiled(  # type: ignore[misc]
+    _TABLE_OUT,
+    TABLE,  # readings
+    TABLE,  # roots
+    NUMBERS,  # cos_phi
+    NUMBERS,  # sin_phi
+    types.int64,  # skipped
+)
+def erp_table(
+    readings: FloatArray, roots: FloatArray, cos_phi: FloatArray, sin_phi: FloatArray, skipped: int
+) -> FloatArray:
+    """:func:`newest_rows` of a :func:`root_table` with each reading's sensor position, as one
+    ``(N - skipped, 6)`` table, columns :data:`ERP_COLUMNS` (zero ERP, direction and valid where
+    the reading gives no ERP).
+
+    Args:
+        readings: ``(4, N)`` a :func:`reading_table`.
+        roots: ``(2, K)`` a :func:`root_table` of its pairs.
+        cos_phi, sin_phi: ``(K,)`` numpy's ``cos`` and ``sin`` of the roots.
+        skipped: 0 or 1, the readings before the first row.
+    """
+    rows = readings.shape[1] - skipped
+    table = np.zeros((rows, 6))
+    for row in range(rows):
+        table[row, 0] = readings[0, row + skipped]
+        table[row, 1] = readings[1, row + skipped]
+    for k in range(roots.shape[1]):
+        second = int(roots[1, k]) + 1
+        row = second - skipped
+        table[row, 2] = readings[0, second] + readings[3, second] * cos_phi[k]
+        table[row, 3] = readings[1, second] + readings[3, second] * sin_phi[k]
+        table[row, 4] = wrap_to_pi(roots[0, k])
+        table[row, 5] = 1.0
+    return table
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((_TABLE_OUT, types.float64, types.float64)),
+    TABLE,  # members
+)
+def centred_group(members: FloatArray) -> tuple[FloatArray, float, float]:
+    """``(members - centroid, centroid_x, centroid_y)`` of a group's ``(n, 2)`` ERPs (metres),
+    ``n >= 1``: the centroid as ``np.add.reduce(members, axis=0) / n`` gives it (numpy adds
+    the rows one after the other, from 0.0), ``(n, 2)`` the ERPs relative to it."""
+    count = members.shape[0]
+    sum_x = 0.0
+    sum_y = 0.0
+    for i in range(count):
+        sum_x += members[i, 0]
+        sum_y += members[i, 1]
+    centroid_x = sum_x / count
+    centroid_y = sum_y / count
+    centred = np.empty((count, 2))
+    for i in range(count):
+        centred[i, 0] = members[i, 0] - centroid_x
+        centred[i, 1] = members[i, 1] - centroid_y
+    return centred, centroid_x, centroid_y

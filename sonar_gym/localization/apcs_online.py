@@ -39,7 +39,12 @@ from sonar_gym.localization.apcs import (
     correct_with_checked_wall,
 )
 from sonar_gym.localization.apcs_correction import symmetrized, validated_covariance
-from sonar_gym.localization.apcs_walls import WallMap, fit_group_points, newest_reflection_rows
+from sonar_gym.localization.apcs_walls import (
+    WallMap,
+    fit_group_points,
+    newest_reflection_rows,
+    newest_reflection_table,
+)
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
 from sonar_gym.pose import FloatArray, Pose
@@ -82,8 +87,9 @@ def rejection_reason(match: MatchResult) -> str | None:
         return None
     if match.status == AMBIGUOUS:
         return AMBIGUOUS
-    closest = match.closest_check
-    return "empty_map" if closest is None else closest.reason
+    # the closest check's reason alone, without building the check (only an empty map has none)
+    checks = match.checks
+    return "empty_map" if len(checks) == 0 else checks.closest_reason
 
 
 @dataclass(frozen=True)
@@ -242,12 +248,7 @@ class WallStream:
         self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
     ) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """:meth:`pending_erps` on checked arrays."""
-        if self._previous is None:
-            has_previous, previous = False, (0.0, 0.0, 0.0, 0.0)
-        else:
-            (previous_x, previous_y), previous_direction, previous_range = self._previous
-            has_previous = True
-            previous = (previous_x, previous_y, previous_direction, previous_range)
+        has_previous, previous = self._previous_reading()
         all_positions, directions, all_ranges = apcs_kernels.stream_readings(
             positions, headings, ranges, BEAM_OFFSET_RAD[self.side], has_previous, previous
         )
@@ -258,6 +259,27 @@ class WallStream:
             self.params.sensing_range_m,
             int(has_previous),
         )
+
+    def _pending_rows(
+        self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
+    ) -> list[float]:
+        """:meth:`_pending` with the readings' sensor positions, as the flat list of the rows of
+        :func:`~sonar_gym.localization.apcs_walls.newest_reflection_table` (six floats a
+        reading: :data:`~sonar_gym.localization.apcs_kernels.ERP_COLUMNS`)."""
+        has_previous, previous = self._previous_reading()
+        readings = apcs_kernels.reading_table(
+            positions, headings, ranges, self._beam_offset_rad, has_previous, previous
+        )
+        table = newest_reflection_table(readings, self.params.sensing_range_m, int(has_previous))
+        return table.ravel().tolist()  # type: ignore[no-any-return]
+
+    def _previous_reading(self) -> tuple[bool, tuple[float, float, float, float]]:
+        """Whether a reading is stored, and its ``(x, y, direction, range)`` (metres, radians;
+        zeros without one)."""
+        if self._previous is None:
+            return False, (0.0, 0.0, 0.0, 0.0)
+        (previous_x, previous_y), previous_direction, previous_range = self._previous
+        return True, (previous_x, previous_y, previous_direction, previous_range)
 
     def accept(
         self,
@@ -389,10 +411,10 @@ class WallStream:
 # The Fig. 2 loop
 # --------------------------------------------------------------------------------------------
 
-_PendingRows = tuple[list[float], list[float], list[float], list[bool]]
-"""A side's rows from a reading on, as flat lists: sensor ``x0, y0, x1, ...`` (metres), ERP
-``x0, y0, x1, ...`` (metres), reflection directions (radians), whether the reading gives an
-ERP."""
+# A side's rows from a reading on, as one flat list of floats (WallStream._pending_rows):
+# per reading, the columns of apcs_kernels.ERP_COLUMNS.
+_ROW_WIDTH = len(apcs_kernels.ERP_COLUMNS)
+_SENSOR_X, _SENSOR_Y, _ERP_X, _ERP_Y, _DIRECTION, _VALID = range(_ROW_WIDTH)
 
 
 @dataclass(frozen=True)
@@ -612,20 +634,16 @@ class APCSTracker:
         event = 0
         while event < len(events) and sample_list[events[event][0]] < limit:
             first_sample = events[event][0]
-            pending: dict[str, _PendingRows] = {}
             rows = poses[samples[first_sample:] + 1]
-            for side in sides:
-                sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
-                points, phis, valid = self.streams[side]._pending(
-                    sensor_xy, rows[:, 2], ranges[side][first_sample:]
+            # Flat lists of floats, six a reading: no list per row to allocate.
+            pending: dict[str, list[float]] = {
+                side: self.streams[side]._pending_rows(
+                    _sensor_positions(rows, side, sensor_offset_m),
+                    rows[:, 2],
+                    ranges[side][first_sample:],
                 )
-                # Flat lists of floats (x0, y0, x1, ...): no list per row to allocate.
-                pending[side] = (
-                    sensor_xy.ravel().tolist(),
-                    points.ravel().tolist(),
-                    phis.tolist(),
-                    valid.tolist(),
-                )
+                for side in sides
+            }
             headings = rows[:, 2].tolist()
             # WallStream.accept on plain floats. Each side's latest reading (its sample) is
             # stored in its stream only where the stored reading is read: before a verified
@@ -636,13 +654,13 @@ class APCSTracker:
                 m, side = events[event]
                 event += 1
                 unstored[side] = m
-                _, erp_coordinates, erp_phis, erp_valid = pending[side]
-                row = m - first_sample
-                if not erp_valid[row]:
+                erp_rows = pending[side]
+                at = _ROW_WIDTH * (m - first_sample)
+                if erp_rows[at + _VALID] == 0.0:
                     continue
-                point_x, point_y = erp_coordinates[2 * row], erp_coordinates[2 * row + 1]
+                point_x, point_y = erp_rows[at + _ERP_X], erp_rows[at + _ERP_Y]
                 result.erps.append((point_x, point_y, side))
-                closed = self.streams[side]._grouped(point_x, point_y, erp_phis[row])
+                closed = self.streams[side]._grouped(point_x, point_y, erp_rows[at + _DIRECTION])
                 if closed:
                     walls = self._verified_walls(side, closed, result)
                     # Only a verified wall reads the estimate (most closed groups are dropped);
@@ -685,9 +703,12 @@ class APCSTracker:
         order; the others are counted in ``result.dropped``, as :meth:`handle_groups` counts
         them (it only counts a dropped group, so its verdict object is not built)."""
         stream = self.streams[side]
+        min_group_size = self.params.min_group_size
         walls = []
         for group in closed:
-            verdict = stream._wall_verdict(group)
+            # most closed groups are too small to fit: dropped without a call
+            too_small = len(group[0]) < min_group_size
+            verdict = None if too_small else stream._wall_verdict(group)
             if verdict is None:
                 result.dropped[side] += 1
             else:
@@ -697,7 +718,7 @@ class APCSTracker:
     def _store_readings(
         self,
         unstored: dict[str, int],
-        pending: Mapping[str, _PendingRows],
+        pending: Mapping[str, list[float]],
         headings: list[float],
         range_lists: Mapping[str, list[float]],
         first_sample: int,
@@ -706,11 +727,12 @@ class APCSTracker:
         (:meth:`WallStream._remember`), from the plain-float rows of a pass of
         :meth:`run_unchecked` that starts at sample ``first_sample``; ``unstored`` is emptied."""
         for side, m in unstored.items():
-            sensor_coordinates = pending[side][0]
+            erp_rows = pending[side]
             row = m - first_sample
+            at = _ROW_WIDTH * row
             self.streams[side]._remember(
-                sensor_coordinates[2 * row],
-                sensor_coordinates[2 * row + 1],
+                erp_rows[at + _SENSOR_X],
+                erp_rows[at + _SENSOR_Y],
                 headings[row],
                 range_lists[side][m],
             )

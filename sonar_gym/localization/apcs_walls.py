@@ -28,6 +28,7 @@ from typing import Literal, overload
 
 import numpy as np
 import numpy.typing as npt
+from numpy.linalg import _umath_linalg
 
 from sonar_gym.localization import apcs_kernels, apcs_match_kernels
 from sonar_gym.pose import FloatArray, wrap_angles
@@ -535,6 +536,41 @@ def newest_reflection_rows(
     )
 
 
+def newest_reflection_table(
+    readings: FloatArray, valid_range_m: tuple[float, float], skipped: int
+) -> FloatArray:
+    """:func:`newest_reflection_rows` with each reading's sensor position, as one table.
+
+    Args:
+        readings: ``(4, N)`` sensor positions (metres in {W}), beam-axis directions (radians)
+            and ranges (metres, NaN for a dropout), as
+            :func:`~sonar_gym.localization.apcs_kernels.reading_table` gives them.
+        valid_range_m: ranges outside are dropouts, metres.
+        skipped: 0 or 1, the readings before the first row.
+
+    Returns:
+        ``(N - skipped, 6)`` rows of
+        :data:`~sonar_gym.localization.apcs_kernels.ERP_COLUMNS`: the sensor position, the
+        ERP and its direction as :func:`newest_reflection_rows` gives them, and whether there
+        is one (1.0 or 0.0).
+    """
+    low, high = valid_range_m
+    # numpy's sine and cosine act element by element: those of the first and the second
+    # reading of every pair are those of all the readings.
+    directions = readings[2]
+    pairs = apcs_kernels.pair_table(readings, low, high, np.sin(directions), np.cos(directions))
+    roots = apcs_kernels.root_table(
+        pairs,
+        np.arctan2(pairs[0], pairs[1]),  # alpha of eqs (5)-(6)
+        np.arccos(pairs[2]),  # the offset of the roots of eq. (4)
+        np.arctan2(pairs[4], pairs[5]),  # the pair's mean beam axis
+    )
+    phi = roots[0]
+    return apcs_kernels.erp_table(  # type: ignore[no-any-return]
+        readings, roots, np.cos(phi), np.sin(phi), skipped
+    )
+
+
 def _chosen_roots(
     positions: FloatArray,
     directions: FloatArray,
@@ -781,6 +817,23 @@ def fit_wall_group(
     )
 
 
+def symmetric_eigh(scatter: FloatArray) -> tuple[list[float], FloatArray]:
+    """``np.linalg.eigh(scatter)`` of a finite float64 ``(2, 2)`` scatter matrix (m^2): the
+    eigenvalues, ascending, as floats and the eigenvectors as the columns of an array.
+
+    The LAPACK routine ``np.linalg.eigh`` calls (its ``eigh_lo`` ufunc, on the lower
+    triangle), called directly: the same bits, without the wrapper's checks and error-state
+    switch, which cost several times the routine on a 2 x 2 matrix. Where the routine does not
+    converge it returns NaN; ``np.linalg.eigh`` is then called, to raise its error.
+    """
+    values, vectors = _umath_linalg.eigh_lo(scatter, signature="d->dd")
+    eigenvalues: list[float] = values.tolist()
+    if not all(map(math.isfinite, eigenvalues)):
+        values, vectors = np.linalg.eigh(scatter)
+        eigenvalues = values.tolist()
+    return eigenvalues, vectors
+
+
 def fit_group_points(
     members: FloatArray,
     directions: FloatArray | None,
@@ -796,11 +849,10 @@ def fit_group_points(
             for plain points.
         indices: the group's positions in the ERP sequence (kept in the verdict).
     """
-    centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
-    centred = members - centroid
+    # members.mean(axis=0), as it sums, and the ERPs relative to it, in one compiled loop
+    centred, centroid_x, centroid_y = apcs_kernels.centred_group(members)
     scatter = centred.T @ centred / len(indices)
-    values, eigenvectors = np.linalg.eigh(scatter)
-    eigenvalues: list[float] = values.tolist()  # ascending
+    eigenvalues, eigenvectors = symmetric_eigh(scatter)  # ascending
     residual_variance = max(eigenvalues[0], 0.0)
     if residual_variance >= params.variance_threshold_m2:
         return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
@@ -824,7 +876,6 @@ def fit_group_points(
     extent_start, extent_end = min(positions_along), max(positions_along)
     if extent_end - extent_start <= ZERO_LENGTH_M:
         return WallFit(GROUP_ZERO_LENGTH, indices, residual_variance)
-    centroid_x, centroid_y = centroid.tolist()
     start = (centroid_x + extent_start * along_x, centroid_y + extent_start * along_y)  # T_s
     end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
     # floats from the fit, a tuple of ints: what the constructor's conversions would give
@@ -1086,6 +1137,25 @@ class WallChecks(Sequence[WallCheck]):
             for index, passed in enumerate(self._conditions.tolist())
             if (reason := _FIRST_FAILED[tuple(passed)]) is not None
         }
+
+    def rejection_summary(self) -> str:
+        """``"index: reason"`` of every wall in :attr:`rejections`, in map order, joined by
+        ``", "`` (the list a no-match message gives), without building the dict."""
+        return ", ".join(
+            [
+                f"{index}: {reason}"
+                for index, passed in enumerate(self._conditions.tolist())
+                if (reason := _FIRST_FAILED[tuple(passed)]) is not None
+            ]
+        )
+
+    @property
+    def closest_reason(self) -> str | None:
+        """The :attr:`~WallCheck.reason` of :attr:`closest` (``None`` for an empty map),
+        without building the check."""
+        if self._closest < 0:
+            return None
+        return _FIRST_FAILED[tuple(self._conditions[self._closest].tolist())]
 
     @property
     def closest(self) -> WallCheck | None:

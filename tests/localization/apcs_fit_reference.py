@@ -1,6 +1,10 @@
 """:func:`sonar_gym.localization.apcs_walls.fit_group_points` as it was written with numpy
 arrays throughout (``np.linalg.eigh``, array end points): the form its float glue replaced,
-kept as the tests' reference."""
+kept as the tests' reference.
+
+:func:`fit_group_points_numpy_glue` is the float-glue form as it was before the centroid moved
+into a compiled loop and ``eigh`` was called as its LAPACK ufunc.
+"""
 
 from __future__ import annotations
 
@@ -52,4 +56,57 @@ def fit_group_points_arrays(
     start = centroid + extent_start * along
     end = centroid + extent_end * along
     wall = DetectedWall(tuple(start.tolist()), tuple(end.tolist()), indices, residual_variance)
+    return WallFit(GROUP_OK, indices, residual_variance, wall)
+
+
+def fit_group_points_numpy_glue(
+    members: FloatArray,
+    directions: FloatArray | None,
+    indices: tuple[int, ...],
+    params: APCSParameters = DEFAULT_PARAMETERS,
+) -> WallFit:
+    """:func:`~sonar_gym.localization.apcs_walls.fit_wall_group` of a group given as its own
+    points, on checked inputs, as it was written with numpy's centroid, ``np.linalg.eigh`` and
+    float glue.
+
+    Args:
+        members: ``(n, 2)`` the group's ERPs, finite, metres in {W}, with
+            ``n >= params.min_group_size``.
+        directions: ``(n,)`` their reflection directions, radians in (-pi, pi], or ``None``
+            for plain points.
+        indices: the group's positions in the ERP sequence (kept in the verdict).
+    """
+    centroid = np.add.reduce(members, axis=0) / len(members)  # members.mean(axis=0), as it sums
+    centred = members - centroid
+    scatter = centred.T @ centred / len(indices)
+    values, eigenvectors = np.linalg.eigh(scatter)
+    eigenvalues: list[float] = values.tolist()  # ascending
+    residual_variance = max(eigenvalues[0], 0.0)
+    if residual_variance >= params.variance_threshold_m2:
+        return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
+
+    along = eigenvectors[:, 1]
+    along_x, along_y = along.tolist()
+    occupied_side = np.array([-along_y, along_x])  # left of `along`
+    if directions is not None:
+        # np.add.reduce is what ndarray.sum calls, without its Python wrapper
+        towards_wall = np.array(
+            [np.add.reduce(np.cos(directions)), np.add.reduce(np.sin(directions))]
+        )
+        flip = float(occupied_side @ towards_wall) < 0.0
+    else:
+        flip = float((centred[-1] - centred[0]) @ along) < 0.0
+    if flip:
+        along = -along
+        along_x, along_y = -along_x, -along_y
+
+    positions_along = (centred @ along).tolist()
+    extent_start, extent_end = min(positions_along), max(positions_along)
+    if extent_end - extent_start <= ZERO_LENGTH_M:
+        return WallFit(GROUP_ZERO_LENGTH, indices, residual_variance)
+    centroid_x, centroid_y = centroid.tolist()
+    start = (centroid_x + extent_start * along_x, centroid_y + extent_start * along_y)  # T_s
+    end = (centroid_x + extent_end * along_x, centroid_y + extent_end * along_y)  # T_e
+    # floats from the fit, a tuple of ints: what the constructor's conversions would give
+    wall = DetectedWall.unchecked(start, end, indices, residual_variance)
     return WallFit(GROUP_OK, indices, residual_variance, wall)

@@ -1,7 +1,8 @@
 """:meth:`sonar_gym.localization.apcs_online.APCSTracker.run_unchecked` as it was written when
 every closed group, dropped or not, was built with its verdict and handed to
 :meth:`~sonar_gym.localization.apcs_online.APCSTracker.handle_groups` (which only counts a
-dropped one): the form the tracker's loop replaced, kept as the tests' reference."""
+dropped one): the form the tracker's loop replaced, kept as the tests' reference, with the
+tracker's way of storing the readings of that time (its rows as separate flat lists)."""
 
 from __future__ import annotations
 
@@ -14,11 +15,38 @@ from sonar_gym.localization.apcs_online import (
     SIDE_NAMES,
     APCSTracker,
     RunResult,
-    _PendingRows,
     _sensor_positions,
 )
 from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
 from sonar_gym.pose import FloatArray, Pose
+
+_PendingRows = tuple[list[float], list[float], list[float], list[bool]]
+"""A side's rows from a reading on, as flat lists: sensor ``x0, y0, x1, ...`` (metres), ERP
+``x0, y0, x1, ...`` (metres), reflection directions (radians), whether the reading gives an
+ERP."""
+
+
+def _store_readings(
+    self: APCSTracker,
+    unstored: dict[str, int],
+    pending: Mapping[str, _PendingRows],
+    headings: list[float],
+    range_lists: Mapping[str, list[float]],
+    first_sample: int,
+) -> None:
+    """Store each side's latest reading (``unstored``: side -> its sample) in its stream
+    (:meth:`WallStream._remember`), from the plain-float rows of a pass of
+    :meth:`run_unchecked` that starts at sample ``first_sample``; ``unstored`` is emptied."""
+    for side, m in unstored.items():
+        sensor_coordinates = pending[side][0]
+        row = m - first_sample
+        self.streams[side]._remember(
+            sensor_coordinates[2 * row],
+            sensor_coordinates[2 * row + 1],
+            headings[row],
+            range_lists[side][m],
+        )
+    unstored.clear()
 
 
 def run_unchecked_reference(
@@ -85,11 +113,11 @@ def run_unchecked_reference(
                 # Only a verified wall reads the estimate (most closed groups are dropped);
                 # the end of the run sets it in any case.
                 if any(group.fit.wall is not None for group in groups):
-                    self._store_readings(unstored, pending, headings, range_lists, first_sample)
+                    _store_readings(self, unstored, pending, headings, range_lists, first_sample)
                     self.estimate = Pose.unchecked(*poses[command + 1].tolist())
                     self.covariance = covariances[command + 1]
                 corrected = self.handle_groups(side, groups, command, result)
-        self._store_readings(unstored, pending, headings, range_lists, first_sample)
+        _store_readings(self, unstored, pending, headings, range_lists, first_sample)
         if corrected:
             command = sample_list[events[event - 1][0]]
             later_stops = [stop for stop in stops if stop > command]

@@ -1,5 +1,6 @@
 """The verdict of :func:`fit_group_points` on float glue has exactly the bits of the numpy-array
-form it replaced (Yamamoto et al. sec. 4.2.2-4.2.3, Fig. 6)."""
+form it replaced and of its float-glue form before the compiled centroid (Yamamoto et al.
+sec. 4.2.2-4.2.3, Fig. 6)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,10 @@ from sonar_gym.localization.apcs_walls import (
     fit_group_points,
 )
 from sonar_gym.pose import wrap_angles
-from tests.localization.apcs_fit_reference import fit_group_points_arrays
+from tests.localization.apcs_fit_reference import (
+    fit_group_points_arrays,
+    fit_group_points_numpy_glue,
+)
 from tests.localization.float_bits import canonical
 
 
@@ -58,6 +62,8 @@ def _check(members: np.ndarray, directions: np.ndarray | None, params: APCSParam
         warnings.simplefilter("error")
         got = fit_group_points(members, directions, indices, params)
     assert _bits(got) == _bits(expected), (members.tolist(), directions)
+    glue = fit_group_points_numpy_glue(members, directions, indices, params)
+    assert _bits(got) == _bits(glue), (members.tolist(), directions)
     return got.status
 
 
