@@ -28,7 +28,6 @@ from typing import Literal, overload
 
 import numpy as np
 import numpy.typing as npt
-from numpy.linalg import _umath_linalg
 
 from sonar_gym.localization import apcs_kernels, apcs_match_kernels
 from sonar_gym.pose import FloatArray, wrap_angles
@@ -817,23 +816,6 @@ def fit_wall_group(
     )
 
 
-def symmetric_eigh(scatter: FloatArray) -> tuple[list[float], FloatArray]:
-    """``np.linalg.eigh(scatter)`` of a finite float64 ``(2, 2)`` scatter matrix (m^2): the
-    eigenvalues, ascending, as floats and the eigenvectors as the columns of an array.
-
-    The LAPACK routine ``np.linalg.eigh`` calls (its ``eigh_lo`` ufunc, on the lower
-    triangle), called directly: the same bits, without the wrapper's checks and error-state
-    switch, which cost several times the routine on a 2 x 2 matrix. Where the routine does not
-    converge it returns NaN; ``np.linalg.eigh`` is then called, to raise its error.
-    """
-    values, vectors = _umath_linalg.eigh_lo(scatter, signature="d->dd")
-    eigenvalues: list[float] = values.tolist()
-    if not all(map(math.isfinite, eigenvalues)):
-        values, vectors = np.linalg.eigh(scatter)
-        eigenvalues = values.tolist()
-    return eigenvalues, vectors
-
-
 def fit_group_points(
     members: FloatArray,
     directions: FloatArray | None,
@@ -852,7 +834,8 @@ def fit_group_points(
     # members.mean(axis=0), as it sums, and the ERPs relative to it, in one compiled loop
     centred, centroid_x, centroid_y = apcs_kernels.centred_group(members)
     scatter = centred.T @ centred / len(indices)
-    eigenvalues, eigenvectors = symmetric_eigh(scatter)  # ascending
+    values, eigenvectors = np.linalg.eigh(scatter)
+    eigenvalues: list[float] = values.tolist()  # ascending
     residual_variance = max(eigenvalues[0], 0.0)
     if residual_variance >= params.variance_threshold_m2:
         return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
