@@ -1,32 +1,28 @@
 """Compiled inner loops of APCS's estimated reflection points (Yamamoto et al., eqs 1-6).
 
-:func:`sonar_gym.localization.apcs_walls.newest_reflection_points` runs on the few dozen
-readings a side sonar takes over a motion command, where numpy's per-call cost of the array
-form (:func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` and
+A side sonar takes a few dozen readings over a motion command, where numpy's per-call cost of
+the array form (:func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` and
 ``_newest_points``, about 35 calls) is most of the time. These loops do that form's elementwise
 arithmetic element by element, in the same order, so they return the same bits (see
 :mod:`sonar_gym.sonar.kernels` for why elementwise steps agree). The trigonometry stays in
 numpy, between the loops (its ``sin``, ``cos``, ``arctan2`` and ``arccos`` of arrays round
-differently from libm's): callers pass it in.
+differently from libm's): callers pass it in. Each loop returns one table (each array a loop
+returns costs a Python object), the rows numpy's trigonometry reads contiguous.
 
-:func:`stream_readings` puts a side stream's stored reading before a run of new ones. The
-three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings:
+:func:`reading_table` puts a side stream's stored reading before a run of new ones. The
+three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings
+(:func:`~sonar_gym.localization.apcs_walls.newest_reflection_table` runs them):
 
-1. :func:`pair_geometry`: the eq. (4) inputs per pair (``sin alpha``, ``cos alpha`` of
+1. :func:`pair_table`: the eq. (4) inputs per pair (``sin alpha``, ``cos alpha`` of
    eqs (5)-(6), the cosine of the root's offset, whether a root exists) and the summed beam
    axes whose ``arctan2`` is the mean beam axis;
-2. :func:`chosen_roots`: the two roots of eq. (4), the one nearer the beam axis, for the pairs
+2. :func:`root_table`: the two roots of eq. (4), the one nearer the beam axis, for the pairs
    that have one;
-3. :func:`newest_rows`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
+3. :func:`erp_table`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
    reading.
 
 :func:`wrapped_angles` wraps a closed group's reflection directions before its fit, and
 :func:`centred_group` gives the group's centroid and its ERPs relative to it.
-
-The on-line tracker (:class:`~sonar_gym.localization.apcs_online.APCSTracker`) runs the same
-loops as :func:`reading_table`, :func:`pair_table`, :func:`root_table` and :func:`erp_table`,
-each returning one table instead of several arrays (each array a loop returns costs a Python
-object), the rows numpy's trigonometry reads contiguous.
 
 Positions are metres in {W}, angles radians counter-clockwise from the {W} x-axis.
 """
@@ -38,207 +34,15 @@ import math
 import numpy as np
 from numba import types
 
-from sonar_gym.compiled import FLAGS, INDICES, NUMBERS, TABLE, compiled, wrap_to_pi
+from sonar_gym.compiled import NUMBERS, TABLE, compiled, wrap_to_pi
 from sonar_gym.pose import FloatArray
 
 _VECTOR_OUT = types.Array(types.float64, 1, "C")
 _TABLE_OUT = types.Array(types.float64, 2, "C")
-_FLAGS_OUT = types.Array(types.boolean, 1, "C")
-_INDICES_OUT = types.Array(types.int64, 1, "C")
 
 # Below this, the sensor did not move between two readings (metres):
 # apcs_walls.ZERO_LENGTH_M, repeated here so that the loops do not import the wall module.
 _ZERO_LENGTH_M = 1e-9
-
-
-@compiled(  # type: ignore[misc]
-    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _VECTOR_OUT)),
-    TABLE,  # positions
-    NUMBERS,  # headings
-    NUMBERS,  # ranges
-    types.float64,  # beam_offset
-    types.boolean,  # has_previous
-    types.UniTuple(types.float64, 4),  # previous
-)
-def stream_readings(
-    positions: FloatArray,
-    headings: FloatArray,
-    ranges: FloatArray,
-    beam_offset: float,
-    has_previous: bool,
-    previous: tuple[float, float, float, float],
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``(positions, directions, ranges)`` of a run of ``n`` readings, after the stream's
-    previous reading if ``has_previous``: ``(n + 1, 2)`` (or ``(n, 2)``) sensor positions
-    (metres), beam-axis directions ``heading + beam_offset`` (radians) and ranges (metres).
-
-    Args:
-        positions: ``(n, 2)`` sensor positions; ``headings`` ``(n,)`` robot headings;
-            ``ranges`` ``(n,)`` ranges (NaN for a dropout).
-        beam_offset: the side's beam axis relative to the heading, radians.
-        previous: the previous reading's ``(x, y, direction, range)``; ignored without one.
-    """
-    count = positions.shape[0]
-    first = 1 if has_previous else 0
-    all_positions = np.empty((count + first, 2))
-    directions = np.empty(count + first)
-    all_ranges = np.empty(count + first)
-    if has_previous:
-        all_positions[0, 0], all_positions[0, 1] = previous[0], previous[1]
-        directions[0], all_ranges[0] = previous[2], previous[3]
-    for i in range(count):
-        all_positions[first + i, 0] = positions[i, 0]
-        all_positions[first + i, 1] = positions[i, 1]
-        directions[first + i] = headings[i] + beam_offset
-        all_ranges[first + i] = ranges[i]
-    return all_positions, directions, all_ranges
-
-
-@compiled(  # type: ignore[misc]
-    types.Tuple((_VECTOR_OUT, _VECTOR_OUT, _VECTOR_OUT, _FLAGS_OUT, _VECTOR_OUT, _VECTOR_OUT)),
-    TABLE,  # positions
-    NUMBERS,  # ranges
-    types.float64,  # low
-    types.float64,  # high
-    NUMBERS,  # first_sin
-    NUMBERS,  # second_sin
-    NUMBERS,  # first_cos
-    NUMBERS,  # second_cos
-)
-def pair_geometry(
-    positions: FloatArray,
-    ranges: FloatArray,
-    low: float,
-    high: float,
-    first_sin: FloatArray,
-    second_sin: FloatArray,
-    first_cos: FloatArray,
-    second_cos: FloatArray,
-) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray, FloatArray, FloatArray]:
-    """Per pair of consecutive readings: ``(sin alpha, cos alpha, cosine, solvable, beam y,
-    beam x)``, each ``(N - 1,)``.
-
-    ``alpha`` is that of eqs (5)-(6) (``arctan2(sin alpha, cos alpha)``); ``cosine`` is
-    ``-(r2 - r1) / |P1P2|``, whose ``arccos`` is the offset of the roots of eq. (4), 0 where
-    ``solvable`` is False (a dropout, a range outside ``[low, high]``, no motion or
-    ``|r2 - r1| > |P1P2|``); ``arctan2(beam y, beam x)`` is the mean beam axis of the pair.
-    As :func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` on the ranges
-    with those outside ``[low, high]`` made NaN.
-
-    Args:
-        positions: ``(N, 2)`` sensor positions, metres in {W}.
-        ranges: ``(N,)`` ranges, metres (NaN or inf for a dropout).
-        low, high: the valid ranges, metres.
-        first_sin, second_sin, first_cos, second_cos: ``(N - 1,)`` numpy's ``sin`` and ``cos``
-            of the beam-axis directions of the first and the second reading of each pair.
-    """
-    count = positions.shape[0] - 1
-    sin_alpha = np.empty(count)
-    cos_alpha = np.empty(count)
-    cosine = np.empty(count)
-    solvable = np.empty(count, dtype=np.bool_)
-    beam_y = np.empty(count)
-    beam_x = np.empty(count)
-    for i in range(count):
-        dx = positions[i + 1, 0] - positions[i, 0]
-        dy = positions[i + 1, 1] - positions[i, 1]
-        baseline = math.sqrt(dy * dy + dx * dx)  # |P1P2|, the corrected root of eq. (4)
-        moved = baseline > _ZERO_LENGTH_M
-        safe_baseline = baseline if moved else 1.0
-        sin_alpha[i] = dx / safe_baseline  # eq. (5)
-        cos_alpha[i] = dy / safe_baseline  # eq. (6)
-        first, second = ranges[i], ranges[i + 1]
-        ranged = (
-            low <= first <= high
-            and low <= second <= high
-            and math.isfinite(first)
-            and math.isfinite(second)
-        )
-        range_step = (second if ranged else 0.0) - (first if ranged else 0.0)
-        value = -range_step / safe_baseline
-        solvable[i] = ranged and moved and abs(value) <= 1.0
-        cosine[i] = value if solvable[i] else 0.0
-        beam_y[i] = first_sin[i] + second_sin[i]
-        beam_x[i] = first_cos[i] + second_cos[i]
-    return sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x
-
-
-@compiled(  # type: ignore[misc]
-    types.Tuple((_VECTOR_OUT, _INDICES_OUT)),
-    NUMBERS,  # alpha
-    NUMBERS,  # offset
-    NUMBERS,  # beam_axis
-    FLAGS,  # solvable
-)
-def chosen_roots(
-    alpha: FloatArray, offset: FloatArray, beam_axis: FloatArray, solvable: np.ndarray
-) -> tuple[FloatArray, np.ndarray]:
-    """``(phi, pairs)``: of the roots ``pi/2 - alpha +- offset`` of eq. (4) (wrapped to
-    (-pi, pi]), the one nearer ``beam_axis`` (``+`` on a tie), for each pair that has one,
-    and the indices of those pairs. Radians; inputs ``(N - 1,)``."""
-    count = 0
-    for i in range(solvable.shape[0]):
-        if solvable[i]:
-            count += 1
-    phi = np.empty(count)
-    pairs = np.empty(count, dtype=np.int64)
-    k = 0
-    for i in range(solvable.shape[0]):
-        if not solvable[i]:
-            continue
-        phi_plus = wrap_to_pi(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
-        phi_minus = wrap_to_pi(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
-        off_axis_plus = abs(wrap_to_pi(phi_plus - beam_axis[i]))
-        off_axis_minus = abs(wrap_to_pi(phi_minus - beam_axis[i]))
-        phi[k] = phi_plus if off_axis_plus <= off_axis_minus else phi_minus
-        pairs[k] = i
-        k += 1
-    return phi, pairs
-
-
-@compiled(  # type: ignore[misc]
-    types.Tuple((_TABLE_OUT, _VECTOR_OUT, _FLAGS_OUT)),
-    TABLE,  # positions
-    NUMBERS,  # ranges
-    NUMBERS,  # phi
-    INDICES,  # pairs
-    NUMBERS,  # cos_phi
-    NUMBERS,  # sin_phi
-    types.int64,  # skipped
-)
-def newest_rows(
-    positions: FloatArray,
-    ranges: FloatArray,
-    phi: FloatArray,
-    pairs: np.ndarray,
-    cos_phi: FloatArray,
-    sin_phi: FloatArray,
-    skipped: int,
-) -> tuple[FloatArray, FloatArray, np.ndarray]:
-    """The ERPs ``R2`` of the ``K`` pairs, eqs (2)-(3), as one row per reading from reading
-    ``skipped`` on: ``(points (N - skipped, 2), directions (N - skipped,), valid
-    (N - skipped,))``, zero where the reading gives no ERP; ``phi`` wrapped by ``wrap_angles``
-    once more, as :class:`~sonar_gym.localization.apcs_walls.EstimatedReflectionPoints` stores
-    it.
-
-    Args:
-        positions: ``(N, 2)`` sensor positions, metres in {W}; ``ranges`` ``(N,)`` metres.
-        phi, pairs: :func:`chosen_roots`' output.
-        cos_phi, sin_phi: numpy's ``cos`` and ``sin`` of ``phi``.
-        skipped: 0 or 1, the readings before the first row.
-    """
-    rows = positions.shape[0] - skipped
-    points = np.zeros((rows, 2))
-    directions = np.zeros(rows)
-    valid = np.zeros(rows, dtype=np.bool_)
-    for k in range(pairs.shape[0]):
-        second = pairs[k] + 1
-        row = second - skipped
-        points[row, 0] = positions[second, 0] + ranges[second] * cos_phi[k]
-        points[row, 1] = positions[second, 1] + ranges[second] * sin_phi[k]
-        directions[row] = wrap_to_pi(phi[k])
-        valid[row] = True
-    return points, directions, valid
 
 
 @compiled(_VECTOR_OUT, NUMBERS)  # type: ignore[misc]
@@ -251,15 +55,11 @@ def wrapped_angles(angles: FloatArray) -> FloatArray:
     return wrapped
 
 
-# A run of readings as one table, for the on-line tracker: the loops above, each returning one
-# array, in the same arithmetic.
-
 READING_ROWS = ("x", "y", "direction", "range")
 """The rows of :func:`reading_table`'s output: sensor position (metres), beam-axis direction
 (radians) and range (metres)."""
 PAIR_ROWS = ("sin_alpha", "cos_alpha", "cosine", "solvable", "beam_y", "beam_x")
-"""The rows of :func:`pair_table`'s output, :func:`pair_geometry`'s outputs in order
-(``solvable`` as 1.0 or 0.0)."""
+"""The rows of :func:`pair_table`'s output (``solvable`` as 1.0 or 0.0)."""
 ERP_COLUMNS = ("sensor_x", "sensor_y", "erp_x", "erp_y", "direction", "valid")
 """The columns of :func:`erp_table`'s output: the reading's sensor position (metres), its ERP
 (metres), the reflection direction (radians) and whether it gives an ERP (1.0 or 0.0)."""
@@ -282,8 +82,16 @@ def reading_table(
     has_previous: bool,
     previous: tuple[float, float, float, float],
 ) -> FloatArray:
-    """:func:`stream_readings` as one ``(4, N)`` table, rows :data:`READING_ROWS`, each row
-    contiguous (``N = n + 1`` with a previous reading, else ``n``)."""
+    """A run of ``n`` readings, after the stream's previous reading if ``has_previous``, as
+    one ``(4, N)`` table, rows :data:`READING_ROWS`, each row contiguous (``N = n + 1`` with a
+    previous reading, else ``n``); the direction is ``heading + beam_offset``.
+
+    Args:
+        positions: ``(n, 2)`` sensor positions; ``headings`` ``(n,)`` robot headings;
+            ``ranges`` ``(n,)`` ranges (NaN for a dropout).
+        beam_offset: the side's beam axis relative to the heading, radians.
+        previous: the previous reading's ``(x, y, direction, range)``; ignored without one.
+    """
     count = positions.shape[0]
     first = 1 if has_previous else 0
     table = np.empty((4, count + first))
@@ -309,8 +117,15 @@ def reading_table(
 def pair_table(
     readings: FloatArray, low: float, high: float, sines: FloatArray, cosines: FloatArray
 ) -> FloatArray:
-    """:func:`pair_geometry` of the readings of a :func:`reading_table` as one
+    """Per pair of consecutive readings of a :func:`reading_table`, one column of a
     ``(6, max(N - 1, 0))`` table, rows :data:`PAIR_ROWS`, each row contiguous.
+
+    ``alpha`` is that of eqs (5)-(6) (``arctan2(sin alpha, cos alpha)``); ``cosine`` is
+    ``-(r2 - r1) / |P1P2|``, whose ``arccos`` is the offset of the roots of eq. (4), 0 where
+    ``solvable`` is 0.0 (a dropout, a range outside ``[low, high]``, no motion or
+    ``|r2 - r1| > |P1P2|``); ``arctan2(beam y, beam x)`` is the mean beam axis of the pair.
+    As :func:`~sonar_gym.localization.apcs_walls.reflection_direction_candidates` on the ranges
+    with those outside ``[low, high]`` made NaN.
 
     Args:
         readings: ``(4, N)`` a :func:`reading_table`.
@@ -354,13 +169,15 @@ def pair_table(
 def root_table(
     pairs: FloatArray, alpha: FloatArray, offset: FloatArray, beam_axis: FloatArray
 ) -> FloatArray:
-    """:func:`chosen_roots` of a :func:`pair_table` as one ``(2, K)`` table: the chosen
-    roots ``phi`` (radians) and the indices of their pairs (as floats, exact), each row
-    contiguous.
+    """Of the roots ``pi/2 - alpha +- offset`` of eq. (4) (wrapped to (-pi, pi]), the one
+    nearer ``beam_axis`` (``+`` on a tie), for each of the ``K`` pairs of a :func:`pair_table`
+    that has one, as one ``(2, K)`` table: the chosen roots ``phi`` (radians) and the indices
+    of their pairs (as floats, exact), each row contiguous.
 
     Args:
         pairs: ``(6, N - 1)`` a :func:`pair_table`.
-        alpha, offset, beam_axis: ``(N - 1,)`` as :func:`chosen_roots` takes them.
+        alpha, offset, beam_axis: ``(N - 1,)`` numpy's ``arctan2`` and ``arccos`` of its rows:
+            ``alpha``, the roots' offset and the mean beam axis, radians.
     """
     count = 0
     for i in range(pairs.shape[1]):
@@ -392,9 +209,12 @@ def root_table(
 def erp_table(
     readings: FloatArray, roots: FloatArray, cos_phi: FloatArray, sin_phi: FloatArray, skipped: int
 ) -> FloatArray:
-    """:func:`newest_rows` of a :func:`root_table` with each reading's sensor position, as one
-    ``(N - skipped, 6)`` table, columns :data:`ERP_COLUMNS` (zero ERP, direction and valid where
-    the reading gives no ERP).
+    """The ERPs ``R2 = P2 + r2 (cos phi, sin phi)`` (eqs (2)-(3)) of the pairs of a
+    :func:`root_table` with each reading's sensor position, as one row per reading from
+    reading ``skipped`` on: a ``(N - skipped, 6)`` table, columns :data:`ERP_COLUMNS` (zero ERP,
+    direction and valid where the reading gives no ERP); ``phi`` wrapped by ``wrap_angles``
+    once more, as :class:`~sonar_gym.localization.apcs_walls.EstimatedReflectionPoints` stores
+    it.
 
     Args:
         readings: ``(4, N)`` a :func:`reading_table`.

@@ -42,8 +42,8 @@ from sonar_gym.localization.apcs_correction import symmetrized, validated_covari
 from sonar_gym.localization.apcs_walls import (
     WallMap,
     fit_group_points,
-    newest_reflection_rows,
     newest_reflection_table,
+    reflection_rows_of_table,
 )
 from sonar_gym.localization.result import OK
 from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
@@ -249,15 +249,11 @@ class WallStream:
     ) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """:meth:`pending_erps` on checked arrays."""
         has_previous, previous = self._previous_reading()
-        all_positions, directions, all_ranges = apcs_kernels.stream_readings(
-            positions, headings, ranges, BEAM_OFFSET_RAD[self.side], has_previous, previous
+        readings = apcs_kernels.reading_table(
+            positions, headings, ranges, self._beam_offset_rad, has_previous, previous
         )
-        return newest_reflection_rows(
-            all_positions,
-            directions,
-            all_ranges,
-            self.params.sensing_range_m,
-            int(has_previous),
+        return reflection_rows_of_table(
+            newest_reflection_table(readings, self.params.sensing_range_m, int(has_previous))
         )
 
     def _pending_rows(

@@ -529,10 +529,11 @@ def newest_reflection_rows(
     if len(positions) < 2:
         rows = len(positions) - skipped
         return np.zeros((rows, 2)), np.zeros(rows), np.zeros(rows, dtype=bool)
-    phi, pairs = _chosen_roots(positions, directions, ranges, valid_range_m)
-    return apcs_kernels.newest_rows(
-        positions, ranges, phi, pairs, np.cos(phi), np.sin(phi), skipped
-    )
+    readings = np.empty((4, len(positions)))  # the rows of apcs_kernels.READING_ROWS
+    readings[0:2] = positions.T
+    readings[2] = directions
+    readings[3] = ranges
+    return reflection_rows_of_table(newest_reflection_table(readings, valid_range_m, skipped))
 
 
 def newest_reflection_table(
@@ -570,28 +571,13 @@ def newest_reflection_table(
     )
 
 
-def _chosen_roots(
-    positions: FloatArray,
-    directions: FloatArray,
-    ranges: FloatArray,
-    valid_range_m: tuple[float, float],
-) -> tuple[FloatArray, IntArray]:
-    """``(phi, pairs)`` of ``_newest_points`` on checked inputs (``N >= 2``), with the ranges
-    outside ``valid_range_m`` taken as dropouts: the loops of
-    :mod:`~sonar_gym.localization.apcs_kernels` with numpy's trigonometry between them."""
-    low, high = valid_range_m
-    # numpy's sine and cosine act element by element: those of the first and the second
-    # reading of every pair are slices of those of all the readings.
-    sines, cosines = np.sin(directions), np.cos(directions)
-    sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x = apcs_kernels.pair_geometry(
-        positions, ranges, low, high, sines[:-1], sines[1:], cosines[:-1], cosines[1:]
-    )
-    return apcs_kernels.chosen_roots(  # type: ignore[no-any-return]
-        np.arctan2(sin_alpha, cos_alpha),  # alpha of eqs (5)-(6)
-        np.arccos(cosine),  # the offset of the roots of eq. (4)
-        np.arctan2(beam_y, beam_x),  # the pair's mean beam axis
-        solvable,
-    )
+def reflection_rows_of_table(
+    table: FloatArray,
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    """:func:`newest_reflection_rows`' ``(points, reflection_directions_rad, valid)`` of the
+    ``(M, 6)`` rows of a :func:`newest_reflection_table`: ``(M, 2)`` ERPs (metres in {W}),
+    ``(M,)`` their directions (radians) and whether the reading gives an ERP."""
+    return table[:, 2:4].copy(), table[:, 4].copy(), table[:, 5].astype(bool)
 
 
 def _newest_points(

@@ -1,6 +1,6 @@
-"""Two pieces of the APCS stream's glue as they were written: the pair geometry of
-:func:`sonar_gym.localization.apcs_walls._chosen_roots` with the sine and cosine of each pair's
-first and second reading taken apart, and the sensor positions of
+"""Two pieces of the APCS stream's glue as they were written: the chosen roots of eq. (4)
+(:func:`tests.localization.apcs_row_kernels_reference.chosen_roots_once`) with the sine and
+cosine of each pair's first and second reading taken apart, and the sensor positions of
 :func:`sonar_gym.localization.apcs_online._sensor_positions` through ``np.column_stack``: the
 forms the modules replaced, kept as the tests' reference."""
 
@@ -10,9 +10,9 @@ import math
 
 import numpy as np
 
-from sonar_gym.localization import apcs_kernels
 from sonar_gym.localization.apcs_walls import IntArray
 from sonar_gym.pose import FloatArray
+from tests.localization.apcs_row_kernels_reference import chosen_roots, pair_geometry
 
 
 def chosen_roots_sliced(
@@ -23,13 +23,14 @@ def chosen_roots_sliced(
 ) -> tuple[FloatArray, IntArray]:
     """``(phi, pairs)`` of ``_newest_points`` on checked inputs (``N >= 2``), with the ranges
     outside ``valid_range_m`` taken as dropouts: the loops of
-    :mod:`~sonar_gym.localization.apcs_kernels` with numpy's trigonometry between them."""
+    :mod:`~tests.localization.apcs_row_kernels_reference` with numpy's trigonometry between
+    them."""
     low, high = valid_range_m
     first, second = directions[:-1], directions[1:]
-    sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x = apcs_kernels.pair_geometry(
+    sin_alpha, cos_alpha, cosine, solvable, beam_y, beam_x = pair_geometry(
         positions, ranges, low, high, np.sin(first), np.sin(second), np.cos(first), np.cos(second)
     )
-    return apcs_kernels.chosen_roots(  # type: ignore[no-any-return]
+    return chosen_roots(  # type: ignore[no-any-return]
         np.arctan2(sin_alpha, cos_alpha),  # alpha of eqs (5)-(6)
         np.arccos(cosine),  # the offset of the roots of eq. (4)
         np.arctan2(beam_y, beam_x),  # the pair's mean beam axis

@@ -1,14 +1,14 @@
 """The readings of :meth:`sonar_gym.localization.apcs_online.WallStream.pending_erps` as numpy
-arrays: the form :func:`sonar_gym.localization.apcs_kernels.stream_readings` replaced, kept as
-the tests' reference."""
+arrays: the form :func:`sonar_gym.localization.apcs_kernels.reading_table` replaced (its ERPs
+through :mod:`tests.localization.apcs_row_kernels_reference`), kept as the tests' reference."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from sonar_gym.localization.apcs_online import BEAM_OFFSET_RAD, WallStream
-from sonar_gym.localization.apcs_walls import newest_reflection_rows
 from sonar_gym.pose import FloatArray
+from tests.localization.apcs_row_kernels_reference import newest_reflection_rows
 
 
 def pending_erps_arrays(

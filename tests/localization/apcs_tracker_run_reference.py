@@ -2,7 +2,8 @@
 every closed group, dropped or not, was built with its verdict and handed to
 :meth:`~sonar_gym.localization.apcs_online.APCSTracker.handle_groups` (which only counts a
 dropped one): the form the tracker's loop replaced, kept as the tests' reference, with the
-tracker's way of storing the readings of that time (its rows as separate flat lists)."""
+tracker's way of storing the readings of that time (its rows as separate flat lists, its pending
+ERPs those of :func:`tests.localization.apcs_row_kernels_reference.pending_rows`)."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from sonar_gym.localization.apcs_online import (
 )
 from sonar_gym.odometry import checked_variance_per_m, predict_run_unchecked
 from sonar_gym.pose import FloatArray, Pose
+from tests.localization.apcs_row_kernels_reference import pending_rows
 
 _PendingRows = tuple[list[float], list[float], list[float], list[bool]]
 """A side's rows from a reading on, as flat lists: sensor ``x0, y0, x1, ...`` (metres), ERP
@@ -81,8 +83,8 @@ def run_unchecked_reference(
         rows = poses[samples[first_sample:] + 1]
         for side in sides:
             sensor_xy = _sensor_positions(rows, side, sensor_offset_m)
-            points, phis, valid = self.streams[side]._pending(
-                sensor_xy, rows[:, 2], ranges[side][first_sample:]
+            points, phis, valid = pending_rows(
+                self.streams[side], sensor_xy, rows[:, 2], ranges[side][first_sample:]
             )
             # Flat lists of floats (x0, y0, x1, ...): no list per row to allocate.
             pending[side] = (

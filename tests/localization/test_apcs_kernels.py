@@ -156,7 +156,7 @@ def test_reflection_points_of_any_readings(
     assert_both_forms_agree(positions, directions, ranges, valid_range_m)
 
 
-def test_the_erp_loops_take_any_root() -> None:
+def test_the_erp_loop_takes_any_root() -> None:
     # The roots reach the last loop wrapped once already, where wrapping again rarely changes
     # a bit; any angle here, so that the loop's own wrap is tested too.
     rng = np.random.default_rng(5)
@@ -166,17 +166,16 @@ def test_the_erp_loops_take_any_root() -> None:
     phi = np.concatenate([rng.uniform(-4.0, 4.0, 20), [1e-20, -1e-17, np.pi, -np.pi, 3e-16]])
     unit = np.stack([np.cos(phi), np.sin(phi)], axis=1)
     points = positions[1:][pairs] + ranges[1:][pairs, None] * unit  # R2, eqs (2)-(3)
+    readings = np.vstack([positions.T, np.zeros(40), ranges])
+    roots = np.vstack([phi, pairs.astype(np.float64)])
     for skipped in (0, 1):
-        rows = np.zeros((40 - skipped, 2)), np.zeros(40 - skipped), np.zeros(40 - skipped, bool)
-        rows[0][pairs + 1 - skipped] = points
-        rows[1][pairs + 1 - skipped] = wrap_angles(phi)
-        rows[2][pairs + 1 - skipped] = True
-        assert_same_bits(
-            apcs_kernels.newest_rows(
-                positions, ranges, phi, pairs, unit[:, 0], unit[:, 1], skipped
-            ),
-            rows,
-        )
+        rows = np.zeros((40 - skipped, 6))
+        rows[:, 0:2] = positions[skipped:]
+        rows[pairs + 1 - skipped, 2:4] = points
+        rows[pairs + 1 - skipped, 4] = wrap_angles(phi)
+        rows[pairs + 1 - skipped, 5] = 1.0
+        got = apcs_kernels.erp_table(readings, roots, unit[:, 0], unit[:, 1], skipped)
+        assert_same_bits((got,), (rows,))
 
 
 def test_wrapped_angles_of_turned_directions() -> None:

@@ -1,6 +1,7 @@
-"""The APCS stream's glue gives exactly the bits of the forms it replaced: the pair geometry
-with each reading's sine and cosine taken once, and the sensor positions without
-``np.column_stack``."""
+"""The APCS stream's glue gives exactly the bits of the forms it replaced: the ERPs with each
+reading's sine and cosine taken once (through the tables of
+:func:`~sonar_gym.localization.apcs_walls.newest_reflection_table`), and the sensor positions
+without ``np.column_stack``."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import pytest
 
 from sonar_gym.localization.apcs import DEFAULT_PARAMETERS
 from sonar_gym.localization.apcs_online import _sensor_positions
-from sonar_gym.localization.apcs_walls import _chosen_roots
+from sonar_gym.localization.apcs_walls import newest_reflection_rows
 from tests.localization.apcs_glue_reference import chosen_roots_sliced, sensor_positions_stacked
+from tests.localization.apcs_row_kernels_reference import newest_rows
 from tests.localization.side_readings import wobbly_side_readings
 
 
@@ -21,19 +23,22 @@ def _readings(rng: np.random.Generator, count: int) -> tuple[np.ndarray, np.ndar
     return positions, directions + turns, ranges
 
 
-def test_chosen_roots_match_the_sliced_form() -> None:
+def test_reflection_rows_match_the_sliced_form() -> None:
     rng = np.random.default_rng(20261207)
     pairs_seen = 0
     for _ in range(400):
         positions, directions, ranges = _readings(rng, int(rng.integers(2, 70)))
-        got = _chosen_roots(positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m)
-        expected = chosen_roots_sliced(
+        got = newest_reflection_rows(
+            positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m, 0
+        )
+        phi, pairs = chosen_roots_sliced(
             positions, directions, ranges, DEFAULT_PARAMETERS.sensing_range_m
         )
+        expected = newest_rows(positions, ranges, phi, pairs, np.cos(phi), np.sin(phi), 0)
         for array, reference in zip(got, expected, strict=True):
-            assert array.dtype == reference.dtype
+            assert array.dtype == reference.dtype and array.shape == reference.shape
             assert array.tobytes() == reference.tobytes()
-        pairs_seen += len(got[1])
+        pairs_seen += len(pairs)
     assert pairs_seen > 1000
 
 

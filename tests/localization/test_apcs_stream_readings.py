@@ -1,5 +1,5 @@
 """A side stream's pending ERPs (Yamamoto et al. sec. 4.2.1, eqs (1)-(6)) with the compiled
-:func:`~sonar_gym.localization.apcs_kernels.stream_readings` against the array form it replaced
+:func:`~sonar_gym.localization.apcs_kernels.reading_table` against the array form it replaced
 (:mod:`tests.localization.apcs_stream_reference`), bit for bit."""
 
 from __future__ import annotations

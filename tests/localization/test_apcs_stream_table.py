@@ -1,7 +1,7 @@
 """A side stream's pending ERPs as the one table the tracker reads
 (:meth:`~sonar_gym.localization.apcs_online.WallStream._pending_rows`, the compiled loops of
-:func:`~sonar_gym.localization.apcs_kernels.reading_table` on) against the arrays of
-:meth:`~sonar_gym.localization.apcs_online.WallStream._pending` and the array form
+:func:`~sonar_gym.localization.apcs_kernels.reading_table` on) against the loops that returned
+separate arrays (:mod:`tests.localization.apcs_row_kernels_reference`) and the array form
 (:mod:`tests.localization.apcs_stream_reference`) with the sensor positions, bit for bit
 (Yamamoto et al. sec. 4.2.1, eqs (1)-(6))."""
 
@@ -13,9 +13,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sonar_gym.localization import apcs_kernels
-from sonar_gym.localization.apcs_walls import newest_reflection_rows, newest_reflection_table
+from sonar_gym.localization.apcs_walls import newest_reflection_table
 from tests.fuzzing import fuzz_settings
 from tests.localization.side_readings import pending_stream_case
+from tests.localization.apcs_row_kernels_reference import newest_reflection_rows, pending_rows
 from tests.localization.apcs_stream_reference import pending_erps_arrays
 
 
@@ -47,7 +48,7 @@ def test_pending_rows_are_the_pending_arrays_bit_for_bit(
         seed, count, side, has_previous, near_pi, strided
     )
     got = np.array(stream._pending_rows(positions, headings, ranges)).reshape(-1, 6)
-    compiled = _expected_rows(positions, *stream._pending(positions, headings, ranges))
+    compiled = _expected_rows(positions, *pending_rows(stream, positions, headings, ranges))
     arrays = _expected_rows(positions, *pending_erps_arrays(stream, positions, headings, ranges))
     assert got.shape == (len(positions), 6)
     assert got.tobytes() == compiled.tobytes()
@@ -56,7 +57,7 @@ def test_pending_rows_are_the_pending_arrays_bit_for_bit(
 
 @fuzz_settings(200)
 @given(seed=st.integers(0, 2**32 - 1), count=st.sampled_from([1, 2, 3, 9, 33]))
-def test_reflection_table_is_newest_reflection_rows_bit_for_bit(seed: int, count: int) -> None:
+def test_reflection_table_is_the_row_loops_bit_for_bit(seed: int, count: int) -> None:
     rng = np.random.default_rng(seed)
     positions = np.cumsum(rng.normal(0.0, 0.05, (count, 2)), axis=0)
     directions = rng.uniform(-4.0, 4.0) + rng.normal(0.0, 0.02, count).cumsum()
