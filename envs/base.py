@@ -254,8 +254,11 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
         # A sum is finite unless an entry is not (or the sum overflows, which the full
-        # check then clears): one reduction for the common case.
-        if not math.isfinite(observation.sum()) and not np.isfinite(observation).all():
+        # check then clears). Python's sum of the entries as floats costs less than a NumPy
+        # reduction over a short vector, and float32 entries cannot overflow it.
+        if not math.isfinite(sum(observation.ravel().tolist())) and not (
+            np.isfinite(observation).all()
+        ):
             raise RuntimeError(f"{type(self).__name__}: non-finite observation")
         return observation
 
