@@ -240,22 +240,28 @@ class SonarEnv(gym.Env[np.ndarray, Any], ABC):
                 f"{outcome.reward!r} and terms {dict(outcome.reward_terms)}"
             )
         terms = {key: float(value) for key, value in outcome.reward_terms.items()}
-        bad = {key: value for key, value in terms.items() if not math.isfinite(value)}
-        if bad:
-            raise RuntimeError(f"{name}: non-finite reward term(s) {bad}")
-        for key, value in terms.items():
-            self._record.reward_terms[key] = self._record.reward_terms.get(key, 0.0) + value
-        outcome.info[REWARDS_INFO_KEY] = dict(terms)
         reward = _sum_in_order(list(terms.values()))
-        if not math.isfinite(reward):
+        finite = math.isfinite(reward)  # the sum of the terms is finite only if each term is
+        if not finite:
+            bad = {key: value for key, value in terms.items() if not math.isfinite(value)}
+            if bad:
+                raise RuntimeError(f"{name}: non-finite reward term(s) {bad}")
+        sums = self._record.reward_terms
+        for key, value in terms.items():
+            sums[key] = sums.get(key, 0.0) + value
+        outcome.info[REWARDS_INFO_KEY] = terms  # a fresh dict, not kept here
+        if not finite:
             raise RuntimeError(f"{name}: reward terms {terms} overflow to {reward!r}")
         return reward
 
     def _checked_observation(self) -> np.ndarray:
         observation = self._observe()
         # A sum is finite unless an entry is not (or the sum overflows, which the full
-        # check then clears): one reduction for the common case.
-        if not math.isfinite(observation.sum()) and not np.isfinite(observation).all():
+        # check then clears). Python's sum of the entries as floats costs less than a NumPy
+        # reduction over a short vector, and float32 entries cannot overflow it.
+        if not math.isfinite(sum(observation.ravel().tolist())) and not (
+            np.isfinite(observation).all()
+        ):
             raise RuntimeError(f"{type(self).__name__}: non-finite observation")
         return observation
 
@@ -286,9 +292,9 @@ class ActionCheck:
     comparisons; every other value goes to ``space.contains``, so the check accepts and
     rejects exactly what ``space.contains`` does.
 
-    The space's bounds are read once, at construction; make a new check when the space's
-    ``start``, ``nvec`` or ``n`` change (the env rebuilds it whenever ``action_space`` is
-    replaced or these arrays are reassigned).
+    The space's bounds, dtype and shape are read once, at construction; make a new check when
+    the space's ``start``, ``nvec`` or ``n`` change (the env rebuilds it whenever
+    ``action_space`` is replaced or these arrays are reassigned).
     """
 
     def __init__(self, space: gym.Space[Any]) -> None:
@@ -298,6 +304,8 @@ class ActionCheck:
         self._low: list[int] = []
         self._high: list[int] = []
         kind = type(space)
+        self._dtype = space.dtype
+        self._shape = space.shape
         self._multi_discrete = kind is gym.spaces.MultiDiscrete
         self._discrete = kind is gym.spaces.Discrete and space.dtype == np.int64
         if isinstance(space, gym.spaces.MultiDiscrete) and self._multi_discrete:
@@ -321,21 +329,22 @@ class ActionCheck:
 
     def __call__(self, action: Any) -> bool:
         """Whether ``action`` lies in the space; the same answer as ``space.contains``."""
-        space = self.space
         if self._multi_discrete:
             if (
                 type(action) is np.ndarray
-                and action.dtype == space.dtype
-                and action.shape == space.shape
+                and action.dtype == self._dtype
+                and action.shape == self._shape
             ):
-                values = action.ravel().tolist()
-                return all(
-                    low <= value <= high
-                    for low, value, high in zip(self._low, values, self._high, strict=True)
-                )
+                # the same shape as the bounds: as many values as bounds
+                for low, value, high in zip(
+                    self._low, action.ravel().tolist(), self._high, strict=True
+                ):
+                    if not low <= value <= high:
+                        return False
+                return True
         elif self._discrete and (type(action) is int or type(action) is np.int64):
             return self._low[0] <= int(action) <= self._high[0]
-        return bool(space.contains(action))
+        return bool(self.space.contains(action))
 
 
 def unwrap_sonar_env(env: gym.Env[Any, Any]) -> SonarEnv:

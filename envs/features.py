@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, TypeGuard
 
 import gymnasium as gym
 import numpy as np
@@ -102,6 +102,13 @@ class ScaledPosition(Feature):
         """:meth:`values` as Python floats."""
         # On Python floats: numpy's six calls on two coordinates cost more than the arithmetic,
         # which rounds the same, step by step; clipped as np.clip does (NaN stays).
+        if _is_float_pair(position) and _is_float_pair(low) and _is_float_pair(high):
+            # how tasks pass a point and the room's corners: the same arithmetic, unrolled
+            (x, y), (low_x, low_y), (high_x, high_y) = position, low, high
+            return [
+                clipped(2.0 * (x - low_x) / (high_x - low_x) - 1.0, -1.0, 1.0),
+                clipped(2.0 * (y - low_y) / (high_y - low_y) - 1.0, -1.0, 1.0),
+            ]
         return [
             clipped(2.0 * (p - lo) / (hi - lo) - 1.0, -1.0, 1.0)
             for p, lo, hi in zip(_floats(position), _floats(low), _floats(high), strict=True)
@@ -147,7 +154,9 @@ class RangeBins(Feature):
         fractions = np.asarray(range_fractions, dtype=np.float64)
         if fractions.size == 0:
             return np.ones(self.size)
-        return _nearest_per_bin(fractions.reshape(-1), self.size)  # type: ignore[no-any-return]
+        if fractions.ndim != 1:
+            fractions = fractions.reshape(-1)
+        return _nearest_per_bin(fractions, self.size)  # type: ignore[no-any-return]
 
 
 def clipped(value: float, low: float, high: float) -> float:
@@ -155,6 +164,16 @@ def clipped(value: float, low: float, high: float) -> float:
     ``low > value``, ``min`` keeps that unless ``high < value``; so NaN stays, as in np.clip.
     Two comparisons cost less than the two builtin calls."""
     return low if low > value else high if high < value else value
+
+
+def _is_float_pair(values: object) -> TypeGuard[tuple[float, float]]:
+    """Whether ``values`` is a tuple of two Python floats (a point as tasks pass it)."""
+    return (
+        type(values) is tuple
+        and len(values) == 2
+        and type(values[0]) is float
+        and type(values[1]) is float
+    )
 
 
 def _floats(values: npt.ArrayLike) -> Sequence[float]:
