@@ -158,13 +158,7 @@ class Sweep:
         ``Sweep(angles, ranges, sensor_offset, odometry)`` (read-only copies) at a fraction
         of the cost, as :meth:`Pose.unchecked`. Anything else is the caller's error.
         """
-        sweep = object.__new__(cls)
-        fields = sweep.__dict__  # frozen: the fields are set as __post_init__ sets them
-        fields["angles"] = _read_only(angles.copy())
-        fields["ranges"] = _read_only(ranges.copy())
-        fields["sensor_offset"] = (float(sensor_offset[0]), float(sensor_offset[1]))
-        fields["odometry"] = odometry
-        return sweep
+        return cls.handed_over(angles.copy(), ranges.copy(), sensor_offset, odometry)
 
     @classmethod
     def handed_over(

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from hypothesis import strategies as st
 
 from sonar_gym.localization.apcs_online import WallStream
 
@@ -30,9 +31,13 @@ def wobbly_side_readings(
     return positions, headings + np.pi / 2.0, ranges
 
 
+PendingStreamCase = tuple[WallStream, np.ndarray, np.ndarray, np.ndarray]
+"""A stream and the readings to pend on it: ``(stream, positions, headings, ranges)``."""
+
+
 def pending_stream_case(
     seed: int, count: int, side: str, has_previous: bool, near_pi: bool, strided: bool
-) -> tuple[WallStream, np.ndarray, np.ndarray, np.ndarray]:
+) -> PendingStreamCase:
     """A ``side`` stream (with a remembered previous reading when ``has_previous``) and
     ``count`` readings to pend on it: ``(positions (count, 2) metres, headings (count,)
     radians, ranges (count,) metres)`` of a sensor creeping along a wall with standstills,
@@ -61,3 +66,15 @@ def pending_stream_case(
             previous_range,
         )
     return stream, positions, headings, ranges
+
+
+PENDING_STREAM_CASES = st.builds(
+    pending_stream_case,
+    seed=st.integers(0, 2**32 - 1),
+    count=st.sampled_from([0, 1, 2, 3, 12, 40]),
+    side=st.sampled_from(["left", "right"]),
+    has_previous=st.booleans(),
+    near_pi=st.booleans(),
+    strided=st.booleans(),
+)
+"""Hypothesis strategy of :func:`pending_stream_case`'s cases."""

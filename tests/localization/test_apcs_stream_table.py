@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from sonar_gym.localization import apcs_kernels
 from sonar_gym.localization.apcs_walls import newest_reflection_table
 from tests.fuzzing import fuzz_settings
-from tests.localization.side_readings import pending_stream_case
+from tests.localization.side_readings import PENDING_STREAM_CASES, PendingStreamCase
 from tests.localization.apcs_row_kernels_reference import newest_reflection_rows, pending_rows
 from tests.localization.apcs_stream_reference import pending_erps_arrays
 
@@ -33,20 +33,9 @@ def _expected_rows(
 
 
 @fuzz_settings(300)
-@given(
-    seed=st.integers(0, 2**32 - 1),
-    count=st.sampled_from([0, 1, 2, 3, 12, 40]),
-    side=st.sampled_from(["left", "right"]),
-    has_previous=st.booleans(),
-    near_pi=st.booleans(),
-    strided=st.booleans(),
-)
-def test_pending_rows_are_the_pending_arrays_bit_for_bit(
-    seed: int, count: int, side: str, has_previous: bool, near_pi: bool, strided: bool
-) -> None:
-    stream, positions, headings, ranges = pending_stream_case(
-        seed, count, side, has_previous, near_pi, strided
-    )
+@given(case=PENDING_STREAM_CASES)
+def test_pending_rows_are_the_pending_arrays_bit_for_bit(case: PendingStreamCase) -> None:
+    stream, positions, headings, ranges = case
     got = np.array(stream._pending_rows(positions, headings, ranges)).reshape(-1, 6)
     compiled = _expected_rows(positions, *pending_rows(stream, positions, headings, ranges))
     arrays = _expected_rows(positions, *pending_erps_arrays(stream, positions, headings, ranges))
