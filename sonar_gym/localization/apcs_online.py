@@ -248,26 +248,26 @@ class WallStream:
         self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
     ) -> tuple[FloatArray, FloatArray, np.ndarray]:
         """:meth:`pending_erps` on checked arrays."""
-        has_previous, previous = self._previous_reading()
-        readings = apcs_kernels.reading_table(
-            positions, headings, ranges, self._beam_offset_rad, has_previous, previous
-        )
-        return reflection_rows_of_table(
-            newest_reflection_table(readings, self.params.sensing_range_m, int(has_previous))
-        )
+        return reflection_rows_of_table(self._pending_table(positions, headings, ranges))
 
     def _pending_rows(
         self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
     ) -> list[float]:
         """:meth:`_pending` with the readings' sensor positions, as the flat list of the rows of
-        :func:`~sonar_gym.localization.apcs_walls.newest_reflection_table` (six floats a
-        reading: :data:`~sonar_gym.localization.apcs_kernels.ERP_COLUMNS`)."""
+        :meth:`_pending_table` (six floats a reading)."""
+        return self._pending_table(positions, headings, ranges).ravel().tolist()  # type: ignore[no-any-return]
+
+    def _pending_table(
+        self, positions: FloatArray, headings: FloatArray, ranges: FloatArray
+    ) -> FloatArray:
+        """The pending ERPs of the readings after the stored one, as the rows of
+        :func:`~sonar_gym.localization.apcs_walls.newest_reflection_table` (columns
+        :data:`~sonar_gym.localization.apcs_kernels.ERP_COLUMNS`), one per new reading."""
         has_previous, previous = self._previous_reading()
         readings = apcs_kernels.reading_table(
             positions, headings, ranges, self._beam_offset_rad, has_previous, previous
         )
-        table = newest_reflection_table(readings, self.params.sensing_range_m, int(has_previous))
-        return table.ravel().tolist()  # type: ignore[no-any-return]
+        return newest_reflection_table(readings, self.params.sensing_range_m, int(has_previous))
 
     def _previous_reading(self) -> tuple[bool, tuple[float, float, float, float]]:
         """Whether a reading is stored, and its ``(x, y, direction, range)`` (metres, radians;

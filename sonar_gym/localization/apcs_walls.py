@@ -1101,22 +1101,18 @@ class WallChecks(Sequence[WallCheck]):
     @property
     def rejections(self) -> dict[int, str]:
         """Map position -> first failed condition, for every wall that failed one."""
-        return {
-            index: reason
-            for index, passed in enumerate(self._conditions.tolist())
-            if (reason := _FIRST_FAILED[tuple(passed)]) is not None
-        }
+        return dict(self._rejected())
 
     def rejection_summary(self) -> str:
         """``"index: reason"`` of every wall in :attr:`rejections`, in map order, joined by
         ``", "`` (the list a no-match message gives), without building the dict."""
-        return ", ".join(
-            [
-                f"{index}: {reason}"
-                for index, passed in enumerate(self._conditions.tolist())
-                if (reason := _FIRST_FAILED[tuple(passed)]) is not None
-            ]
-        )
+        return ", ".join([f"{index}: {reason}" for index, reason in self._rejected()])
+
+    def _rejected(self) -> Iterator[tuple[int, str]]:
+        """``(map position, first failed condition)`` of every wall that failed one, in order."""
+        for index, passed in enumerate(self._conditions.tolist()):
+            if (reason := _FIRST_FAILED[tuple(passed)]) is not None:
+                yield index, reason
 
     @property
     def closest_reason(self) -> str | None:
