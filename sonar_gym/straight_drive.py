@@ -113,17 +113,15 @@ class CommandDraws:
 
     Attributes:
         start_state: the generator's state before the first command (to replay a command
-            through ``drive``, or to stop the run early).
+            through ``drive``, or to stop the run early; :meth:`rewind` redraws from it).
         normal_blocks, uniform_blocks: ``(k, 2)`` normals and ``(k, 4)`` uniforms of each
             block of commands, in order.
-        end_state: its state after the last command (set by :meth:`finish`).
         count: the number of commands drawn.
     """
 
     start_state: Mapping[str, Any]
     normal_blocks: list[FloatArray] = field(default_factory=list)
     uniform_blocks: list[FloatArray] = field(default_factory=list)
-    end_state: Mapping[str, Any] | None = None
     count: int = 0
 
     @classmethod
@@ -156,15 +154,8 @@ class CommandDraws:
         self.uniform_blocks.append(uniforms)
         self.count += len(normals)
 
-    def finish(self, rng: np.random.Generator) -> None:
-        """Note the generator's state after the last command."""
-        self.end_state = rng.bit_generator.state
-
     def rewind(self, rng: np.random.Generator, index: int) -> None:
         """Put ``rng`` in its state before command ``index`` (after the last for ``count``)."""
-        if index == self.count and self.end_state is not None:
-            rng.bit_generator.state = self.end_state
-            return
         rng.bit_generator.state = self.start_state
         drive_kernels.draw_commands(rng, index)
 

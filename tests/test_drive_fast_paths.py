@@ -150,7 +150,6 @@ def test_rewind_puts_the_generator_before_the_command(index: int) -> None:
     draws.extend(*draw_commands(rng, 12))
     for _ in range(8):
         draws.draw(rng)
-    draws.finish(rng)
     draws.rewind(rng, index)
     normals, uniforms = rng.standard_normal(2), rng.random(4)
     assert np.array_equal(normals, draws.normals[index])

@@ -216,8 +216,6 @@ def test_drive_commands_is_the_arrays_drive(scenario: str, seed: int) -> None:
         for _ in commanded:
             draws.draw(motion_rng)
             reference_draws.draw(reference_rng)
-        draws.finish(motion_rng)
-        reference_draws.finish(reference_rng)
         actual = drive_commands(robot, world, commanded, draws, motion_rng)
         expected = drive_commands_arrays(
             reference_robot, reference_world, commanded, reference_draws, reference_rng
