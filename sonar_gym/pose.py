@@ -81,7 +81,7 @@ class Pose:
 
     def as_array(self) -> FloatArray:
         """``[x, y, theta]`` as a float64 array."""
-        return np.array((self.x, self.y, self.theta))  # float64: the fields are floats
+        return np.array((self.x, self.y, self.theta), dtype=np.float64)
 
     @property
     def position(self) -> FloatArray:
