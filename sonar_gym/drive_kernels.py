@@ -59,6 +59,21 @@ def _draw_commands_compiled(handle: GeneratorHandle, count: int) -> tuple[FloatA
     return normals, uniforms
 
 
+def _draw_run(rng: np.random.Generator, draws: FloatArray) -> None:
+    """The numbers of ``len(draws) / 6`` commands into ``draws``: per command two standard
+    normals, then four uniforms (the layout of :func:`drive_commands`' ``draws``)."""
+    for first in range(0, draws.shape[0], 6):
+        draws[first] = rng.standard_normal()
+        draws[first + 1] = rng.standard_normal()
+        for slot in range(first + 2, first + 6):
+            draws[slot] = rng.random()
+
+
+_draw_run_compiled = compiled(
+    types.none, _GENERATOR, types.Array(types.float64, 1, "C"), inline=True
+)(_draw_run)
+
+
 def draw_commands(rng: np.random.Generator, count: int) -> tuple[FloatArray, FloatArray]:
     """The random numbers of ``count`` drive commands: ``(count, 2)`` standard normals and
     ``(count, 4)`` uniforms, drawn command by command from ``rng`` (in one compiled loop,
@@ -489,14 +504,16 @@ def drive_commands(
             types.Array(types.float64, 2, "C"),
         )
     ),
-    *_DRIVE_ARGUMENTS,
+    GENERATOR_HANDLE,  # handle
+    _DRIVE_ARGUMENTS[0],  # commands_m
+    *_DRIVE_ARGUMENTS[2:],
     types.UniTuple(types.float64, 3),  # estimate
     TABLE,  # covariance
     types.float64,  # variance_per_m
 )
-def drive_and_predict(
+def _drive_and_predict_compiled(
+    handle: GeneratorHandle,
     commands_m: FloatArray,
-    draws: FloatArray,
     noise: FloatArray,
     wheel_base_m: float,
     substeps: int,
@@ -511,14 +528,8 @@ def drive_and_predict(
     covariance: FloatArray,
     variance_per_m: float,
 ) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
-    """:func:`drive_commands`, then the EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) over
-    the commands' encoder increments from ``estimate`` (``(x, y, theta)``, {W}) and its
-    ``covariance``: :func:`sonar_gym.odometry_kernels.predict_commands` with the paper's
-    Jacobians, ``V`` of ``variance_per_m`` m^2 per metre rolled and no scale variance.
-
-    Returns the motion table, the first command that needs the physics, the predicted pose
-    after the last command (heading wrapped to (-pi, pi]) and its 3x3 covariance.
-    """
+    draws = np.empty(6 * commands_m.shape[0])
+    _draw_run_compiled(handle_generator(handle), draws)
     motions, blocked = _drive_commands_compiled(
         commands_m,
         draws,
@@ -545,3 +556,50 @@ def drive_and_predict(
     last = predicted.shape[0] - 1
     end = (predicted[last, 0], predicted[last, 1], predicted[last, 2])
     return motions, blocked, end, predicted_covariance
+
+
+def drive_and_predict(
+    rng: np.random.Generator,
+    commands_m: FloatArray,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+    estimate: tuple[float, float, float],
+    covariance: FloatArray,
+    variance_per_m: float,
+) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
+    """:func:`drive_commands` of ``commands_m`` with their draws taken from ``rng`` (the
+    numbers of :func:`draw_commands`, in its order, leaving ``rng`` as it leaves it), then the
+    EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) over the commands' encoder increments
+    from ``estimate`` (``(x, y, theta)``, {W}) and its ``covariance``:
+    :func:`sonar_gym.odometry_kernels.predict_commands` with the paper's Jacobians, ``V`` of
+    ``variance_per_m`` m^2 per metre rolled and no scale variance. One compiled call, handed
+    ``rng`` by :func:`~sonar_gym.generator_handles.generator_handle`.
+
+    Returns the motion table, the first command that needs the physics, the predicted pose
+    after the last command (heading wrapped to (-pi, pi]) and its 3x3 covariance.
+    """
+    return _drive_and_predict_compiled(  # type: ignore[no-any-return]
+        generator_handle(rng),
+        commands_m,
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+        estimate,
+        covariance,
+        variance_per_m,
+    )

@@ -28,7 +28,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -169,6 +168,20 @@ class CommandRun:
             encoder_right_m=row[drive_kernels.ENCODER + 1],
         )
 
+
+_WheelArguments = tuple[
+    FloatArray,  # noise
+    float,  # wheel_base_m
+    int,  # substeps
+    int,  # integration
+    tuple[float, float, float],  # odometry
+    tuple[float, float, float],  # start
+    float,  # robot_radius_m
+    FloatArray,  # bounds
+    np.ndarray,  # kinds
+    FloatArray,  # shapes
+]
+"""The arguments of :func:`sonar_gym.drive_kernels.drive_commands` from ``noise`` on."""
 
 ENCODER_COLUMNS = slice(drive_kernels.ENCODER, drive_kernels.ENCODER + 2)
 """The motion table's columns of the encoder increments ``(left, right)``, metres."""
@@ -319,7 +332,9 @@ class DifferentialDriveRobot:
         """
         start = world.robot_pose
         motions, blocked = drive_kernels.drive_commands(
-            *self._wheel_arguments(world, commands_m, rng, substeps, start)
+            commands_m,
+            _command_draws(rng, len(commands_m)),
+            *self._wheel_arguments(world, substeps, start),
         )
         collided, pose = self._physics_after(world, motions, blocked, start)
         return motions, collided, pose
@@ -343,7 +358,9 @@ class DifferentialDriveRobot:
         """
         start = world.robot_pose
         motions, blocked, predicted, predicted_covariance = drive_kernels.drive_and_predict(
-            *self._wheel_arguments(world, commands_m, rng, 0, start),
+            rng,
+            commands_m,
+            *self._wheel_arguments(world, 0, start),
             (estimate.x, estimate.y, estimate.theta),
             covariance,
             variance_per_m,
@@ -356,21 +373,12 @@ class DifferentialDriveRobot:
             self._physics_after(world, motions, blocked, start)
         return motions, Pose.unchecked(*predicted), predicted_covariance
 
-    def _wheel_arguments(
-        self,
-        world: World,
-        commands_m: FloatArray,
-        rng: np.random.Generator,
-        substeps: int,
-        start: Pose,
-    ) -> tuple[Any, ...]:
-        """The arguments of :func:`sonar_gym.drive_kernels.drive_commands` for ``commands_m``
-        from the true pose ``start``, drawing each command's numbers from ``rng``."""
+    def _wheel_arguments(self, world: World, substeps: int, start: Pose) -> _WheelArguments:
+        """The arguments of :func:`sonar_gym.drive_kernels.drive_commands` after the commands
+        and their draws, for a drive from the true pose ``start``: from ``noise`` on."""
         odometry = start if self.odometry_pose is None else self.odometry_pose
         table = world.static_shape_table
         return (
-            commands_m,
-            _command_draws(rng, len(commands_m)),
             self._noise_arguments(),
             float(self.wheel_base_for(world)),
             substeps,

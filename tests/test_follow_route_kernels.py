@@ -4,6 +4,7 @@ odometry calls it replaced (:mod:`tests.follow_route_reference`), bit for bit.""
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -17,6 +18,7 @@ from sonar_gym.robot import DifferentialDriveRobot, _command_draws
 from sonar_gym.world import World
 from tests.command_draws_reference import command_draws_reference
 from tests.follow_route_reference import follow_route_reference
+from tests.test_generator_handles import BIT_GENERATORS, _same_state
 from tests.test_drive_command_kernels import ROOM
 
 
@@ -81,32 +83,37 @@ def test_following_a_route_is_the_plan_drive_and_prediction_of_each_target(
 
 @pytest.mark.parametrize("seed", range(5))
 def test_the_fused_call_is_the_drive_then_the_prediction(seed: int) -> None:
-    rng = np.random.default_rng(seed)
-    count = int(rng.integers(1, 6))
-    commands = rng.uniform(-1.0, 1.0, (count, 2))
-    commands[rng.random(count) < 0.3] = 0.0
-    draws = _command_draws(rng, count)
+    """The one compiled call draws the commands' numbers from the caller's generator (as
+    ``_command_draws`` draws them from a copy), drives as the draws-taking loop does and
+    predicts as :func:`~sonar_gym.odometry_kernels.predict_commands` does."""
+    setup = np.random.default_rng(seed)
+    count = int(setup.integers(1, 6))
+    commands = setup.uniform(-1.0, 1.0, (count, 2))
+    commands[setup.random(count) < 0.3] = 0.0
     noise = np.array([0.005, 0.01, -0.002, 0.3, 0.2, 0.02, math.radians(3.0)])
     world = World(ROOM)
     common = (
-        commands,
-        draws,
         noise,
         0.37,
         0,
         1,
-        tuple(rng.uniform(-1.0, 1.0, 3).tolist()),
+        tuple(setup.uniform(-1.0, 1.0, 3).tolist()),
         (-0.5, -0.2, 0.4),
         world.robot_radius,
         *world.static_shape_table.arrays,
     )
-    estimate = tuple(rng.uniform(-1.0, 1.0, 3).tolist())
-    root = rng.standard_normal((3, 3))
+    estimate = tuple(setup.uniform(-1.0, 1.0, 3).tolist())
+    root = setup.standard_normal((3, 3))
     covariance = root @ root.T
+    rng = np.random.default_rng(100 + seed)
+    rng.random(seed)  # somewhere along the stream
+    twin = copy.deepcopy(rng)
     motions, blocked, end, predicted_covariance = drive_kernels.drive_and_predict(
-        *common, estimate, covariance, 3e-5
+        rng, commands, *common, estimate, covariance, 3e-5
     )
-    expected_motions, expected_blocked = drive_kernels.drive_commands(*common)
+    draws = _command_draws(twin, count)
+    assert rng.bit_generator.state == twin.bit_generator.state
+    expected_motions, expected_blocked = drive_kernels.drive_commands(commands, draws, *common)
     poses, expected_covariance = odometry_kernels.predict_commands(
         estimate, covariance, expected_motions[:, :2], 0.37, 3e-5, 0.0, False
     )
@@ -117,6 +124,21 @@ def test_the_fused_call_is_the_drive_then_the_prediction(seed: int) -> None:
     assert np.array_equal(motions[:blocked], expected_motions[:blocked])
     assert end == tuple(poses[-1].tolist())
     assert np.array_equal(predicted_covariance, expected_covariance)
+
+
+@pytest.mark.parametrize("kind", [*BIT_GENERATORS, np.random.MT19937])
+@pytest.mark.parametrize("count", [0, 1, 2, 9, 300])
+def test_a_compiled_run_of_draws_is_the_draws_of_drive(
+    kind: type[np.random.BitGenerator], count: int
+) -> None:
+    """The compiled loop's numbers, in its flat layout, and the generator state after them
+    are those of ``_command_draws`` (kept as the robot's draws of a run), bit for bit."""
+    rng, expected_rng = np.random.Generator(kind(count)), np.random.Generator(kind(count))
+    for _ in range(3):  # and again from where the last run left the generator
+        draws = np.empty(6 * count)
+        drive_kernels._draw_run_compiled(rng, draws)
+        assert draws.tobytes() == _command_draws(expected_rng, count).tobytes()
+        assert _same_state(rng.bit_generator.state, expected_rng.bit_generator.state)
 
 
 def test_the_draws_of_a_run_are_drives_draws_in_its_order() -> None:
