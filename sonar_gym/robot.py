@@ -242,6 +242,8 @@ class DifferentialDriveRobot:
         self.max_substep_m = float(max_substep_m)
         self.max_substep_rad = float(max_substep_rad)
         self.odometry_pose: Pose | None = odometry_pose
+        # the last noise array of the kernels and what it was made from (_noise_arguments)
+        self._kept_noise: tuple[OdometryNoise, float, float, FloatArray] | None = None
 
     def reset_odometry(self, pose: Pose | None) -> None:
         """Set the dead-reckoning estimate (``None``: the true pose at the next command)."""
@@ -393,20 +395,32 @@ class DifferentialDriveRobot:
 
     def _noise_arguments(self) -> FloatArray:
         """The ``noise`` array of :func:`sonar_gym.drive_kernels.drive_commands`: the odometry
-        errors, then the substep limits (metres, radians)."""
-        noise = self.noise
-        return np.array(
+        errors, then the substep limits (metres, radians). Kept (read-only) while ``noise``
+        (frozen) is the same object and the limits keep their values."""
+        noise, max_substep_m, max_substep_rad = self.noise, self.max_substep_m, self.max_substep_rad
+        kept = self._kept_noise
+        if (
+            kept is not None
+            and kept[0] is noise
+            and kept[1] == max_substep_m
+            and kept[2] == max_substep_rad
+        ):
+            return kept[3]
+        array = np.array(
             (
                 noise.encoder_std_m_per_sqrt_m,
                 noise.scale_error_left,
                 noise.scale_error_right,
                 noise.slip_probability_per_m,
                 noise.slip_fraction_max,
-                self.max_substep_m,
-                self.max_substep_rad,
+                max_substep_m,
+                max_substep_rad,
             ),
             dtype=np.float64,
         )
+        array.flags.writeable = False
+        self._kept_noise = (noise, max_substep_m, max_substep_rad, array)
+        return array
 
     def _physics_after(
         self, world: World, motions: FloatArray, blocked: int, start: Pose
