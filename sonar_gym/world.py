@@ -139,6 +139,10 @@ class World:
             test of planned motions (:mod:`sonar_gym.path_clearance`).
     """
 
+    _body_behind = False
+    """Whether the built space's body is not yet at the pose teleported to (set by
+    :meth:`_teleport`, cleared by :meth:`_place_body`; here for a subclass's ``_build``)."""
+
     def __init__(
         self, scenario: Scenario, temperature_c: float = 20.0, robot_pose: Pose | None = None
     ) -> None:
@@ -165,6 +169,7 @@ class World:
         self._commanded_angular_velocity = 0.0
         self._robot_is_fresh = True  # not stepped by the space since it was made
         self._placed_pose: Pose | None = None  # the pose teleported to, until the body moves
+        self._body_behind = False
 
     def _build_space(self) -> pymunk.Space:
         """Build the pymunk space as :meth:`_build` would have eagerly: the static shapes, then
@@ -310,7 +315,11 @@ class World:
         """The ``pymunk.Space`` (static shapes in category :data:`STATIC_CATEGORY`, the robot in
         :data:`ROBOT_CATEGORY`), built on first use."""
         space = self._space
-        return self._build_space() if space is None else space
+        if space is None:
+            return self._build_space()
+        if self._body_behind:
+            self._place_body()
+        return space
 
     @property
     def robot_body(self) -> pymunk.Body:
@@ -325,9 +334,11 @@ class World:
         return tuple(self._static_shapes)
 
     def _body(self) -> pymunk.Body:
-        """The robot body, building the space first if it is not built yet."""
+        """The robot body at the robot pose, building the space first if it is not built yet."""
         if self._robot_body is None:
             self._build_space()
+        elif self._body_behind:
+            self._place_body()
         assert self._robot_body is not None
         return self._robot_body
 
@@ -360,20 +371,27 @@ class World:
         self._teleport(pose)
 
     def _teleport(self, pose: Pose) -> None:
+        # The body follows only when it is next read (_body, space: _place_body): the queries
+        # of the world ignore the robot, so a run of teleports between two motions leaves the
+        # space as the last one alone would. Before the space is built, the pose is all there
+        # is to keep (see _build_space).
+        self._placed_pose = pose  # pose.theta is wrapped: the body reads back this very pose
+        self._body_behind = self._space is not None
+
+    def _place_body(self) -> None:
+        """Put the body at the pose teleported to (:attr:`_placed_pose`)."""
         # A new body and shape carry no cached contacts and no solver bias velocity, so what
         # happens next depends only on the pose, never on the history of the space. A body
         # the space has not stepped since it was made is still in that state: it only moves.
-        # Before the space is built, the pose is all there is to keep (see _build_space).
-        self._placed_pose = pose  # pose.theta is wrapped: the body reads back this very pose
-        space = self._space
-        if space is None:
-            return
+        self._body_behind = False
+        space, body, pose = self._space, self._robot_body, self._placed_pose
+        assert space is not None and body is not None and pose is not None
         if self._robot_is_fresh:
-            _move_fresh_body(space, self._body(), pose)
+            _move_fresh_body(space, body, pose)
             return
         old_shape = self._robot_shape
         assert old_shape is not None  # a body that has moved is in the built space
-        space.remove(self._body(), old_shape)
+        space.remove(body, old_shape)
         body, shape = self._new_robot()
         _SET_POSITION(body, (pose.x, pose.y))
         _SET_ANGLE(body, pose.theta)
