@@ -495,24 +495,18 @@ def drive_commands(
     )
 
 
-@compiled(  # type: ignore[misc]
-    types.Tuple(
-        (
-            _MOTIONS,
-            types.int64,
-            types.UniTuple(types.float64, 3),
-            types.Array(types.float64, 2, "C"),
-        )
-    ),
-    GENERATOR_HANDLE,  # handle
-    _DRIVE_ARGUMENTS[0],  # commands_m
-    *_DRIVE_ARGUMENTS[2:],
+_PREDICTED_DRIVE = types.Tuple(
+    (_MOTIONS, types.int64, types.UniTuple(types.float64, 3), types.Array(types.float64, 2, "C"))
+)
+_PREDICTION_ARGUMENTS = (
     types.UniTuple(types.float64, 3),  # estimate
     TABLE,  # covariance
     types.float64,  # variance_per_m
 )
-def _drive_and_predict_compiled(
-    handle: GeneratorHandle,
+
+
+def _drive_and_predict(
+    rng: np.random.Generator,
     commands_m: FloatArray,
     noise: FloatArray,
     wheel_base_m: float,
@@ -529,7 +523,7 @@ def _drive_and_predict_compiled(
     variance_per_m: float,
 ) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
     draws = np.empty(6 * commands_m.shape[0])
-    _draw_run_compiled(handle_generator(handle), draws)
+    _draw_run_compiled(rng, draws)
     motions, blocked = _drive_commands_compiled(
         commands_m,
         draws,
@@ -556,6 +550,59 @@ def _drive_and_predict_compiled(
     last = predicted.shape[0] - 1
     end = (predicted[last, 0], predicted[last, 1], predicted[last, 2])
     return motions, blocked, end, predicted_covariance
+
+
+_drive_and_predict_inline = compiled(
+    _PREDICTED_DRIVE,
+    _GENERATOR,
+    _DRIVE_ARGUMENTS[0],  # commands_m
+    *_DRIVE_ARGUMENTS[2:],
+    *_PREDICTION_ARGUMENTS,
+    inline=True,
+)(_drive_and_predict)
+
+
+@compiled(  # type: ignore[misc]
+    _PREDICTED_DRIVE,
+    GENERATOR_HANDLE,  # handle
+    _DRIVE_ARGUMENTS[0],  # commands_m
+    *_DRIVE_ARGUMENTS[2:],
+    *_PREDICTION_ARGUMENTS,
+)
+def _drive_and_predict_compiled(
+    handle: GeneratorHandle,
+    commands_m: FloatArray,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+    estimate: tuple[float, float, float],
+    covariance: FloatArray,
+    variance_per_m: float,
+) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
+    return _drive_and_predict_inline(  # type: ignore[no-any-return]
+        handle_generator(handle),
+        commands_m,
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+        estimate,
+        covariance,
+        variance_per_m,
+    )
 
 
 def drive_and_predict(
@@ -589,6 +636,129 @@ def drive_and_predict(
     return _drive_and_predict_compiled(  # type: ignore[no-any-return]
         generator_handle(rng),
         commands_m,
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+        estimate,
+        covariance,
+        variance_per_m,
+    )
+
+
+def _move_commands(
+    belief: tuple[float, float, float],
+    target_xy: tuple[float, float],
+    distance_m: float,
+    wheel_base_m: float,
+) -> FloatArray:
+    x, y, theta = belief
+    if distance_m > 1e-9:
+        bearing = math.atan2(target_xy[1] - y, target_xy[0] - x)
+        half = 0.5 * wrap_angle(bearing - theta) * wheel_base_m
+        commands = np.empty((2, 2))
+        commands[0, 0], commands[0, 1] = -half, half
+        commands[1, 0], commands[1, 1] = distance_m, distance_m
+        return commands
+    return np.zeros((1, 2))
+
+
+move_commands = compiled(
+    types.Array(types.float64, 2, "C"),
+    types.UniTuple(types.float64, 3),  # belief
+    types.UniTuple(types.float64, 2),  # target_xy
+    types.float64,  # distance_m
+    types.float64,  # wheel_base_m
+    inline=True,
+)(_move_commands)
+""":func:`sonar_gym.robot.move_commands` to a point, no heading, inside a compiled loop, as a
+``(K, 2)`` table: ``move_commands(belief, target_xy, distance_m, wheel_base_m)`` from
+``belief`` (``(x, y, theta)``, {W}) to ``target_xy`` (metres) whose distance from it is
+``distance_m``, Python's ``math.hypot`` of the differences (taken by the caller: it is not
+libm's ``hypot``)."""
+
+
+@compiled(  # type: ignore[misc]
+    _PREDICTED_DRIVE,
+    GENERATOR_HANDLE,  # handle
+    types.UniTuple(types.float64, 2),  # target_xy
+    types.float64,  # distance_m
+    *_DRIVE_ARGUMENTS[2:],
+    *_PREDICTION_ARGUMENTS,
+)
+def _drive_to_and_predict_compiled(
+    handle: GeneratorHandle,
+    target_xy: tuple[float, float],
+    distance_m: float,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+    estimate: tuple[float, float, float],
+    covariance: FloatArray,
+    variance_per_m: float,
+) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
+    return _drive_and_predict_inline(  # type: ignore[no-any-return]
+        handle_generator(handle),
+        move_commands(estimate, target_xy, distance_m, wheel_base_m),
+        noise,
+        wheel_base_m,
+        substeps,
+        integration,
+        odometry,
+        start,
+        robot_radius_m,
+        bounds,
+        kinds,
+        shapes,
+        estimate,
+        covariance,
+        variance_per_m,
+    )
+
+
+def drive_to_and_predict(
+    rng: np.random.Generator,
+    target_xy: tuple[float, float],
+    distance_m: float,
+    noise: FloatArray,
+    wheel_base_m: float,
+    substeps: int,
+    integration: int,
+    odometry: tuple[float, float, float],
+    start: tuple[float, float, float],
+    robot_radius_m: float,
+    bounds: FloatArray,
+    kinds: np.ndarray,
+    shapes: FloatArray,
+    estimate: tuple[float, float, float],
+    covariance: FloatArray,
+    variance_per_m: float,
+) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
+    """:func:`drive_and_predict` of the commands planned from ``estimate`` to the point
+    ``target_xy`` ({W}, metres): those of :func:`sonar_gym.robot.move_commands` without a
+    heading (the turn towards the point, then the straight of ``distance_m``, Python's
+    ``math.hypot`` of the differences; one command of no travel if the point is within 1 nm).
+
+    Returns the motion table (its commands those planned), the first command that needs the
+    physics, the predicted pose after the last command and its 3x3 covariance.
+    """
+    return _drive_to_and_predict_compiled(  # type: ignore[no-any-return]
+        generator_handle(rng),
+        target_xy,
+        distance_m,
         noise,
         wheel_base_m,
         substeps,

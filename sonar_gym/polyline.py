@@ -18,7 +18,7 @@ import numpy as np
 
 from sonar_gym.odometry import propagate_covariance
 from sonar_gym.pose import FloatArray, Pose, vector_norm
-from sonar_gym.robot import ENCODER_COLUMNS, DifferentialDriveRobot, MotionResult, move_commands
+from sonar_gym.robot import ENCODER_COLUMNS, DifferentialDriveRobot, MotionResult
 from sonar_gym.world import World
 
 ROUTE_CLEARANCE_M = 0.03
@@ -252,14 +252,12 @@ def follow_route(
     :func:`sonar_gym.odometry.predict_over_motion` with ``V`` of ``variance_per_m`` m^2 per
     metre rolled).
     """
-    wheel_base = float(robot.wheel_base_for(world))
     variance = float(variance_per_m)
     covariance = np.asarray(covariance, dtype=np.float64)
     rolled: list[float] = []
     for target in route.targets_between(*span_m):
-        plan = np.array(move_commands(estimate, target, wheel_base), dtype=np.float64)
-        motions, estimate, covariance = robot.drive_and_predict(
-            world, plan, rng, estimate, covariance, variance
+        motions, estimate, covariance = robot.drive_to_and_predict(
+            world, target, rng, estimate, covariance, variance
         )
         increments = motions[:, ENCODER_COLUMNS].tolist()
         rolled += [0.5 * (abs(left) + abs(right)) for left, right in increments]

@@ -367,13 +367,50 @@ class DifferentialDriveRobot:
             covariance,
             variance_per_m,
         )
+        self._finish_drive(world, motions, blocked, start)
+        return motions, Pose.unchecked(*predicted), predicted_covariance
+
+    def drive_to_and_predict(
+        self,
+        world: World,
+        target_xy: tuple[float, float],
+        rng: np.random.Generator,
+        estimate: Pose,
+        covariance: FloatArray,
+        variance_per_m: float,
+    ) -> tuple[FloatArray, Pose, FloatArray]:
+        """:meth:`drive_and_predict` of the commands :func:`move_commands` plans from
+        ``estimate`` to the point ``target_xy`` (Python floats, {W}, metres; no heading), with
+        the wheel base used with ``world``; planned in the same compiled call
+        (:func:`sonar_gym.drive_kernels.drive_to_and_predict`).
+
+        Returns the motion table, the predicted pose after the last command and its covariance.
+        """
+        start = world.robot_pose
+        belief = (estimate.x, estimate.y, estimate.theta)
+        distance = math.hypot(target_xy[0] - belief[0], target_xy[1] - belief[1])
+        motions, blocked, predicted, predicted_covariance = drive_kernels.drive_to_and_predict(
+            rng,
+            target_xy,
+            distance,
+            *self._wheel_arguments(world, 0, start),
+            belief,
+            covariance,
+            variance_per_m,
+        )
+        self._finish_drive(world, motions, blocked, start)
+        return motions, Pose.unchecked(*predicted), predicted_covariance
+
+    def _finish_drive(self, world: World, motions: FloatArray, blocked: int, start: Pose) -> None:
+        """Move the body and set the odometry after the compiled drive of the motion table
+        ``motions`` from the true pose ``start``, whose commands from ``blocked`` on need the
+        physics."""
         if blocked == len(motions):  # every command clear of the shapes: no physics
             last = motions[-1].tolist()
             world.place_robot_on_clear_path(Pose.unchecked(*last[_TRUE_POSE]))
             self.odometry_pose = Pose.unchecked(*last[_ODOMETRY])
         else:
             self._physics_after(world, motions, blocked, start)
-        return motions, Pose.unchecked(*predicted), predicted_covariance
 
     def _wheel_arguments(self, world: World, substeps: int, start: Pose) -> _WheelArguments:
         """The arguments of :func:`sonar_gym.drive_kernels.drive_commands` after the commands
