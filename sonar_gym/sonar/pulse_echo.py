@@ -282,7 +282,7 @@ class PulseEchoSonar:
         pose (sector pans, a pan after a calibration) reuse the last position's candidates: the
         memory holds one entry, matched on the very geometry and transducer objects, the
         sensor and robot positions, the robot radius, the temperature and the edge law. The
-        arrays are read-only.
+        arrays are read-only (as :func:`~sonar_gym.sonar.echoes.echo_candidates` hands them).
         """
         geometry, temperature_c = world.geometry, world.temperature_c
         key = (
@@ -303,8 +303,6 @@ class PulseEchoSonar:
         ):
             return last[3]
         candidates = self._search_candidates(world, robot_pose, sensor_xy)
-        for array in (candidates.directions, candidates.path_lengths, candidates.amplitudes):
-            array.setflags(write=False)
         _LAST_CANDIDATES["entry"] = (geometry, self.transducer, key, candidates)
         return candidates
 
