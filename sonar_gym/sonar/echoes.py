@@ -185,14 +185,16 @@ class EchoCandidates:
         :func:`echo_candidates`, which runs once per sensor position."""
         candidates = object.__new__(cls)
         candidates.__dict__.update(
-            position=position,
-            directions=directions,
-            path_lengths=path_lengths,
-            amplitudes=amplitudes,
-            _primitive_indices=primitive_indices,
-            _concave=concave,
-            _tables=tables,
-            threshold=threshold,
+            {
+                "position": position,
+                "directions": directions,
+                "path_lengths": path_lengths,
+                "amplitudes": amplitudes,
+                "_primitive_indices": primitive_indices,
+                "_concave": concave,
+                "_tables": tables,
+                "threshold": threshold,
+            }
         )
         return candidates
 
@@ -286,11 +288,11 @@ def echo_candidates(
     # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
     # minimum range and the threshold (a candidate is valid if it passes all five), then
     # which segments and circles may occlude; then the robot's footprint.
-    footprint = _NO_FOOTPRINT
+    footprint = _NO_FOOTPRINT  # (sensor - centre, radius), {W}, metres
     if footprint_center is not None and footprint_radius_m > 0.0:
         fx, fy = float(footprint_center[0]), float(footprint_center[1])
         if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
-            footprint = np.array((px - fx, py - fy, footprint_radius_m))
+            footprint = (px - fx, py - fy, footprint_radius_m)
     picks = np.empty(tables.n_picks, dtype=np.int64)
     kept = kernels.audible_paths(
         mapped,
@@ -303,7 +305,7 @@ def echo_candidates(
         tables.twin,
         tables.twin_comes_last,
         tables.has_t_junctions,
-        footprint,
+        *footprint,
         picks,
     )
     keep, directions, path_lengths, kept_amplitudes = _unoccluded_nearest_first(
@@ -362,7 +364,7 @@ def _unoccluded_nearest_first(
         _PATH_CENTRE,
     )
     n_kept = len(indices)
-    floats.flags.writeable = False  # and so every view of it
+    floats.setflags(write=False)  # and so every view of it
     return (
         indices,
         floats[: 2 * n_kept].reshape(n_kept, 2),
@@ -374,6 +376,5 @@ def _unoccluded_nearest_first(
 _NO_FACTORS = np.empty(0)
 """No absorption or gain factors: the amplitudes are the on-axis ones."""
 _NO_FACTORS.flags.writeable = False
-_NO_FOOTPRINT = np.empty(0)
-"""No footprint test (:func:`sonar_gym.sonar.kernels.audible_candidates`)."""
-_NO_FOOTPRINT.flags.writeable = False
+_NO_FOOTPRINT = (0.0, 0.0, 0.0)
+"""No footprint test: a radius of 0 (:func:`sonar_gym.sonar.kernels.audible_paths`)."""

@@ -623,7 +623,9 @@ def echo_ranges(
     INDICES,  # twin
     FLAGS,  # twin_comes_last
     types.boolean,  # has_t_junctions
-    NUMBERS,  # footprint
+    types.float64,  # footprint_offset_x
+    types.float64,  # footprint_offset_y
+    types.float64,  # footprint_radius
     types.Array(types.int64, 1, "C"),  # picks (written)
 )
 def audible_paths(
@@ -637,7 +639,9 @@ def audible_paths(
     twin: np.ndarray,
     twin_comes_last: np.ndarray,
     has_t_junctions: bool,
-    footprint: FloatArray,
+    footprint_offset_x: float,
+    footprint_offset_y: float,
+    footprint_radius: float,
     picks: np.ndarray,
 ) -> FloatArray:
     """:func:`audible_candidates` handing back one array: the ``(P, 3)`` rows
@@ -646,9 +650,15 @@ def audible_paths(
 
     Args:
         mapped, layout, absorption, gain, strict_bounds, inclusive_bounds, concave, twin,
-            twin_comes_last, has_t_junctions, footprint: those of :func:`audible_candidates`.
+            twin_comes_last, has_t_junctions: those of :func:`audible_candidates`.
+        footprint_offset_x, footprint_offset_y, footprint_radius: its footprint as three
+            floats (metres, {W}); a radius of 0 or less: no footprint test.
         picks: ``(N + S + C,)`` written (see above; the entries between are left as they are).
     """
+    footprint = np.empty(3 if footprint_radius > 0.0 else 0)
+    if footprint_radius > 0.0:
+        footprint[0], footprint[1] = footprint_offset_x, footprint_offset_y
+        footprint[2] = footprint_radius
     keep, kept, occluders = audible_candidates(
         mapped,
         layout,

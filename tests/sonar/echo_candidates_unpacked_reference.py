@@ -22,13 +22,16 @@ from sonar_gym.sonar.echoes import (
     _EDGE,
     _LN10,
     _NO_FACTORS,
-    _NO_FOOTPRINT,
     _PATH_CENTRE,
     _PLANE,
     EchoCandidates,
     edge_law_constants,
 )
 from sonar_gym.sonar.receiver import TimeVaryingGain
+
+_NO_FOOTPRINT = np.empty(0)
+"""No footprint test (:func:`sonar_gym.sonar.kernels.audible_candidates`)."""
+_NO_FOOTPRINT.flags.writeable = False
 
 
 def echo_candidates_unpacked_reference(

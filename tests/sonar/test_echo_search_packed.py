@@ -125,12 +125,14 @@ def test_packed_loops_give_the_bits_of_the_loops_they_wrap(world_name: str) -> N
             tables.twin,
             tables.twin_comes_last,
             tables.has_t_junctions,
-            footprint,
         )
         picks = np.full(tables.n_picks, -7, dtype=np.int64)
-        kept = kernels.audible_paths(mapped, tables.search_layout, absorption, gain, *tests, picks)
+        footprint_floats = footprint.tolist() if len(footprint) else [0.0, 0.0, 0.0]
+        kept = kernels.audible_paths(
+            mapped, tables.search_layout, absorption, gain, *tests, *footprint_floats, picks
+        )
         keep_want, kept_want, occluders_want = kernels.audible_candidates(
-            mapped_reference, tables.search_layout, absorption, gain, *tests
+            mapped_reference, tables.search_layout, absorption, gain, *tests, footprint
         )
         assert _bits_equal(kept, kept_want)
         assert _bits_equal(picks[: len(keep_want)], keep_want)
