@@ -272,7 +272,6 @@ def echo_candidates(
         -absorption_db_per_m * _LN10 / 10.0,
         concave,
     )
-    centre_distance = distances[:n_circles]
     # Air absorption 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10) and the receiver's gain
     # as factors here; the amplitudes, their products, are written by the tests' loop below.
     absorption = (
@@ -309,7 +308,7 @@ def echo_candidates(
         picks,
     )
     keep, directions, path_lengths, kept_amplitudes = _unoccluded_nearest_first(
-        tables, mapped, picks, kept, centre_distance
+        tables, mapped, picks, kept, distances
     )
     return EchoCandidates.unchecked(
         sensor[:2],
@@ -328,7 +327,7 @@ def _unoccluded_nearest_first(
     mapped: FloatArray,
     picks: np.ndarray,
     kept: FloatArray,
-    centre_distance: FloatArray,
+    distances: FloatArray,
 ) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
     """The candidates :func:`~sonar_gym.sonar.kernels.audible_paths` picked whose paths
     ``p -> p + rel`` cross no occluding segment and enter no circle before their end, nearest
@@ -350,16 +349,17 @@ def _unoccluded_nearest_first(
         picks: ``(N + S + C,)`` the indices of the ``P`` candidates that passed the tests, then
             whether each segment may occlude and 1 for every circle (last ``S + C`` entries).
         kept: ``(P, 3)`` their rows ``(rel_x, rel_y, 1)``.
-        centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
+        distances: :func:`~sonar_gym.sonar.kernels.echo_ranges`' distances, the first ``C``
+            from ``p`` to every circle centre.
     """
     matrix = mapped[tables.occlusion_rows].reshape(-1, 3)  # the occlusion map at the sensor
     indices, floats = kernels.clear_paths_nearest_first(
         np.dot(matrix, kept.T),  # (3 S + C, P)
         picks,
         kept,
-        mapped[tables.ranges_rows],
-        mapped[tables.amplitudes_rows],
-        centre_distance,
+        mapped,
+        distances,
+        tables.search_layout,
         tables.radius_sq,
         _PATH_CENTRE,
     )

@@ -684,9 +684,9 @@ def audible_paths(
     TABLE,  # products
     INDICES,  # picks
     TABLE,  # kept
-    NUMBERS,  # ranges
-    NUMBERS,  # amplitudes
-    NUMBERS,  # centre_distance
+    NUMBERS,  # mapped
+    NUMBERS,  # distances
+    INDICES,  # layout
     NUMBERS,  # radius_sq
     types.float64,  # path_centre
 )
@@ -694,9 +694,9 @@ def clear_paths_nearest_first(
     products: FloatArray,
     picks: np.ndarray,
     kept: FloatArray,
-    ranges: FloatArray,
-    amplitudes: FloatArray,
-    centre_distance: FloatArray,
+    mapped: FloatArray,
+    distances: FloatArray,
+    layout: np.ndarray,
     radius_sq: FloatArray,
     path_centre: float,
 ) -> tuple[np.ndarray, FloatArray]:
@@ -708,9 +708,19 @@ def clear_paths_nearest_first(
         products: ``(3 S + C, P)`` the occlusion map times ``kept.T``.
         picks: :func:`audible_paths`' ``(N + S + C,)`` indices and occluder flags.
         kept: ``(P, 3)`` :func:`audible_paths`' rows.
-        ranges, amplitudes, centre_distance, radius_sq, path_centre: those of
-            :func:`clear_nearest_first`.
+        mapped: the search map's product after :func:`audible_paths`: the ranges and
+            amplitudes of :func:`clear_nearest_first` are its ranges and amplitudes rows.
+        distances: :func:`echo_ranges`' distances; their first ``C`` are the centre distances.
+        layout: :func:`on_axis_echoes`' ``(S, C, W, V, first ranges row, ...)``.
+        radius_sq, path_centre: those of :func:`clear_nearest_first`.
     """
+    n_circles = layout[1]
+    n_candidates = layout[0] + n_circles + layout[3]
+    ranges_start = layout[4]
+    amplitudes_start = ranges_start + n_candidates
+    ranges = mapped[ranges_start:amplitudes_start]
+    amplitudes = mapped[amplitudes_start : amplitudes_start + n_candidates]
+    centre_distance = distances[:n_circles]
     n_circles = centre_distance.shape[0]
     n_occluders = (products.shape[0] - n_circles) // 3 + n_circles
     first_occluder = picks.shape[0] - n_occluders

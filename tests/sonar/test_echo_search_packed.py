@@ -141,17 +141,26 @@ def test_packed_loops_give_the_bits_of_the_loops_they_wrap(world_name: str) -> N
         assert _bits_equal(mapped, mapped_reference)
 
         products = np.dot(mapped[tables.occlusion_rows].reshape(-1, 3), kept.T)
-        shared = (
-            mapped[tables.ranges_rows],
-            mapped[tables.amplitudes_rows],
-            distances_want[:n_circles],
-            tables.radius_sq,
-        )
         indices, floats = kernels.clear_paths_nearest_first(
-            products, picks, kept, *shared, _PATH_CENTRE
+            products,
+            picks,
+            kept,
+            mapped,
+            distances,
+            tables.search_layout,
+            tables.radius_sq,
+            _PATH_CENTRE,
         )
         want = kernels.clear_nearest_first(
-            products, keep_want, kept_want, *shared, occluders_want, _PATH_CENTRE
+            products,
+            keep_want,
+            kept_want,
+            mapped_reference[tables.ranges_rows],
+            mapped_reference[tables.amplitudes_rows],
+            distances_want[:n_circles],
+            tables.radius_sq,
+            occluders_want,
+            _PATH_CENTRE,
         )
         n_kept = len(want[0])
         assert _bits_equal(indices, want[0])
