@@ -83,11 +83,14 @@ class EchoTables:
         occluder_bounds: ``(S + C,)`` 0 for segments that may occlude, 1 for enclosure
             segments (never), -1 for circles (always).
         kind_codes: the EchoKind codes of a plane, a cylinder and an edge.
+        n_candidates, n_picks: ``N = S + C + V``, and ``N + S + C`` (the picks of the echo
+            search's tests: the indices of the candidates that pass, then the occluders).
 
     What only the pan's echo search reads (``position_and_occlusion_map``, ``radius_padded``,
     ``twin_comes_last``, ``kinds_template``, ``has_t_junctions``, ``search_map``,
-    ``strict_bounds``, ``occluder_bounds``) is built on first use, once per geometry: the side
-    sonars, whose geometry changes every episode in an env with random obstacles, never ask.
+    ``strict_bounds``, ``occluder_bounds``, ``n_candidates``, ``n_picks``) is built on first
+    use, once per geometry: the side sonars, whose geometry changes every episode in an env
+    with random obstacles, never ask.
     """
 
     position_map: FloatArray
@@ -198,6 +201,18 @@ class EchoTables:
         )
         occluder_bounds.flags.writeable = False
         return occluder_bounds
+
+    @functools.cached_property
+    def n_candidates(self) -> int:
+        """``N = S + C + V``, the number of echo candidates."""
+        return self.n_segments + self.n_circles + self.n_vertices
+
+    @functools.cached_property
+    def n_picks(self) -> int:
+        """``N + S + C``: the length of the picks of
+        :func:`sonar_gym.sonar.kernels.audible_paths` (the indices of at most every candidate,
+        then one occluder flag per segment and circle)."""
+        return 2 * (self.n_segments + self.n_circles) + self.n_vertices
 
     @functools.cached_property
     def search_layout(self) -> np.ndarray:

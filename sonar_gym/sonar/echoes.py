@@ -185,14 +185,16 @@ class EchoCandidates:
         :func:`echo_candidates`, which runs once per sensor position."""
         candidates = object.__new__(cls)
         candidates.__dict__.update(
-            position=position,
-            directions=directions,
-            path_lengths=path_lengths,
-            amplitudes=amplitudes,
-            _primitive_indices=primitive_indices,
-            _concave=concave,
-            _tables=tables,
-            threshold=threshold,
+            {
+                "position": position,
+                "directions": directions,
+                "path_lengths": path_lengths,
+                "amplitudes": amplitudes,
+                "_primitive_indices": primitive_indices,
+                "_concave": concave,
+                "_tables": tables,
+                "threshold": threshold,
+            }
         )
         return candidates
 
@@ -231,7 +233,8 @@ def echo_candidates(
     edge_law: str = "weak",
     receiver_gain: TimeVaryingGain | None = None,
 ) -> EchoCandidates:
-    """Find the echo candidates of a sensor at ``position`` (see the module docstring).
+    """Find the echo candidates of a sensor at ``position`` (see the module docstring); their
+    directions, path lengths and amplitudes are read-only.
 
     Args:
         geometry: the static reflectors ({W}, metres).
@@ -248,42 +251,49 @@ def echo_candidates(
     """
     tables = echo_tables(geometry, _PLANE, _CYLINDER, _EDGE)
     px, py = float(position[0]), float(position[1])
+    n_circles, n_candidates = tables.n_circles, tables.n_candidates
 
     # The map's product holds every quantity affine in the position, and gets the ranges and
     # amplitudes written into its rows for them: from first_test_row on it is then every
     # per-candidate test, two comparisons in all.
-    mapped = np.dot(tables.search_map, np.array((px, py, 1.0)))
+    sensor = np.array((px, py, 1.0))
+    mapped = np.dot(tables.search_map, sensor)
     # Ranges (planes and vertices |rel|, a cylinder its centre distance minus its radius,
     # written into the map's ranges rows), the cylinders' offsets moved to their echo points,
     # and the on-axis laws of the module docstring (written into the map's amplitudes rows),
-    # candidate by candidate.
-    concave, distances = kernels.on_axis_echoes(
+    # candidate by candidate; then the exponents of air absorption.
+    concave = np.empty(tables.n_wedges, dtype=np.bool_)
+    distances = kernels.echo_ranges(
         mapped,
         tables.search_layout,
         tables.radius_padded,
         tables.radius,
         edge_law_constants(edge_law, wavenumber),
+        -absorption_db_per_m * _LN10 / 10.0,
+        concave,
     )
-    centre_distance, safe = distances[: tables.n_circles], distances[tables.n_circles :]
     # Air absorption 10^(-alpha 2 r / 20) = exp(-alpha ln(10) r / 10) and the receiver's gain
     # as factors here; the amplitudes, their products, are written by the tests' loop below.
     absorption = (
-        np.exp((-absorption_db_per_m * _LN10 / 10.0) * safe)
-        if absorption_db_per_m > 0.0
-        else _NO_FACTORS
+        np.exp(distances[n_circles + n_candidates :]) if absorption_db_per_m > 0.0 else _NO_FACTORS
     )
-    gain = _NO_FACTORS if receiver_gain is None else receiver_gain.gain(safe)
+    gain = (
+        _NO_FACTORS
+        if receiver_gain is None
+        else receiver_gain.gain(distances[n_circles : n_circles + n_candidates])
+    )
 
     # The tests, as rows of `mapped` against bounds: strictly, the foot inside the segment
     # (along > 0, -along > -1); inclusively, the segment not seen from its solid side, the
     # minimum range and the threshold (a candidate is valid if it passes all five), then
     # which segments and circles may occlude; then the robot's footprint.
-    footprint = _NO_FOOTPRINT
+    footprint = _NO_FOOTPRINT  # (sensor - centre, radius), {W}, metres
     if footprint_center is not None and footprint_radius_m > 0.0:
         fx, fy = float(footprint_center[0]), float(footprint_center[1])
         if footprint_radius_m > min_range_m - math.hypot(px - fx, py - fy):
-            footprint = np.array((px - fx, py - fy, footprint_radius_m))
-    keep, kept, occluders = kernels.audible_candidates(
+            footprint = (px - fx, py - fy, footprint_radius_m)
+    picks = np.empty(tables.n_picks, dtype=np.int64)
+    kept = kernels.audible_paths(
         mapped,
         tables.search_layout,
         absorption,
@@ -294,13 +304,14 @@ def echo_candidates(
         tables.twin,
         tables.twin_comes_last,
         tables.has_t_junctions,
-        footprint,
+        *footprint,
+        picks,
     )
     keep, directions, path_lengths, kept_amplitudes = _unoccluded_nearest_first(
-        tables, mapped, keep, kept, centre_distance, occluders
+        tables, mapped, picks, kept, distances
     )
     return EchoCandidates.unchecked(
-        np.array((px, py)),
+        sensor[:2],
         directions,
         path_lengths,
         kept_amplitudes,
@@ -314,14 +325,13 @@ def echo_candidates(
 def _unoccluded_nearest_first(
     tables: EchoTables,
     mapped: FloatArray,
-    keep: np.ndarray,
+    picks: np.ndarray,
     kept: FloatArray,
-    centre_distance: FloatArray,
-    occluders: np.ndarray,
+    distances: FloatArray,
 ) -> tuple[np.ndarray, FloatArray, FloatArray, FloatArray]:
-    """The candidates ``keep`` whose paths ``p -> p + rel`` cross no occluding segment and
-    enter no circle before their end, nearest first: ``(indices, (K, 2) unit directions, path
-    lengths, amplitudes)``.
+    """The candidates :func:`~sonar_gym.sonar.kernels.audible_paths` picked whose paths
+    ``p -> p + rel`` cross no occluding segment and enter no circle before their end, nearest
+    first: ``(indices, (K, 2) unit directions, path lengths, amplitudes)``.
 
     Segments: ``p + u rel = a + v d`` gives ``u = ((a - p) x d) / (rel x d)`` and
     ``v = ((a - p) x rel) / (rel x d)``; a crossing with ``0 <= u <= 1 - tol`` and
@@ -330,31 +340,41 @@ def _unoccluded_nearest_first(
     the path (``0 <= u* <= 1 - tol``) and inside the circle. (Beyond the path's end the nearest
     point of the path is its end, an echo point on another surface, never inside a circle; the
     reflecting cylinder itself has ``u* > 1``.) The products are numpy's; the tests and the
-    ordering run path by path in :func:`sonar_gym.sonar.kernels.clear_nearest_first`.
+    ordering run path by path in :func:`sonar_gym.sonar.kernels.clear_paths_nearest_first`,
+    whose one array of floats the directions, path lengths and amplitudes are read-only views
+    of.
 
     Args:
         mapped: the search map's product at the sensor, its ranges and amplitudes rows written.
-        keep: ``(K,)`` candidate indices; ``kept``: ``(K, 3)`` their rows ``(rel_x, rel_y, 1)``.
-        centre_distance: ``(C,)`` distance from ``p`` to every circle centre.
-        occluders: ``(S + C,)`` which segments may occlude, then True for every circle.
+        picks: ``(N + S + C,)`` the indices of the ``P`` candidates that passed the tests, then
+            whether each segment may occlude and 1 for every circle (last ``S + C`` entries).
+        kept: ``(P, 3)`` their rows ``(rel_x, rel_y, 1)``.
+        distances: :func:`~sonar_gym.sonar.kernels.echo_ranges`' distances, the first ``C``
+            from ``p`` to every circle centre.
     """
     matrix = mapped[tables.occlusion_rows].reshape(-1, 3)  # the occlusion map at the sensor
-    return kernels.clear_nearest_first(  # type: ignore[no-any-return]
-        np.dot(matrix, kept.T),  # (3 S + C, K)
-        keep,
+    indices, floats = kernels.clear_paths_nearest_first(
+        np.dot(matrix, kept.T),  # (3 S + C, P)
+        picks,
         kept,
-        mapped[tables.ranges_rows],
-        mapped[tables.amplitudes_rows],
-        centre_distance,
+        mapped,
+        distances,
+        tables.search_layout,
         tables.radius_sq,
-        occluders,
         _PATH_CENTRE,
+    )
+    n_kept = len(indices)
+    floats.setflags(write=False)  # and so every view of it
+    return (
+        indices,
+        floats[: 2 * n_kept].reshape(n_kept, 2),
+        floats[2 * n_kept : 3 * n_kept],
+        floats[3 * n_kept :],
     )
 
 
 _NO_FACTORS = np.empty(0)
 """No absorption or gain factors: the amplitudes are the on-axis ones."""
 _NO_FACTORS.flags.writeable = False
-_NO_FOOTPRINT = np.empty(0)
-"""No footprint test (:func:`sonar_gym.sonar.kernels.audible_candidates`)."""
-_NO_FOOTPRINT.flags.writeable = False
+_NO_FOOTPRINT = (0.0, 0.0, 0.0)
+"""No footprint test: a radius of 0 (:func:`sonar_gym.sonar.kernels.audible_paths`)."""

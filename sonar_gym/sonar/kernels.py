@@ -565,3 +565,184 @@ def clear_nearest_first(
         kept_ranges[place] = ranges[keep[place]]
     clear = unoccluded(products, kept_ranges, centre_distance, radius_sq, occluders, path_centre)
     return nearest_first(keep, clear, kept, ranges, amplitudes)  # type: ignore[no-any-return]
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 1, "C"),
+    types.Array(types.float64, 1, "C"),  # mapped (ranges, offsets, on-axis amplitudes written)
+    INDICES,  # layout
+    NUMBERS,  # radius_padded
+    NUMBERS,  # radius
+    NUMBERS,  # edge law constants
+    types.float64,  # exponent_per_m
+    types.Array(types.boolean, 1, "C"),  # concave (written)
+)
+def echo_ranges(
+    mapped: FloatArray,
+    layout: np.ndarray,
+    radius_padded: FloatArray,
+    radius: FloatArray,
+    edge_law: FloatArray,
+    exponent_per_m: float,
+    concave: np.ndarray,
+) -> FloatArray:
+    """:func:`on_axis_echoes` handing back one array: its concave flags written into
+    ``concave`` (``(W,)``, in place) and its distances followed by the exponents of air
+    absorption, ``(C + 2 N,)``: the centre distances ``(C,)``, the ranges clipped at 1 nm
+    ``(N,)`` (metres), then ``exponent_per_m`` times each clipped range ``(N,)``, the
+    elementwise product ``exponent_per_m * safe`` that numpy's ``exp`` takes (``exponent_per_m``
+    in 1/m: ``-alpha ln(10) / 10`` for an absorption ``alpha`` in dB/m).
+
+    Args:
+        mapped, layout, radius_padded, radius, edge_law: those of :func:`on_axis_echoes`.
+        exponent_per_m: the exponent of air absorption per metre of range (1/m).
+        concave: ``(W,)`` written: whether each wedge vertex is concave from the sensor.
+    """
+    wedges, distances = on_axis_echoes(mapped, layout, radius_padded, radius, edge_law)
+    concave[:] = wedges
+    n_circles, n_distances = layout[1], distances.shape[0]
+    n_candidates = n_distances - n_circles
+    ranges_and_exponents = np.empty(n_distances + n_candidates)
+    ranges_and_exponents[:n_distances] = distances
+    for candidate in range(n_candidates):
+        ranges_and_exponents[n_distances + candidate] = (
+            exponent_per_m * distances[n_circles + candidate]
+        )
+    return ranges_and_exponents
+
+
+@compiled(  # type: ignore[misc]
+    types.Array(types.float64, 2, "C"),
+    types.Array(types.float64, 1, "C"),  # mapped (amplitudes written)
+    INDICES,  # layout
+    NUMBERS,  # absorption
+    NUMBERS,  # gain
+    NUMBERS,  # strict_bounds
+    NUMBERS,  # inclusive_bounds
+    FLAGS,  # concave
+    INDICES,  # twin
+    FLAGS,  # twin_comes_last
+    types.boolean,  # has_t_junctions
+    types.float64,  # footprint_offset_x
+    types.float64,  # footprint_offset_y
+    types.float64,  # footprint_radius
+    types.Array(types.int64, 1, "C"),  # picks (written)
+)
+def audible_paths(
+    mapped: FloatArray,
+    layout: np.ndarray,
+    absorption: FloatArray,
+    gain: FloatArray,
+    strict_bounds: FloatArray,
+    inclusive_bounds: FloatArray,
+    concave: np.ndarray,
+    twin: np.ndarray,
+    twin_comes_last: np.ndarray,
+    has_t_junctions: bool,
+    footprint_offset_x: float,
+    footprint_offset_y: float,
+    footprint_radius: float,
+    picks: np.ndarray,
+) -> FloatArray:
+    """:func:`audible_candidates` handing back one array: the ``(P, 3)`` rows
+    ``(rel_x, rel_y, 1)`` of the candidates that pass, with their indices written into
+    ``picks[:P]`` and which primitives may occlude (1 or 0) into its last ``S + C`` entries.
+
+    Args:
+        mapped, layout, absorption, gain, strict_bounds, inclusive_bounds, concave, twin,
+            twin_comes_last, has_t_junctions: those of :func:`audible_candidates`.
+        footprint_offset_x, footprint_offset_y, footprint_radius: its footprint as three
+            floats (metres, {W}); a radius of 0 or less: no footprint test.
+        picks: ``(N + S + C,)`` written (see above; the entries between are left as they are).
+    """
+    footprint = np.empty(3 if footprint_radius > 0.0 else 0)
+    if footprint_radius > 0.0:
+        footprint[0], footprint[1] = footprint_offset_x, footprint_offset_y
+        footprint[2] = footprint_radius
+    keep, kept, occluders = audible_candidates(
+        mapped,
+        layout,
+        absorption,
+        gain,
+        strict_bounds,
+        inclusive_bounds,
+        concave,
+        twin,
+        twin_comes_last,
+        has_t_junctions,
+        footprint,
+    )
+    picks[: keep.shape[0]] = keep
+    first_occluder = picks.shape[0] - occluders.shape[0]
+    for occluder in range(occluders.shape[0]):
+        picks[first_occluder + occluder] = 1 if occluders[occluder] else 0
+    return kept
+
+
+@compiled(  # type: ignore[misc]
+    types.Tuple((types.Array(types.int64, 1, "C"), types.Array(types.float64, 1, "C"))),
+    TABLE,  # products
+    INDICES,  # picks
+    TABLE,  # kept
+    NUMBERS,  # mapped
+    NUMBERS,  # distances
+    INDICES,  # layout
+    NUMBERS,  # radius_sq
+    types.float64,  # path_centre
+)
+def clear_paths_nearest_first(
+    products: FloatArray,
+    picks: np.ndarray,
+    kept: FloatArray,
+    mapped: FloatArray,
+    distances: FloatArray,
+    layout: np.ndarray,
+    radius_sq: FloatArray,
+    path_centre: float,
+) -> tuple[np.ndarray, FloatArray]:
+    """:func:`clear_nearest_first` of the candidates :func:`audible_paths` picked, handing back
+    two arrays: ``(indices (K,), (4 K,) the unit directions (K, 2) row by row, then the path
+    lengths (K,), then the amplitudes (K,))``.
+
+    Args:
+        products: ``(3 S + C, P)`` the occlusion map times ``kept.T``.
+        picks: :func:`audible_paths`' ``(N + S + C,)`` indices and occluder flags.
+        kept: ``(P, 3)`` :func:`audible_paths`' rows.
+        mapped: the search map's product after :func:`audible_paths`: the ranges and
+            amplitudes of :func:`clear_nearest_first` are its ranges and amplitudes rows.
+        distances: :func:`echo_ranges`' distances; their first ``C`` are the centre distances.
+        layout: :func:`on_axis_echoes`' ``(S, C, W, V, first ranges row, ...)``.
+        radius_sq, path_centre: those of :func:`clear_nearest_first`.
+    """
+    n_circles = layout[1]
+    n_candidates = layout[0] + n_circles + layout[3]
+    ranges_start = layout[4]
+    amplitudes_start = ranges_start + n_candidates
+    ranges = mapped[ranges_start:amplitudes_start]
+    amplitudes = mapped[amplitudes_start : amplitudes_start + n_candidates]
+    centre_distance = distances[:n_circles]
+    n_circles = centre_distance.shape[0]
+    n_occluders = (products.shape[0] - n_circles) // 3 + n_circles
+    first_occluder = picks.shape[0] - n_occluders
+    occluders = np.empty(n_occluders, dtype=np.bool_)
+    for occluder in range(n_occluders):
+        occluders[occluder] = picks[first_occluder + occluder] != 0
+    indices, directions, path_lengths, kept_amplitudes = clear_nearest_first(
+        products,
+        picks[: kept.shape[0]],
+        kept,
+        ranges,
+        amplitudes,
+        centre_distance,
+        radius_sq,
+        occluders,
+        path_centre,
+    )
+    n_kept = indices.shape[0]
+    floats = np.empty(4 * n_kept)
+    for rank in range(n_kept):
+        floats[2 * rank] = directions[rank, 0]
+        floats[2 * rank + 1] = directions[rank, 1]
+        floats[2 * n_kept + rank] = path_lengths[rank]
+        floats[3 * n_kept + rank] = kept_amplitudes[rank]
+    return indices, floats

@@ -201,6 +201,9 @@ def echo_readings(
 
 _Sonar = TypeVar("_Sonar", bound="PulseEchoSonar")
 
+SensorPoint = FloatArray | tuple[float, float]
+"""A sensor position ``(x, y)`` in {W}, metres: an array or a pair of floats."""
+
 _LAST_CANDIDATES: dict[
     str, tuple[StaticGeometry, Transducer, tuple[float | str, ...], EchoCandidates]
 ] = {}
@@ -274,7 +277,7 @@ class PulseEchoSonar:
         return dataclasses.replace(self, readout=dataclasses.replace(self.readout, **switches))
 
     def candidates(
-        self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
+        self, world: WorldLike, robot_pose: Pose, sensor_xy: SensorPoint
     ) -> EchoCandidates:
         """Echo candidates of a sensor at ``sensor_xy`` ({W}) on a robot at ``robot_pose``.
 
@@ -282,7 +285,7 @@ class PulseEchoSonar:
         pose (sector pans, a pan after a calibration) reuse the last position's candidates: the
         memory holds one entry, matched on the very geometry and transducer objects, the
         sensor and robot positions, the robot radius, the temperature and the edge law. The
-        arrays are read-only.
+        arrays are read-only (as :func:`~sonar_gym.sonar.echoes.echo_candidates` hands them).
         """
         geometry, temperature_c = world.geometry, world.temperature_c
         key = (
@@ -303,13 +306,11 @@ class PulseEchoSonar:
         ):
             return last[3]
         candidates = self._search_candidates(world, robot_pose, sensor_xy)
-        for array in (candidates.directions, candidates.path_lengths, candidates.amplitudes):
-            array.setflags(write=False)
         _LAST_CANDIDATES["entry"] = (geometry, self.transducer, key, candidates)
         return candidates
 
     def _search_candidates(
-        self, world: WorldLike, robot_pose: Pose, sensor_xy: FloatArray
+        self, world: WorldLike, robot_pose: Pose, sensor_xy: SensorPoint
     ) -> EchoCandidates:
         transducer = self.transducer
         _, wavenumber, _ = air_at(transducer, world.temperature_c)
@@ -330,7 +331,7 @@ class PulseEchoSonar:
         self,
         world: WorldLike,
         robot_pose: Pose,
-        sensor_xy: FloatArray,
+        sensor_xy: SensorPoint,
         beam_directions: FloatArray,
     ) -> FirstEchoes:
         """First echoes of pings from ``sensor_xy`` ({W}) along ``beam_directions`` (``(n, 2)``
@@ -364,7 +365,7 @@ class PulseEchoSonar:
         self,
         world: WorldLike,
         robot_pose: Pose,
-        sensor_xy: FloatArray,
+        sensor_xy: SensorPoint,
         beam_directions: FloatArray,
         rng: np.random.Generator | None,
     ) -> tuple[FloatArray, FloatArray]:

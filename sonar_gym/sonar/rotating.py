@@ -149,9 +149,7 @@ class RotatingSonar(PulseEchoSonar):
         angles, directions = _pan_grid(start, stop, increment)
         offset_x, offset_y = world.scenario.robot.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)  # as Pose.transform_point
-        sensor_xy = np.array(
-            (pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
-        )
+        sensor_xy = (pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
         ranges, amplitudes = self.ping(world, pose, sensor_xy, directions, rng)
         transducer = self.transducer
         duration = (len(angles) - 1) * increment / transducer.pan_speed_rad_s + len(

@@ -137,9 +137,7 @@ class SweptSonar(PulseEchoSonar):
         # pose.transform_point of the offset, on floats: the same arithmetic
         offset_x, offset_y = world.scenario.robot.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
-        sensor_xy = np.array(
-            (pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
-        )
+        sensor_xy = (pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
         ranges, amplitudes = self.ping(world, pose, sensor_xy, directions, rng)
         transducer = self.transducer
         first, last = float(angles[0]), float(angles[-1])

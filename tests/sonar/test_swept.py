@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from sonar_gym.pose import Pose
+from sonar_gym.sonar import pulse_echo
 from sonar_gym.sonar.acoustics import PistonBeam
 from sonar_gym.sonar.presets import PRESET_NAMES, preset
 from sonar_gym.sonar.pulse_echo import IDEAL_READOUT, FirstEchoes
@@ -69,6 +70,25 @@ def test_sweep_readings_are_the_sweep_without_its_scan(sector: float) -> None:
         assert duration == scan.duration_s
     with pytest.raises(ValueError, match="sector_center"):
         sweep.sweep_grid(math.nan)
+
+
+def test_a_sensor_point_as_floats_pings_as_the_same_point_as_an_array() -> None:
+    """The sweep and the pan hand ``ping`` their sensor point as a pair of floats; an array of
+    it (the form they handed before) gives the same candidates and readings, bit for bit."""
+    test_world = cluttered_room()
+    sweep = SweptSonar.kim()
+    directions = sweep.sweep_grid(0.3)[1]
+    for seed, pose in enumerate([Pose(0.3, 0.4, 1.0), Pose(-0.2, 0.1, -2.5)]):
+        c, s = math.cos(pose.theta), math.sin(pose.theta)
+        point = (pose.x + c * 0.05 - s * 0.01, pose.y + s * 0.05 + c * 0.01)
+        readings = []
+        for sensor_xy in (point, np.array(point)):
+            pulse_echo._LAST_CANDIDATES.clear()  # search afresh for each form
+            readings.append(
+                sweep.ping(test_world, pose, sensor_xy, directions, np.random.default_rng(seed))
+            )
+        for got, want in zip(readings[0], readings[1], strict=True):
+            assert got.tobytes() == want.tobytes()
 
 
 def test_sweep_sees_the_wall_ahead_at_its_perpendicular_distance() -> None:
