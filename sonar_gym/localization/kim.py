@@ -431,9 +431,14 @@ def _pair_test(
     circle = _search_circle(center, radius)
     if center is None or radius is None:
         return circle, (False, 1.0, 0.0, 1.0, 0.0)
+    return circle, _heading_test(headings)
+
+
+def _heading_test(headings: FloatArray) -> tuple[bool, float, float, float, float]:
+    """The heading test of :func:`_pair_test` within a search circle."""
     spread = _heading_spread(headings)
     middle, angle = (0.0, 0.0) if spread is None else spread
-    return circle, (
+    return (
         spread is not None,
         math.cos(middle),
         math.sin(middle),
@@ -701,7 +706,7 @@ def _smoothed_vote(
         table,
         np.cos(headings),
         np.sin(headings),
-        _pair_test(center, radius, headings)[1],
+        _heading_test(headings),
         *_vote_layout(grid, window, center, radius),
     )
     # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
@@ -717,13 +722,31 @@ def _smoothed_vote(
         x = x0 + (local_x + window.low[0] + 0.5) * size
         y = y0 + (local_y + window.low[1] + 0.5) * size
     pose = Pose.unchecked(x, y, heading)
-    return VoteLocalization(
+    return _vote_fix(
+        pose,
+        int(volume[heading_index, local_x, local_y]),
+        heading,
+        pose.compose(sweeps[-1].odometry),
+    )
+
+
+def _vote_fix(
+    pose: Pose, votes: int, heading_rad: float, last_sweep_pose: Pose
+) -> VoteLocalization:
+    """``VoteLocalization(status=OK, pose=pose, votes=votes, heading_rad=heading_rad,
+    last_sweep_pose=last_sweep_pose)``, its fields set as the frozen dataclass sets them,
+    without its per-field setters and its check (which a pose with ``"ok"`` passes)."""
+    result = object.__new__(VoteLocalization)
+    result.__dict__.update(
         status=OK,
         pose=pose,
-        votes=int(volume[heading_index, local_x, local_y]),
-        heading_rad=heading,
-        last_sweep_pose=pose.compose(sweeps[-1].odometry),
+        message="",
+        votes=votes,
+        vote_map=None,
+        heading_rad=heading_rad,
+        last_sweep_pose=last_sweep_pose,
     )
+    return result
 
 
 def _vote(

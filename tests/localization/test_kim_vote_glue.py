@@ -54,6 +54,7 @@ def test_gathered_readings_are_the_reference_bits(seed: int) -> None:
 
 def _assert_same(result: VoteLocalization, expected: VoteLocalization) -> None:
     assert type(result) is type(expected)
+    assert list(vars(result)) == list(vars(expected))  # every field, in the dataclass's order
     assert (result.status, result.message, result.votes) == (
         expected.status,
         expected.message,
