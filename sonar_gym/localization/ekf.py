@@ -408,9 +408,8 @@ def _general_update(
     symmetrising, for any layout of ``P``, a 3x3 or 2x2 ``G`` and either covariance form."""
     rows = noise.shape[0]
     observation = _IDENTITY[:rows]
-    innovation = np.array([measured_pose.x - pose.x, measured_pose.y - pose.y, innovation_theta])[
-        :rows
-    ]
+    full_innovation = [measured_pose.x - pose.x, measured_pose.y - pose.y, innovation_theta]
+    innovation = np.array(full_innovation)[:rows]
     if rows == 3 and prior.flags.c_contiguous and _kept_by_identity(prior):
         # H = I: H P H^T and P H^T are P itself, bit for bit
         innovation_covariance = prior + noise
