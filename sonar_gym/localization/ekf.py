@@ -363,14 +363,53 @@ def ekf_update_unchecked(
     """
     prior, noise = covariance, measurement_covariance
     rows = noise.shape[0]
+    innovation_theta = wrap_angle(measured_pose.theta - pose.theta)
+    if rows == 3 and not joseph_form and prior.flags.c_contiguous and _kept_by_identity(prior):
+        innovation = np.array(
+            [measured_pose.x - pose.x, measured_pose.y - pose.y, innovation_theta]
+        )
+        dx, dy, dtheta, posterior = _position_and_heading_update(prior, noise, innovation)
+    else:
+        dx, dy, dtheta, posterior = _general_update(
+            pose, prior, measured_pose, noise, innovation_theta, joseph_form
+        )
+    x, y, theta = pose.x + dx, pose.y + dy, pose.theta + dtheta
+    if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
+        return Pose.unchecked(x, y, theta), _symmetrised(posterior)
+    return Pose(x, y, theta), _symmetrised(posterior)  # raises, naming the non-finite field
+
+
+def _position_and_heading_update(
+    prior: FloatArray, noise: FloatArray, innovation: FloatArray
+) -> tuple[float, float, float, FloatArray]:
+    """``(K nu, (I - K) P)`` of a 3x3 fix (``H = I``) on a C-ordered ``P`` that
+    :func:`_kept_by_identity` keeps: ``H P H^T`` and ``P H^T`` are ``P`` itself, bit for bit.
+
+    The products are ``ndarray.dot``: on C-ordered operands it makes the BLAS calls of ``@``
+    (the same bits) at half its per-call cost. Returns the state correction (m, m, rad) and
+    the posterior before symmetrising.
+    """
+    gain = prior.dot(_inverse_or_pseudo_inverse(prior + noise))
+    dx, dy, dtheta = gain.dot(innovation).tolist()
+    # K @ H is K itself when K is kept by the identity; the product otherwise
+    correction = _IDENTITY - (gain if _kept_by_identity(gain) else gain @ _IDENTITY)
+    return dx, dy, dtheta, correction.dot(prior)
+
+
+def _general_update(
+    pose: Pose,
+    prior: FloatArray,
+    measured_pose: Pose,
+    noise: FloatArray,
+    innovation_theta: float,
+    joseph_form: bool,
+) -> tuple[float, float, float, FloatArray]:
+    """The state correction ``K nu`` (m, m, rad) and the posterior covariance before
+    symmetrising, for any layout of ``P``, a 3x3 or 2x2 ``G`` and either covariance form."""
+    rows = noise.shape[0]
     observation = _IDENTITY[:rows]
-    innovation = np.array(
-        [
-            measured_pose.x - pose.x,
-            measured_pose.y - pose.y,
-            wrap_angle(measured_pose.theta - pose.theta),
-        ]
-    )[:rows]
+    full_innovation = [measured_pose.x - pose.x, measured_pose.y - pose.y, innovation_theta]
+    innovation = np.array(full_innovation)[:rows]
     if rows == 3 and prior.flags.c_contiguous and _kept_by_identity(prior):
         # H = I: H P H^T and P H^T are P itself, bit for bit
         innovation_covariance = prior + noise
@@ -385,10 +424,7 @@ def ekf_update_unchecked(
         posterior = correction @ prior @ correction.T + gain @ noise @ gain.T
     else:
         posterior = correction @ prior
-    x, y, theta = pose.x + dx, pose.y + dy, pose.theta + dtheta
-    if math.isfinite(x) and math.isfinite(y) and math.isfinite(theta):
-        return Pose.unchecked(x, y, theta), _symmetrised(posterior)
-    return Pose(x, y, theta), _symmetrised(posterior)  # raises, naming the non-finite field
+    return dx, dy, dtheta, posterior
 
 
 def _kept_by_identity(matrix: FloatArray) -> bool:

@@ -371,23 +371,31 @@ def _gather_readings(sweeps: Sequence[Sweep], max_range_m: float | None) -> _Rea
     """The readings of every sweep with an echo, as :func:`sweep_end_points` of each sweep at
     its odometry, concatenated (the same arithmetic, element by element, in one pass: compiled
     loops around numpy's ``cos`` and ``sin`` of the beams)."""
-    angles = np.concatenate([sweep.angles for sweep in sweeps])
-    ranges = np.concatenate([sweep.ranges for sweep in sweeps])
-    counts = np.array([sweep.ranges.size for sweep in sweeps])
-    # heading and sensor position of each sweep, in the first sweep's frame
-    frames = []
+    angle_rows: list[FloatArray] = []
+    range_rows: list[FloatArray] = []
+    counts: list[int] = []
+    frames: list[tuple[float, float, float]] = []
     for sweep in sweeps:
+        ranges = sweep.ranges
+        angle_rows.append(sweep.angles)
+        range_rows.append(ranges)
+        counts.append(ranges.size)
+        # heading and sensor position of the sweep, in the first sweep's frame
         pose = sweep.odometry
         offset_x, offset_y = sweep.sensor_offset
         c, s = math.cos(pose.theta), math.sin(pose.theta)
         frames.append(
             (pose.theta, pose.x + c * offset_x - s * offset_y, pose.y + s * offset_x + c * offset_y)
         )
+    # one sweep's own read-only arrays serve as they are: the loops only read them
+    angles = angle_rows[0] if len(angle_rows) == 1 else np.concatenate(angle_rows)
+    ranges = range_rows[0] if len(range_rows) == 1 else np.concatenate(range_rows)
     sweep_frames = np.array(frames)
     max_range = math.inf if max_range_m is None else float(max_range_m)
-    beam = kim_kernels.echo_beams(angles, ranges, counts, sweep_frames, max_range)
+    sweep_counts = np.array(counts)
+    beam = kim_kernels.echo_beams(angles, ranges, sweep_counts, sweep_frames, max_range)
     rows = kim_kernels.echo_end_points(
-        ranges, counts, sweep_frames, np.cos(beam), np.sin(beam), max_range
+        ranges, sweep_counts, sweep_frames, np.cos(beam), np.sin(beam), max_range
     )
     return _Readings(rows[0], rows[1], beam, rows[2])
 
@@ -423,9 +431,14 @@ def _pair_test(
     circle = _search_circle(center, radius)
     if center is None or radius is None:
         return circle, (False, 1.0, 0.0, 1.0, 0.0)
+    return circle, _heading_test(headings)
+
+
+def _heading_test(headings: FloatArray) -> tuple[bool, float, float, float, float]:
+    """The heading test of :func:`_pair_test` within a search circle."""
     spread = _heading_spread(headings)
     middle, angle = (0.0, 0.0) if spread is None else spread
-    return circle, (
+    return (
         spread is not None,
         math.cos(middle),
         math.sin(middle),
@@ -644,22 +657,96 @@ def vote_localize_unchecked(
     Anything else is the caller's error.
     """
     headings = _headings_around(search_center.theta, heading_window_rad, heading_step_rad)
-    return _vote(
+    return _smoothed_vote(
         grid,
         sweeps,
         headings,
         (search_center.x, search_center.y),
         search_radius,
         max_range_m,
-        grid.cell_size_m,
-        360,
-        "smoothed",
-        "vote_mean",
         anchor,
-        None,
-        (0.15, math.radians(10.0)),
-        False,
     )
+
+
+_EKF_LOOP_DIRECTION_BINS = 360
+"""``vote_localize``'s default ``direction_bins``, the one of :func:`vote_localize_unchecked`."""
+
+
+def _smoothed_vote(
+    grid: OccupancyGrid,
+    sweeps: Sequence[Sweep],
+    headings: FloatArray,
+    center: Centre,
+    radius: float,
+    max_range_m: float,
+    anchor: Anchor,
+) -> VoteLocalization:
+    """:func:`_vote` with :func:`vote_localize_unchecked`'s fixed arguments (one cell of end
+    clearance, 360 direction bins, ``selection="smoothed"``, ``refine="vote_mean"``, no
+    ambiguity test, no vote map): the same steps and the same numbers, without the
+    bookkeeping that only the other arguments need."""
+    readings = _gather_readings(sweeps, max_range_m)
+    if readings.range_m.size == 0:
+        return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
+    table_cache = _free_distance_table(grid, _EKF_LOOP_DIRECTION_BINS, grid.cell_size_m)
+    anchors = table_cache.anchors(anchor)
+    if anchors.shape[0] == 0:
+        return _failure(NO_VOTES, "the grid has no occupied cell")
+    window = _vote_window(grid, center, radius)
+    if window.shape[0] * window.shape[1] == 0:
+        return _failure(NO_VOTES, _NOTHING_VOTED)
+    direction_index = _direction_index(headings, readings, _EKF_LOOP_DIRECTION_BINS)
+    table = table_cache.columns(direction_index.ravel())
+    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = kim_kernels.smoothed_fix(
+        readings.end_x,
+        readings.end_y,
+        readings.range_m,
+        anchors,
+        direction_index,
+        table,
+        np.cos(headings),
+        np.sin(headings),
+        _heading_test(headings),
+        *_vote_layout(grid, window, center, radius),
+    )
+    # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
+    if peak == 0:
+        return _failure(NO_VOTES, _NOTHING_VOTED)
+    heading = float(headings[heading_index])
+    if count:
+        # the mean of the chosen heading's votes in the chosen cells
+        x, y = mean_x, mean_y
+    else:
+        # the centre of the chosen cell, as OccupancyGrid.cell_to_world
+        (x0, y0), size = grid.origin_m, grid.cell_size_m
+        x = x0 + (local_x + window.low[0] + 0.5) * size
+        y = y0 + (local_y + window.low[1] + 0.5) * size
+    pose = Pose.unchecked(x, y, heading)
+    return _vote_fix(
+        pose,
+        int(volume[heading_index, local_x, local_y]),
+        heading,
+        pose.compose(sweeps[-1].odometry),
+    )
+
+
+def _vote_fix(
+    pose: Pose, votes: int, heading_rad: float, last_sweep_pose: Pose
+) -> VoteLocalization:
+    """``VoteLocalization(status=OK, pose=pose, votes=votes, heading_rad=heading_rad,
+    last_sweep_pose=last_sweep_pose)``, its fields set as the frozen dataclass sets them,
+    without its per-field setters and its check (which a pose with ``"ok"`` passes)."""
+    result = object.__new__(VoteLocalization)
+    result.__dict__.update(
+        status=OK,
+        pose=pose,
+        message="",
+        votes=votes,
+        vote_map=None,
+        heading_rad=heading_rad,
+        last_sweep_pose=last_sweep_pose,
+    )
+    return result
 
 
 def _vote(
