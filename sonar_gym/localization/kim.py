@@ -684,30 +684,23 @@ def _smoothed_vote(
     """:func:`_vote` with :func:`vote_localize_unchecked`'s fixed arguments (one cell of end
     clearance, 360 direction bins, ``selection="smoothed"``, ``refine="vote_mean"``, no
     ambiguity test, no vote map): the same steps and the same numbers, without the
-    bookkeeping that only the other arguments need."""
-    readings = _gather_readings(sweeps, max_range_m)
-    if readings.range_m.size == 0:
-        return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
-    table_cache = _free_distance_table(grid, _EKF_LOOP_DIRECTION_BINS, grid.cell_size_m)
-    anchors = table_cache.anchors(anchor)
-    if anchors.shape[0] == 0:
-        return _failure(NO_VOTES, "the grid has no occupied cell")
-    window = _vote_window(grid, center, radius)
-    if window.shape[0] * window.shape[1] == 0:
-        return _failure(NO_VOTES, _NOTHING_VOTED)
-    direction_index = _direction_index(headings, readings, _EKF_LOOP_DIRECTION_BINS)
-    table = table_cache.columns(direction_index.ravel())
-    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = kim_kernels.smoothed_fix(
-        readings.end_x,
-        readings.end_y,
-        readings.range_m,
-        anchors,
-        direction_index,
-        table,
-        np.cos(headings),
-        np.sin(headings),
-        _heading_test(headings),
-        *_vote_layout(grid, window, center, radius),
+    bookkeeping that only the other arguments need (:class:`_Choice`, the vote map)."""
+    prepared = _vote_inputs(
+        grid,
+        sweeps,
+        headings,
+        center,
+        radius,
+        max_range_m,
+        grid.cell_size_m,
+        _EKF_LOOP_DIRECTION_BINS,
+        anchor,
+    )
+    if isinstance(prepared, VoteLocalization):
+        return prepared
+    votes_of, window = prepared
+    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = _smoothed_fix(
+        votes_of, _heading_test(headings)
     )
     # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
     if peak == 0:
@@ -767,28 +760,13 @@ def _vote(
 ) -> VoteLocalization:
     """:func:`vote_localize` of checked arguments: ``clearance`` is ``end_clearance_m``
     resolved, ``ambiguity_reach`` is ``(ambiguity_distance_m, ambiguity_heading_rad)``."""
-    readings = _gather_readings(sweep_list, max_range_m)
-    if readings.range_m.size == 0:
-        return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
-    table_cache = _free_distance_table(grid, direction_bins, clearance)
-    anchors = table_cache.anchors(anchor)
-    if anchors.shape[0] == 0:
-        return _failure(NO_VOTES, "the grid has no occupied cell")
-
-    # Vote volume over (heading, ix, iy) of the vote window.
-    window = _vote_window(grid, center, radius)
-    if window.shape[0] * window.shape[1] == 0:
-        return _failure(NO_VOTES, _NOTHING_VOTED)
-    direction_index = _direction_index(headings, readings, direction_bins)
-    votes_of = _VoteInputs(
-        readings,
-        anchors,
-        direction_index,
-        table_cache.columns(direction_index.ravel()),
-        np.cos(headings),
-        np.sin(headings),
-        _vote_layout(grid, window, center, radius),
+    prepared = _vote_inputs(
+        grid, sweep_list, headings, center, radius, max_range_m, clearance, direction_bins, anchor
     )
+    if isinstance(prepared, VoteLocalization):
+        return prepared
+    votes_of, window = prepared
+    # Vote volume over (heading, ix, iy) of the vote window.
     volume: npt.NDArray[np.int64] | None
     if selection == "smoothed":
         volume, choice = _smoothed_choice(grid, votes_of, window, center, radius, headings)
@@ -828,6 +806,42 @@ def _vote(
         heading_rad=heading,
         last_sweep_pose=pose.compose(sweep_list[-1].odometry),
     )
+
+
+def _vote_inputs(
+    grid: OccupancyGrid,
+    sweep_list: Sequence[Sweep],
+    headings: FloatArray,
+    center: Centre | None,
+    radius: float | None,
+    max_range_m: float | None,
+    clearance: float,
+    direction_bins: int,
+    anchor: Anchor,
+) -> tuple[_VoteInputs, _VoteWindow] | VoteLocalization:
+    """What the vote loops of one fix read, and the vote window; or the failure when the
+    sweeps returned no echo, the grid has no occupied cell or the window is empty."""
+    readings = _gather_readings(sweep_list, max_range_m)
+    if readings.range_m.size == 0:
+        return _failure(EMPTY_SWEEP, "no reading of the sweeps returned an echo")
+    table_cache = _free_distance_table(grid, direction_bins, clearance)
+    anchors = table_cache.anchors(anchor)
+    if anchors.shape[0] == 0:
+        return _failure(NO_VOTES, "the grid has no occupied cell")
+    window = _vote_window(grid, center, radius)
+    if window.shape[0] * window.shape[1] == 0:
+        return _failure(NO_VOTES, _NOTHING_VOTED)
+    direction_index = _direction_index(headings, readings, direction_bins)
+    votes_of = _VoteInputs(
+        readings,
+        anchors,
+        direction_index,
+        table_cache.columns(direction_index.ravel()),
+        np.cos(headings),
+        np.sin(headings),
+        _vote_layout(grid, window, center, radius),
+    )
+    return votes_of, window
 
 
 _NOTHING_VOTED = "no unobstructed range vector voted inside the grid / search circle"
@@ -894,18 +908,8 @@ def _smoothed_choice(
     """The vote volume ``(heading, ix, iy)`` of ``window`` and the maximum of its 3x3 binomial
     smoothing (window = the chosen cell +- 1), or None for the choice when nothing voted: one
     call of :func:`~sonar_gym.localization.kim_kernels.smoothed_fix`."""
-    readings = votes_of.readings
-    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = kim_kernels.smoothed_fix(
-        readings.end_x,
-        readings.end_y,
-        readings.range_m,
-        votes_of.anchors,
-        votes_of.direction_index,
-        votes_of.table,
-        votes_of.cos_h,
-        votes_of.sin_h,
-        _pair_test(center, radius, headings)[1],
-        *votes_of.layout,
+    volume, peak, heading_index, local_x, local_y, count, mean_x, mean_y = _smoothed_fix(
+        votes_of, _pair_test(center, radius, headings)[1]
     )
     # a vote adds 4 to the score of its own cell: the peak is 0 only when nothing voted
     if peak == 0:
@@ -926,6 +930,27 @@ def _smoothed_choice(
         (mean_x, mean_y),
         volume,
         "smoothed",
+    )
+
+
+def _smoothed_fix(
+    votes_of: _VoteInputs, heading_test: tuple[bool, float, float, float, float]
+) -> tuple[npt.NDArray[np.int64], int, int, int, int, int, float, float]:
+    """:func:`~sonar_gym.localization.kim_kernels.smoothed_fix` of ``votes_of`` with the
+    heading test of :func:`_pair_test`: the vote volume, the smoothed peak, its heading
+    index and window cell, and the number and mean position of its votes."""
+    readings = votes_of.readings
+    return kim_kernels.smoothed_fix(  # type: ignore[no-any-return]
+        readings.end_x,
+        readings.end_y,
+        readings.range_m,
+        votes_of.anchors,
+        votes_of.direction_index,
+        votes_of.table,
+        votes_of.cos_h,
+        votes_of.sin_h,
+        heading_test,
+        *votes_of.layout,
     )
 
 
