@@ -562,96 +562,6 @@ _drive_and_predict_inline = compiled(
 )(_drive_and_predict)
 
 
-@compiled(  # type: ignore[misc]
-    _PREDICTED_DRIVE,
-    GENERATOR_HANDLE,  # handle
-    _DRIVE_ARGUMENTS[0],  # commands_m
-    *_DRIVE_ARGUMENTS[2:],
-    *_PREDICTION_ARGUMENTS,
-)
-def _drive_and_predict_compiled(
-    handle: GeneratorHandle,
-    commands_m: FloatArray,
-    noise: FloatArray,
-    wheel_base_m: float,
-    substeps: int,
-    integration: int,
-    odometry: tuple[float, float, float],
-    start: tuple[float, float, float],
-    robot_radius_m: float,
-    bounds: FloatArray,
-    kinds: np.ndarray,
-    shapes: FloatArray,
-    estimate: tuple[float, float, float],
-    covariance: FloatArray,
-    variance_per_m: float,
-) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
-    return _drive_and_predict_inline(  # type: ignore[no-any-return]
-        handle_generator(handle),
-        commands_m,
-        noise,
-        wheel_base_m,
-        substeps,
-        integration,
-        odometry,
-        start,
-        robot_radius_m,
-        bounds,
-        kinds,
-        shapes,
-        estimate,
-        covariance,
-        variance_per_m,
-    )
-
-
-def drive_and_predict(
-    rng: np.random.Generator,
-    commands_m: FloatArray,
-    noise: FloatArray,
-    wheel_base_m: float,
-    substeps: int,
-    integration: int,
-    odometry: tuple[float, float, float],
-    start: tuple[float, float, float],
-    robot_radius_m: float,
-    bounds: FloatArray,
-    kinds: np.ndarray,
-    shapes: FloatArray,
-    estimate: tuple[float, float, float],
-    covariance: FloatArray,
-    variance_per_m: float,
-) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
-    """:func:`drive_commands` of ``commands_m`` with their draws taken from ``rng`` (the
-    numbers of :func:`draw_commands`, in its order, leaving ``rng`` as it leaves it), then the
-    EKF prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) over the commands' encoder increments
-    from ``estimate`` (``(x, y, theta)``, {W}) and its ``covariance``:
-    :func:`sonar_gym.odometry_kernels.predict_commands` with the paper's Jacobians, ``V`` of
-    ``variance_per_m`` m^2 per metre rolled and no scale variance. One compiled call, handed
-    ``rng`` by :func:`~sonar_gym.generator_handles.generator_handle`.
-
-    Returns the motion table, the first command that needs the physics, the predicted pose
-    after the last command (heading wrapped to (-pi, pi]) and its 3x3 covariance.
-    """
-    return _drive_and_predict_compiled(  # type: ignore[no-any-return]
-        generator_handle(rng),
-        commands_m,
-        noise,
-        wheel_base_m,
-        substeps,
-        integration,
-        odometry,
-        start,
-        robot_radius_m,
-        bounds,
-        kinds,
-        shapes,
-        estimate,
-        covariance,
-        variance_per_m,
-    )
-
-
 def _move_commands(
     belief: tuple[float, float, float],
     target_xy: tuple[float, float],
@@ -747,10 +657,19 @@ def drive_to_and_predict(
     covariance: FloatArray,
     variance_per_m: float,
 ) -> tuple[FloatArray, int, tuple[float, float, float], FloatArray]:
-    """:func:`drive_and_predict` of the commands planned from ``estimate`` to the point
-    ``target_xy`` ({W}, metres): those of :func:`sonar_gym.robot.move_commands` without a
-    heading (the turn towards the point, then the straight of ``distance_m``, Python's
-    ``math.hypot`` of the differences; one command of no travel if the point is within 1 nm).
+    """The drive to the point ``target_xy`` ({W}, metres) planned from ``estimate`` (the
+    commands of :func:`sonar_gym.robot.move_commands` without a heading: the turn towards the
+    point, then the straight of ``distance_m``, Python's ``math.hypot`` of the differences;
+    one command of no travel if the point is within 1 nm), with the EKF prediction over it, in
+    one compiled call handed ``rng`` by
+    :func:`~sonar_gym.generator_handles.generator_handle`.
+
+    Per command: :func:`drive_commands` with its draws taken from ``rng`` (the numbers of
+    :func:`draw_commands`, in its order, leaving ``rng`` as it leaves it); then the EKF
+    prediction (Kim et al. sec. 3.1 eqs. (5)-(6)) over the commands' encoder increments from
+    ``estimate`` (``(x, y, theta)``, {W}) and its ``covariance``:
+    :func:`sonar_gym.odometry_kernels.predict_commands` with the paper's Jacobians, ``V`` of
+    ``variance_per_m`` m^2 per metre rolled and no scale variance.
 
     Returns the motion table (its commands those planned), the first command that needs the
     physics, the predicted pose after the last command and its 3x3 covariance.

@@ -341,35 +341,6 @@ class DifferentialDriveRobot:
         collided, pose = self._physics_after(world, motions, blocked, start)
         return motions, collided, pose
 
-    def drive_and_predict(
-        self,
-        world: World,
-        commands_m: FloatArray,
-        rng: np.random.Generator,
-        estimate: Pose,
-        covariance: FloatArray,
-        variance_per_m: float,
-    ) -> tuple[FloatArray, Pose, FloatArray]:
-        """:meth:`drive_commands_unchecked` (substeps picked per command), and the EKF
-        prediction over its encoder increments from ``estimate`` and its float64 3x3
-        ``covariance`` (:func:`sonar_gym.odometry.predict_over_motion`, paper Jacobians, ``V``
-        of ``variance_per_m`` m^2 per metre rolled) in the same compiled call
-        (:func:`sonar_gym.drive_kernels.drive_and_predict`).
-
-        Returns the motion table, the predicted pose after the last command and its covariance.
-        """
-        start = world.robot_pose
-        motions, blocked, predicted, predicted_covariance = drive_kernels.drive_and_predict(
-            rng,
-            commands_m,
-            *self._wheel_arguments(world, 0, start),
-            (estimate.x, estimate.y, estimate.theta),
-            covariance,
-            variance_per_m,
-        )
-        self._finish_drive(world, motions, blocked, start)
-        return motions, Pose.unchecked(*predicted), predicted_covariance
-
     def drive_to_and_predict(
         self,
         world: World,
@@ -379,10 +350,13 @@ class DifferentialDriveRobot:
         covariance: FloatArray,
         variance_per_m: float,
     ) -> tuple[FloatArray, Pose, FloatArray]:
-        """:meth:`drive_and_predict` of the commands :func:`move_commands` plans from
-        ``estimate`` to the point ``target_xy`` (Python floats, {W}, metres; no heading), with
-        the wheel base used with ``world``; planned in the same compiled call
-        (:func:`sonar_gym.drive_kernels.drive_to_and_predict`).
+        """:meth:`drive_commands_unchecked` (substeps picked per command) of the commands
+        :func:`move_commands` plans from ``estimate`` to the point ``target_xy`` (Python floats,
+        {W}, metres; no heading), with the wheel base used with ``world``, and the EKF
+        prediction over their encoder increments from ``estimate`` and its float64 3x3
+        ``covariance`` (:func:`sonar_gym.odometry.predict_over_motion`, paper Jacobians, ``V``
+        of ``variance_per_m`` m^2 per metre rolled): planned, drawn, driven and predicted in
+        one compiled call (:func:`sonar_gym.drive_kernels.drive_to_and_predict`).
 
         Returns the motion table, the predicted pose after the last command and its covariance.
         """

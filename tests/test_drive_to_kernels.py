@@ -1,9 +1,9 @@
 """The drive to a point planned inside the compiled call
 (:meth:`sonar_gym.robot.DifferentialDriveRobot.drive_to_and_predict`, with
 :data:`sonar_gym.drive_kernels.move_commands`) against the plan of
-:func:`sonar_gym.robot.move_commands` handed to
-:meth:`~sonar_gym.robot.DifferentialDriveRobot.drive_and_predict`: same commands, motions,
-predictions, poses and generator state, bit for bit."""
+:func:`sonar_gym.robot.move_commands` driven and predicted by
+:func:`tests.drive_and_predict_reference.drive_and_predict_reference`: same commands,
+motions, predictions, poses and generator state, bit for bit."""
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ from sonar_gym.odometry import OdometryConfig
 from sonar_gym.pose import Pose
 from sonar_gym.robot import DifferentialDriveRobot, move_commands
 from sonar_gym.world import World
+from tests.drive_and_predict_reference import drive_and_predict_reference
 from tests.fuzzing import fuzz_settings
 from tests.test_drive_command_kernels import ROOM
 
@@ -107,8 +108,8 @@ def test_driving_to_a_point_is_driving_move_commands_plan(seed: int) -> None:
         world, robot, rng = reference
         wheel_base = float(robot.wheel_base_for(world))
         plan = np.array(move_commands(estimates[1], target, wheel_base), dtype=np.float64)
-        expected, estimates[1], covariances[1] = robot.drive_and_predict(
-            world, plan, rng, estimates[1], covariances[1], 2.5e-5
+        expected, estimates[1], covariances[1] = drive_and_predict_reference(
+            robot, world, plan, rng, estimates[1], covariances[1], 2.5e-5
         )
         assert motions.tobytes() == expected.tobytes()
         assert estimates[0] == estimates[1]

@@ -1,6 +1,6 @@
-""":func:`sonar_gym.polyline.follow_route` (each target's drive and EKF prediction in one
-compiled call, :func:`sonar_gym.drive_kernels.drive_and_predict`) against the public robot and
-odometry calls it replaced (:mod:`tests.follow_route_reference`), bit for bit."""
+""":func:`sonar_gym.polyline.follow_route` (each target's plan, drive and EKF prediction in
+one compiled call, :func:`sonar_gym.drive_kernels.drive_to_and_predict`) against the public
+robot and odometry calls it replaced (:mod:`tests.follow_route_reference`), bit for bit."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from sonar_gym import drive_kernels, odometry_kernels
 from sonar_gym.odometry import OdometryConfig
 from sonar_gym.polyline import Route, follow_route
 from sonar_gym.pose import Pose
-from sonar_gym.robot import DifferentialDriveRobot, _command_draws
+from sonar_gym.robot import DifferentialDriveRobot, _command_draws, move_commands
 from sonar_gym.world import World
 from tests.command_draws_reference import command_draws_reference
 from tests.follow_route_reference import follow_route_reference
@@ -82,14 +82,12 @@ def test_following_a_route_is_the_plan_drive_and_prediction_of_each_target(
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_the_fused_call_is_the_drive_then_the_prediction(seed: int) -> None:
-    """The one compiled call draws the commands' numbers from the caller's generator (as
-    ``_command_draws`` draws them from a copy), drives as the draws-taking loop does and
-    predicts as :func:`~sonar_gym.odometry_kernels.predict_commands` does."""
+def test_the_fused_call_is_the_plan_the_drive_then_the_prediction(seed: int) -> None:
+    """The one compiled call plans the commands of :func:`sonar_gym.robot.move_commands`,
+    draws their numbers from the caller's generator (as ``_command_draws`` draws them from a
+    copy), drives as the draws-taking loop does and predicts as
+    :func:`~sonar_gym.odometry_kernels.predict_commands` does."""
     setup = np.random.default_rng(seed)
-    count = int(setup.integers(1, 6))
-    commands = setup.uniform(-1.0, 1.0, (count, 2))
-    commands[setup.random(count) < 0.3] = 0.0
     noise = np.array([0.005, 0.01, -0.002, 0.3, 0.2, 0.02, math.radians(3.0)])
     world = World(ROOM)
     common = (
@@ -103,15 +101,19 @@ def test_the_fused_call_is_the_drive_then_the_prediction(seed: int) -> None:
         *world.static_shape_table.arrays,
     )
     estimate = tuple(setup.uniform(-1.0, 1.0, 3).tolist())
+    # a point ahead, or (seed 0) the estimate itself: one command of no travel
+    target = estimate[:2] if seed == 0 else tuple(setup.uniform(-1.5, 1.5, 2).tolist())
+    distance = math.hypot(target[0] - estimate[0], target[1] - estimate[1])
     root = setup.standard_normal((3, 3))
     covariance = root @ root.T
     rng = np.random.default_rng(100 + seed)
     rng.random(seed)  # somewhere along the stream
     twin = copy.deepcopy(rng)
-    motions, blocked, end, predicted_covariance = drive_kernels.drive_and_predict(
-        rng, commands, *common, estimate, covariance, 3e-5
+    motions, blocked, end, predicted_covariance = drive_kernels.drive_to_and_predict(
+        rng, target, distance, *common, estimate, covariance, 3e-5
     )
-    draws = _command_draws(twin, count)
+    commands = np.array(move_commands(Pose(*estimate), target, 0.37), dtype=np.float64)
+    draws = _command_draws(twin, len(commands))
     assert rng.bit_generator.state == twin.bit_generator.state
     expected_motions, expected_blocked = drive_kernels.drive_commands(commands, draws, *common)
     poses, expected_covariance = odometry_kernels.predict_commands(
