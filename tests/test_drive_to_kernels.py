@@ -17,13 +17,11 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from sonar_gym import drive_kernels
-from sonar_gym.odometry import OdometryConfig
 from sonar_gym.pose import Pose
-from sonar_gym.robot import DifferentialDriveRobot, move_commands
-from sonar_gym.world import World
+from sonar_gym.robot import move_commands
 from tests.drive_and_predict_reference import drive_and_predict_reference
 from tests.fuzzing import fuzz_settings
-from tests.test_drive_command_kernels import ROOM
+from tests.test_follow_route_kernels import _episode
 
 WHEEL_BASE_M = 0.37
 
@@ -78,16 +76,6 @@ def test_the_compiled_plan_is_move_commands_at_the_edges(
     belief: Pose, target: tuple[float, float]
 ) -> None:
     _same_plan(belief, target, WHEEL_BASE_M)
-
-
-def _episode(seed: int) -> tuple[World, DifferentialDriveRobot, np.random.Generator]:
-    world = World(ROOM)
-    world.set_robot_pose(Pose(-0.5, -0.2, 0.4))
-    robot = DifferentialDriveRobot(
-        OdometryConfig(slip_probability_per_m=0.3, scale_error_left=0.01),
-        odometry_pose=Pose(-0.48, -0.21, 0.38) if seed % 2 else None,
-    )
-    return world, robot, np.random.default_rng(seed)
 
 
 @pytest.mark.parametrize("seed", range(8))

@@ -19,7 +19,8 @@ from tests.localization.test_kim import (
 )
 
 
-def _assert_same(result: VoteLocalization, expected: VoteLocalization) -> None:
+def assert_same_vote(result: VoteLocalization, expected: VoteLocalization) -> None:
+    """The same status, message, votes, heading and poses (bit for bit), and no vote map."""
     assert result.status == expected.status
     assert result.message == expected.message
     assert result.votes == expected.votes
@@ -95,7 +96,7 @@ def test_unchecked_vote_is_the_checked_vote(arena_grid: OccupancyGrid, seed: int
         "obstacle_point" if seed % 2 else "cell_center",
     )
     assert checked.status in ("ok", "no_votes")
-    _assert_same(unchecked, checked)
+    assert_same_vote(unchecked, checked)
 
 
 def test_unchecked_vote_fails_as_the_checked_vote(arena_grid: OccupancyGrid) -> None:
@@ -119,4 +120,4 @@ def test_unchecked_vote_fails_as_the_checked_vote(arena_grid: OccupancyGrid) -> 
             "cell_center",
         )
         assert checked.status == status
-        _assert_same(unchecked, checked)
+        assert_same_vote(unchecked, checked)

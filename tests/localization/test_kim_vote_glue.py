@@ -17,6 +17,7 @@ from tests.localization.kim_vote_glue_reference import (
     vote_localize_unchecked_reference,
 )
 from tests.localization.test_kim import MOVES, noisy_sweeps
+from tests.localization.test_kim_unchecked_vote import assert_same_vote
 
 
 def _random_sweeps(rng: np.random.Generator) -> list[Sweep]:
@@ -55,26 +56,7 @@ def test_gathered_readings_are_the_reference_bits(seed: int) -> None:
 def _assert_same(result: VoteLocalization, expected: VoteLocalization) -> None:
     assert type(result) is type(expected)
     assert list(vars(result)) == list(vars(expected))  # every field, in the dataclass's order
-    assert (result.status, result.message, result.votes) == (
-        expected.status,
-        expected.message,
-        expected.votes,
-    )
-    assert result.heading_rad == expected.heading_rad
-    assert result.vote_map is None and expected.vote_map is None
-    for pose, expected_pose in (
-        (result.pose, expected.pose),
-        (result.last_sweep_pose, expected.last_sweep_pose),
-    ):
-        if expected_pose is None:
-            assert pose is None
-        else:
-            assert pose is not None
-            assert (pose.x, pose.y, pose.theta) == (
-                expected_pose.x,
-                expected_pose.y,
-                expected_pose.theta,
-            )
+    assert_same_vote(result, expected)
 
 
 @pytest.mark.parametrize("seed", range(60))

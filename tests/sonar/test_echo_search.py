@@ -6,6 +6,7 @@ room too), with and without air absorption, receiver gain and footprint, both ed
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -48,9 +49,15 @@ def _options(rng: np.random.Generator) -> dict[str, Any]:
     return options
 
 
-@pytest.mark.parametrize("world_name", [*SCENARIOS, "cluttered_room"])
-def test_compiled_echo_search_finds_what_the_numpy_steps_find(world_name: str) -> None:
-    rng = np.random.default_rng(23)
+def assert_search_finds_what(
+    reference: Callable[..., EchoCandidates],
+    world_name: str,
+    seed: int,
+    assert_same: Callable[[EchoCandidates, EchoCandidates], None] = _assert_same,
+) -> None:
+    """:func:`echo_candidates` against ``reference`` at 150 random positions in and around the
+    world, each with random options (:func:`_options`), compared by ``assert_same``."""
+    rng = np.random.default_rng(seed)
     world: Any = (
         cluttered_room() if world_name == "cluttered_room" else World(load_scenario(world_name))
     )
@@ -66,10 +73,15 @@ def test_compiled_echo_search_finds_what_the_numpy_steps_find(world_name: str) -
             offset = rng.uniform(-0.1, 0.1, 2)
             options["footprint_center"] = (position[0] + offset[0], position[1] + offset[1])
         got = echo_candidates(geometry, position, **options)
-        want = echo_candidates_reference(geometry, position, **options)
-        _assert_same(got, want)
+        want = reference(geometry, position, **options)
+        assert_same(got, want)
         found += len(want)
     assert found > 0
+
+
+@pytest.mark.parametrize("world_name", [*SCENARIOS, "cluttered_room"])
+def test_compiled_echo_search_finds_what_the_numpy_steps_find(world_name: str) -> None:
+    assert_search_finds_what(echo_candidates_reference, world_name, 23)
 
 
 def test_compiled_echo_search_at_vertices_and_on_walls() -> None:

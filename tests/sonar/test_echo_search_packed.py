@@ -22,13 +22,12 @@ from sonar_gym.sonar.echoes import (
     _PATH_CENTRE,
     _PLANE,
     EchoCandidates,
-    echo_candidates,
     edge_law_constants,
 )
 from sonar_gym.sonar.presets import preset
 from sonar_gym.world import World
 from tests.sonar.echo_candidates_unpacked_reference import echo_candidates_unpacked_reference
-from tests.sonar.test_echo_search import SCENARIOS, _options
+from tests.sonar.test_echo_search import SCENARIOS, assert_search_finds_what
 from tests.sonar.worlds import cluttered_room
 
 
@@ -53,22 +52,7 @@ def _assert_same(got: EchoCandidates, want: EchoCandidates) -> None:
 
 @pytest.mark.parametrize("world_name", [*SCENARIOS, "cluttered_room"])
 def test_packed_echo_search_finds_what_the_unpacked_search_finds(world_name: str) -> None:
-    rng = np.random.default_rng(29)
-    geometry = _world(world_name).geometry
-    low = geometry.segment_starts.min(axis=0) - 0.5
-    high = geometry.segment_starts.max(axis=0) + 0.5
-    found = 0
-    for _ in range(150):
-        position = rng.uniform(low, high)
-        options = _options(rng)
-        if "footprint_center" in options and rng.random() < 0.7:
-            offset = rng.uniform(-0.1, 0.1, 2)
-            options["footprint_center"] = (position[0] + offset[0], position[1] + offset[1])
-        got = echo_candidates(geometry, position, **options)
-        want = echo_candidates_unpacked_reference(geometry, position, **options)
-        _assert_same(got, want)
-        found += len(want)
-    assert found > 0
+    assert_search_finds_what(echo_candidates_unpacked_reference, world_name, 29, _assert_same)
 
 
 def _search_inputs(
