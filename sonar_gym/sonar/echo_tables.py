@@ -212,7 +212,7 @@ class EchoTables:
         """``N + S + C``: the length of the picks of
         :func:`sonar_gym.sonar.kernels.audible_paths` (the indices of at most every candidate,
         then one occluder flag per segment and circle)."""
-        return 2 * (self.n_segments + self.n_circles) + self.n_vertices
+        return self.n_candidates + self.n_segments + self.n_circles
 
     @functools.cached_property
     def search_layout(self) -> np.ndarray:

@@ -721,7 +721,6 @@ def clear_paths_nearest_first(
     ranges = mapped[ranges_start:amplitudes_start]
     amplitudes = mapped[amplitudes_start : amplitudes_start + n_candidates]
     centre_distance = distances[:n_circles]
-    n_circles = centre_distance.shape[0]
     n_occluders = (products.shape[0] - n_circles) // 3 + n_circles
     first_occluder = picks.shape[0] - n_occluders
     occluders = np.empty(n_occluders, dtype=np.bool_)
