@@ -43,6 +43,7 @@ and by ``O(heading error^3)`` in heading.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -122,6 +123,35 @@ class CorrectionResult(Localization):
 
     covariance: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
     method: str = "paper"
+
+    # ``message`` is held in ``__dict__["_message"]``: the text itself, or (a result made by
+    # :meth:`explained_when_read`) the function that writes it, called when first read.
+    @property  # type: ignore[override]
+    def message(self) -> str:
+        """A human-readable explanation, empty when ok."""
+        message: str | Callable[[], str] = self.__dict__["_message"]
+        if not isinstance(message, str):
+            message = message()
+            self.__dict__["_message"] = message
+        return message
+
+    @message.setter
+    def message(self, message: str) -> None:  # the dataclass's __init__ sets the field here
+        self.__dict__["_message"] = message
+
+    @classmethod
+    def explained_when_read(
+        cls, status: str, explain: Callable[[], str], covariance: FloatArray, method: str
+    ) -> CorrectionResult:
+        """A correction not made (``status`` not ``"ok"``, no pose) whose message is
+        ``explain()``, written when first read: equal to ``CorrectionResult(status, None,
+        explain(), covariance=covariance, method=method)``. ``explain`` must give the same text
+        whenever called (and be picklable for the result to be)."""
+        result = object.__new__(cls)
+        result.__dict__.update(
+            status=status, pose=None, _message=explain, covariance=covariance, method=method
+        )
+        return result
 
 
 def _check_positive(value: float, name: str, unit: str) -> float:
