@@ -361,16 +361,17 @@ class WallStream:
         turn = after.theta - before.theta
         cos_turn, sin_turn = math.cos(turn), math.sin(turn)
         rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
-        origin_before, origin_after = before.position, after.position
-
-        def moved(point: tuple[float, float]) -> tuple[float, float]:
-            x, y = origin_after + rotation @ (np.asarray(point) - origin_before)
-            return float(x), float(y)
-
-        if self._previous is not None:
-            position, direction, range_m = self._previous
-            self._previous = (moved(position), direction + turn, range_m)
-        self._group_points = [moved(point) for point in self._group_points]
+        previous = self._previous
+        # The group's ERPs, then the stored reading's position: one row each.
+        points = self._group_points if previous is None else [*self._group_points, previous[0]]
+        if points:
+            offsets = np.array(points) - np.array((before.x, before.y))
+            # np.matvec makes, row by row, the BLAS call of ``rotation @ offset`` (the same bits)
+            moved = (np.array((after.x, after.y)) + np.matvec(rotation, offsets)).tolist()
+            if previous is not None:
+                position_x, position_y = moved.pop()
+                self._previous = ((position_x, position_y), previous[1] + turn, previous[2])
+            self._group_points = [(x, y) for x, y in moved]
         self._group_directions = [direction + turn for direction in self._group_directions]
 
     def _close(self) -> ClosedGroup:
