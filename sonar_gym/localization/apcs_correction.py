@@ -119,6 +119,9 @@ class CorrectionResult(Localization):
         covariance: ``(3, 3)`` covariance of ``(x, y, theta)`` after the correction (the
             prior's when no correction was made), m^2, m rad, rad^2; symmetric, read-only.
         method: ``"paper"`` or ``"linear"``.
+
+    The message of a correction not made for want of a unique match lists every rejected map
+    wall; such a result is made by :meth:`explained_when_read` and writes it when first read.
     """
 
     covariance: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
@@ -126,7 +129,7 @@ class CorrectionResult(Localization):
 
     # ``message`` is held in ``__dict__["_message"]``: the text itself, or (a result made by
     # :meth:`explained_when_read`) the function that writes it, called when first read.
-    @property  # type: ignore[override]
+    @property  # type: ignore[misc]
     def message(self) -> str:
         """A human-readable explanation, empty when ok."""
         message: str | Callable[[], str] = self.__dict__["_message"]
