@@ -180,6 +180,17 @@ def nearest_facing_walls(
 # --------------------------------------------------------------------------------------------
 
 
+def _frame_move(before: Pose, after: Pose) -> tuple[float, FloatArray, FloatArray, FloatArray]:
+    """The rigid move of the estimate's frame in a correction from ``before`` to ``after``:
+    ``(turn, rotation, origin_before, origin_after)``, the turn in radians, its ``(2, 2)``
+    rotation and the two positions (metres, {W}); a point ``p`` moves to
+    ``origin_after + rotation @ (p - origin_before)``."""
+    turn = after.theta - before.theta
+    cos_turn, sin_turn = math.cos(turn), math.sin(turn)
+    rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
+    return turn, rotation, np.array((before.x, before.y)), np.array((after.x, after.y))
+
+
 _RawGroup = tuple[list[tuple[float, float]], list[float]]
 """A closed group before its verdict: its ERPs ``(x, y)`` (metres, in the frame of the
 estimate) and their reflection directions (radians), in the order taken."""
@@ -358,16 +369,23 @@ class WallStream:
         The readings and ERPs of the stream live in the frame of the pose estimate; a
         correction moves that frame rigidly, and the stored points move with it.
         """
-        turn = after.theta - before.theta
-        cos_turn, sin_turn = math.cos(turn), math.sin(turn)
-        rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
+        self._move(*_frame_move(before, after))
+
+    def _move(
+        self,
+        turn: float,
+        rotation: FloatArray,
+        origin_before: FloatArray,
+        origin_after: FloatArray,
+    ) -> None:
+        """:meth:`move_frame` by the parts :func:`_frame_move` gives."""
         previous = self._previous
         # The group's ERPs, then the stored reading's position: one row each.
         points = self._group_points if previous is None else [*self._group_points, previous[0]]
         if points:
-            offsets = np.array(points) - np.array((before.x, before.y))
+            offsets = np.array(points) - origin_before
             # np.matvec makes, row by row, the BLAS call of ``rotation @ offset`` (the same bits)
-            moved = (np.array((after.x, after.y)) + np.matvec(rotation, offsets)).tolist()
+            moved = (origin_after + np.matvec(rotation, offsets)).tolist()
             if previous is not None:
                 position_x, position_y = moved.pop()
                 self._previous = ((position_x, position_y), previous[1] + turn, previous[2])
@@ -794,8 +812,9 @@ class APCSTracker:
         after = correction.pose
         self.estimate = after
         self.covariance = np.array(correction.covariance, dtype=np.float64)
+        move = _frame_move(before, after)  # one move for both streams
         for stream in self.streams.values():
-            stream.move_frame(before, after)
+            stream._move(*move)
         return after
 
 
