@@ -456,6 +456,33 @@ class WallHandling:
     pose_after: Pose
     command_index: int
 
+    @classmethod
+    def unchecked(
+        cls,
+        side: str,
+        group: ClosedGroup,
+        match: MatchResult,
+        reason: str | None,
+        correction: CorrectionResult,
+        pose_before: Pose,
+        pose_after: Pose,
+        command_index: int,
+    ) -> WallHandling:
+        """``WallHandling(side, group, ...)``, its fields set as its ``__init__`` sets them
+        (frozen: straight into ``__dict__``) at a fraction of the cost."""
+        handling = object.__new__(cls)
+        handling.__dict__.update(
+            side=side,
+            group=group,
+            match=match,
+            reason=reason,
+            correction=correction,
+            pose_before=pose_before,
+            pose_after=pose_after,
+            command_index=command_index,
+        )
+        return handling
+
 
 @dataclass
 class RunResult:
@@ -792,15 +819,15 @@ class APCSTracker:
             after = self._apply(correction)
             corrected = corrected or after is not before
             result.walls.append(
-                WallHandling(
-                    side=side,
-                    group=group,
-                    match=match,
-                    reason=rejection_reason(match),
-                    correction=correction,
-                    pose_before=before,
-                    pose_after=after,
-                    command_index=command_index,
+                WallHandling.unchecked(
+                    side,
+                    group,
+                    match,
+                    rejection_reason(match),
+                    correction,
+                    before,
+                    after,
+                    command_index,
                 )
             )
         return corrected
