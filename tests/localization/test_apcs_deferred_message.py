@@ -52,7 +52,8 @@ def test_the_message_of_an_unmatched_wall_is_the_message_written_at_once() -> No
     statuses = set()
     for wall_map in (_room(), WallMap(())):
         for _ in range(2000):
-            pose = Pose(*rng.uniform(0.5, 3.5, 2).tolist(), float(rng.uniform(-3.0, 3.0)))
+            x, y = rng.uniform(0.5, 3.5, 2).tolist()
+            pose = Pose(x, y, float(rng.uniform(-3.0, 3.0)))
             match, correction = correct_with_detected_wall(
                 pose, covariance, _detected(rng, wall_map), wall_map, 1e-4, 1e-3
             )
@@ -77,7 +78,7 @@ def test_the_message_of_an_unmatched_wall_is_the_message_written_at_once() -> No
 
 
 def test_a_deferred_message_is_written_once_and_stays_read_only() -> None:
-    calls = []
+    calls: list[None] = []
 
     def explain() -> str:
         calls.append(None)
