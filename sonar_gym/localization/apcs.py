@@ -20,6 +20,7 @@ section 6 are the defaults of :class:`APCSParameters`. The implementation lives 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from functools import partial
 
 import numpy.typing as npt
 
@@ -206,13 +207,10 @@ def _match_and_correct(
     """Fig. 2 after the checks: match, observe the wall, ``correct(wall, r, xi)``."""
     match = match_wall(detected, wall_map, params)
     if not match.matched or match.wall is None:
-        reasons = match.checks.rejection_summary()
-        message = (
-            "more than one map wall matches"
-            if match.status == AMBIGUOUS
-            else f"no map wall matches ({reasons})"
+        # The message lists every rejected map wall; it is written only when read.
+        return match, CorrectionResult.explained_when_read(
+            match.status, partial(_unmatched_message, match), prior, method
         )
-        return match, CorrectionResult(match.status, None, message, covariance=prior, method=method)
     observation = observed_wall(detected.vector, pose)
     if observation.r_m <= 0.0:
         return match, CorrectionResult(
@@ -223,3 +221,11 @@ def _match_and_correct(
             method=method,
         )
     return match, correct(match.wall, observation.r_m, observation.xi_rad)
+
+
+def _unmatched_message(match: MatchResult) -> str:
+    """Why a detected wall without a unique match corrects nothing (Fig. 2): more than one map
+    wall matched, or none did, with each map wall's first failed condition."""
+    if match.status == AMBIGUOUS:
+        return "more than one map wall matches"
+    return f"no map wall matches ({match.checks.rejection_summary()})"

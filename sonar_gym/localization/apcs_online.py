@@ -180,6 +180,17 @@ def nearest_facing_walls(
 # --------------------------------------------------------------------------------------------
 
 
+def _frame_move(before: Pose, after: Pose) -> tuple[float, FloatArray, FloatArray, FloatArray]:
+    """The rigid move of the estimate's frame in a correction from ``before`` to ``after``:
+    ``(turn, rotation, origin_before, origin_after)``, the turn in radians, its ``(2, 2)``
+    rotation and the two positions (metres, {W}); a point ``p`` moves to
+    ``origin_after + rotation @ (p - origin_before)``."""
+    turn = after.theta - before.theta
+    cos_turn, sin_turn = math.cos(turn), math.sin(turn)
+    rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
+    return turn, rotation, np.array((before.x, before.y)), np.array((after.x, after.y))
+
+
 _RawGroup = tuple[list[tuple[float, float]], list[float]]
 """A closed group before its verdict: its ERPs ``(x, y)`` (metres, in the frame of the
 estimate) and their reflection directions (radians), in the order taken."""
@@ -358,19 +369,27 @@ class WallStream:
         The readings and ERPs of the stream live in the frame of the pose estimate; a
         correction moves that frame rigidly, and the stored points move with it.
         """
-        turn = after.theta - before.theta
-        cos_turn, sin_turn = math.cos(turn), math.sin(turn)
-        rotation = np.array([[cos_turn, -sin_turn], [sin_turn, cos_turn]])
-        origin_before, origin_after = before.position, after.position
+        self._move(*_frame_move(before, after))
 
-        def moved(point: tuple[float, float]) -> tuple[float, float]:
-            x, y = origin_after + rotation @ (np.asarray(point) - origin_before)
-            return float(x), float(y)
-
-        if self._previous is not None:
-            position, direction, range_m = self._previous
-            self._previous = (moved(position), direction + turn, range_m)
-        self._group_points = [moved(point) for point in self._group_points]
+    def _move(
+        self,
+        turn: float,
+        rotation: FloatArray,
+        origin_before: FloatArray,
+        origin_after: FloatArray,
+    ) -> None:
+        """:meth:`move_frame` by the parts :func:`_frame_move` gives."""
+        previous = self._previous
+        # The group's ERPs, then the stored reading's position: one row each.
+        points = self._group_points if previous is None else [*self._group_points, previous[0]]
+        if points:
+            offsets = np.array(points) - origin_before
+            # np.matvec makes, row by row, the BLAS call of ``rotation @ offset`` (the same bits)
+            moved = (origin_after + np.matvec(rotation, offsets)).tolist()
+            if previous is not None:
+                position_x, position_y = moved.pop()
+                self._previous = ((position_x, position_y), previous[1] + turn, previous[2])
+            self._group_points = [(x, y) for x, y in moved]
         self._group_directions = [direction + turn for direction in self._group_directions]
 
     def _close(self) -> ClosedGroup:
@@ -436,6 +455,33 @@ class WallHandling:
     pose_before: Pose
     pose_after: Pose
     command_index: int
+
+    @classmethod
+    def unchecked(
+        cls,
+        side: str,
+        group: ClosedGroup,
+        match: MatchResult,
+        reason: str | None,
+        correction: CorrectionResult,
+        pose_before: Pose,
+        pose_after: Pose,
+        command_index: int,
+    ) -> WallHandling:
+        """``WallHandling(side, group, ...)``, its fields set as its ``__init__`` sets them
+        (frozen: straight into ``__dict__``) at a fraction of the cost."""
+        handling = object.__new__(cls)
+        handling.__dict__.update(
+            side=side,
+            group=group,
+            match=match,
+            reason=reason,
+            correction=correction,
+            pose_before=pose_before,
+            pose_after=pose_after,
+            command_index=command_index,
+        )
+        return handling
 
 
 @dataclass
@@ -773,15 +819,15 @@ class APCSTracker:
             after = self._apply(correction)
             corrected = corrected or after is not before
             result.walls.append(
-                WallHandling(
-                    side=side,
-                    group=group,
-                    match=match,
-                    reason=rejection_reason(match),
-                    correction=correction,
-                    pose_before=before,
-                    pose_after=after,
-                    command_index=command_index,
+                WallHandling.unchecked(
+                    side,
+                    group,
+                    match,
+                    rejection_reason(match),
+                    correction,
+                    before,
+                    after,
+                    command_index,
                 )
             )
         return corrected
@@ -793,8 +839,9 @@ class APCSTracker:
         after = correction.pose
         self.estimate = after
         self.covariance = np.array(correction.covariance, dtype=np.float64)
+        move = _frame_move(before, after)  # one move for both streams
         for stream in self.streams.values():
-            stream.move_frame(before, after)
+            stream._move(*move)
         return after
 
 
