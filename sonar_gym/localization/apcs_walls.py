@@ -569,11 +569,13 @@ def newest_reflection_table(
     # reading of every pair are those of all the readings.
     directions = readings[2]
     pairs = apcs_kernels.pair_table(readings, low, high, np.sin(directions), np.cos(directions))
+    # alpha of eqs (5)-(6) and the pair's mean beam axis: numpy's arctan2 acts element by
+    # element, so one call on both rows gives each row's angles
+    angles = np.arctan2(pairs[0:2], pairs[2:4])
     roots = apcs_kernels.root_table(
         pairs,
-        np.arctan2(pairs[0], pairs[1]),  # alpha of eqs (5)-(6)
-        np.arccos(pairs[2]),  # the offset of the roots of eq. (4)
-        np.arctan2(pairs[4], pairs[5]),  # the pair's mean beam axis
+        angles,
+        np.arccos(pairs[4]),  # the offset of the roots of eq. (4)
     )
     phi = roots[0]
     return apcs_kernels.erp_table(  # type: ignore[no-any-return]
