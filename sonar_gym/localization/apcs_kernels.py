@@ -15,7 +15,8 @@ three loops, in order, for the pairs ``(i, i + 1)`` of consecutive readings
 
 1. :func:`pair_table`: the eq. (4) inputs per pair (``sin alpha``, ``cos alpha`` of
    eqs (5)-(6), the cosine of the root's offset, whether a root exists) and the summed beam
-   axes whose ``arctan2`` is the mean beam axis;
+   axes whose ``arctan2`` is the mean beam axis, the rows of both ``arctan2`` one block (one
+   numpy call gives both angles);
 2. :func:`root_table`: the two roots of eq. (4), the one nearer the beam axis, for the pairs
    that have one;
 3. :func:`erp_table`: ``R2 = P2 + r2 (cos phi, sin phi)`` of eqs (2)-(3), one row per
@@ -58,8 +59,9 @@ def wrapped_angles(angles: FloatArray) -> FloatArray:
 READING_ROWS = ("x", "y", "direction", "range")
 """The rows of :func:`reading_table`'s output: sensor position (metres), beam-axis direction
 (radians) and range (metres)."""
-PAIR_ROWS = ("sin_alpha", "cos_alpha", "cosine", "solvable", "beam_y", "beam_x")
-"""The rows of :func:`pair_table`'s output (``solvable`` as 1.0 or 0.0)."""
+PAIR_ROWS = ("sin_alpha", "beam_y", "cos_alpha", "beam_x", "cosine", "solvable")
+"""The rows of :func:`pair_table`'s output (``solvable`` as 1.0 or 0.0): ``arctan2`` of rows
+0-1 over rows 2-3 gives ``alpha`` and the mean beam axis."""
 ERP_COLUMNS = ("sensor_x", "sensor_y", "erp_x", "erp_y", "direction", "valid")
 """The columns of :func:`erp_table`'s output: the reading's sensor position (metres), its ERP
 (metres), the reflection direction (radians) and whether it gives an ERP (1.0 or 0.0)."""
@@ -141,7 +143,7 @@ def pair_table(
         moved = baseline > _ZERO_LENGTH_M
         safe_baseline = baseline if moved else 1.0
         table[0, i] = dx / safe_baseline  # eq. (5)
-        table[1, i] = dy / safe_baseline  # eq. (6)
+        table[2, i] = dy / safe_baseline  # eq. (6)
         first, second = readings[3, i], readings[3, i + 1]
         ranged = (
             low <= first <= high
@@ -152,46 +154,46 @@ def pair_table(
         range_step = (second if ranged else 0.0) - (first if ranged else 0.0)
         value = -range_step / safe_baseline
         solvable = ranged and moved and abs(value) <= 1.0
-        table[2, i] = value if solvable else 0.0
-        table[3, i] = 1.0 if solvable else 0.0
-        table[4, i] = sines[i] + sines[i + 1]
-        table[5, i] = cosines[i] + cosines[i + 1]
+        table[4, i] = value if solvable else 0.0
+        table[5, i] = 1.0 if solvable else 0.0
+        table[1, i] = sines[i] + sines[i + 1]
+        table[3, i] = cosines[i] + cosines[i + 1]
     return table
 
 
 @compiled(  # type: ignore[misc]
     _TABLE_OUT,
     TABLE,  # pairs
-    NUMBERS,  # alpha
+    TABLE,  # angles
     NUMBERS,  # offset
-    NUMBERS,  # beam_axis
 )
-def root_table(
-    pairs: FloatArray, alpha: FloatArray, offset: FloatArray, beam_axis: FloatArray
-) -> FloatArray:
+def root_table(pairs: FloatArray, angles: FloatArray, offset: FloatArray) -> FloatArray:
     """Of the roots ``pi/2 - alpha +- offset`` of eq. (4) (wrapped to (-pi, pi]), the one
-    nearer ``beam_axis`` (``+`` on a tie), for each of the ``K`` pairs of a :func:`pair_table`
-    that has one, as one ``(2, K)`` table: the chosen roots ``phi`` (radians) and the indices
-    of their pairs (as floats, exact), each row contiguous.
+    nearer the mean beam axis (``+`` on a tie), for each of the ``K`` pairs of a
+    :func:`pair_table` that has one, as one ``(2, K)`` table: the chosen roots ``phi``
+    (radians) and the indices of their pairs (as floats, exact), each row contiguous.
 
     Args:
         pairs: ``(6, N - 1)`` a :func:`pair_table`.
-        alpha, offset, beam_axis: ``(N - 1,)`` numpy's ``arctan2`` and ``arccos`` of its rows:
-            ``alpha``, the roots' offset and the mean beam axis, radians.
+        angles: ``(2, N - 1)`` numpy's ``arctan2`` of its rows 0-1 over rows 2-3: ``alpha``
+            and the mean beam axis, radians.
+        offset: ``(N - 1,)`` numpy's ``arccos`` of its ``cosine`` row: the roots' offset,
+            radians.
     """
     count = 0
     for i in range(pairs.shape[1]):
-        if pairs[3, i] != 0.0:
+        if pairs[5, i] != 0.0:
             count += 1
     table = np.empty((2, count))
     k = 0
     for i in range(pairs.shape[1]):
-        if pairs[3, i] == 0.0:
+        if pairs[5, i] == 0.0:
             continue
-        phi_plus = wrap_to_pi(math.pi / 2.0 - alpha[i] + offset[i])  # eq. (4), +
-        phi_minus = wrap_to_pi(math.pi / 2.0 - alpha[i] - offset[i])  # eq. (4), -
-        off_axis_plus = abs(wrap_to_pi(phi_plus - beam_axis[i]))
-        off_axis_minus = abs(wrap_to_pi(phi_minus - beam_axis[i]))
+        alpha, beam_axis = angles[0, i], angles[1, i]
+        phi_plus = wrap_to_pi(math.pi / 2.0 - alpha + offset[i])  # eq. (4), +
+        phi_minus = wrap_to_pi(math.pi / 2.0 - alpha - offset[i])  # eq. (4), -
+        off_axis_plus = abs(wrap_to_pi(phi_plus - beam_axis))
+        off_axis_minus = abs(wrap_to_pi(phi_minus - beam_axis))
         table[0, k] = phi_plus if off_axis_plus <= off_axis_minus else phi_minus
         table[1, k] = i
         k += 1

@@ -108,20 +108,30 @@ class WallVector:
         and ``name``, without the conversions of the constructor: equal to
         ``WallVector(start, end, name)``, with the ValueError it raises for end points that
         coincide or (through it) are not finite."""
-        if not (
-            math.isfinite(start[0] + start[1] + end[0] + end[1])
-            and math.hypot(end[0] - start[0], end[1] - start[1]) > ZERO_LENGTH_M
-        ):
+        delta_x, delta_y = end[0] - start[0], end[1] - start[1]
+        length = math.hypot(delta_x, delta_y)
+        if not (math.isfinite(start[0] + start[1] + end[0] + end[1]) and length > ZERO_LENGTH_M):
             return cls(start, end, name)  # it raises, naming what is wrong
+        unit = (delta_x / length, delta_y / length)
         wall = object.__new__(cls)
-        object.__setattr__(wall, "start", start)
-        object.__setattr__(wall, "end", end)
-        object.__setattr__(wall, "name", name)
-        wall._derive(start, end)
+        # The fields, then what _derive sets, in its order: one dictionary, not seven calls.
+        object.__setattr__(
+            wall,
+            "__dict__",
+            {
+                "start": start,
+                "end": end,
+                "name": name,
+                "_length": length,
+                "_unit": unit,
+                "_offset": -(unit[1] * start[0] - unit[0] * start[1]),
+                "_angle": math.atan2(delta_y, delta_x),
+            },
+        )
         return wall
 
     def _derive(self, start: tuple[float, float], end: tuple[float, float]) -> None:
-        """Set what the matching derives from the end points."""
+        """Set what the matching derives from the end points (as :meth:`unchecked` does)."""
         length = math.hypot(end[0] - start[0], end[1] - start[1])
         unit = ((end[0] - start[0]) / length, (end[1] - start[1]) / length)
         # Not fields: derived once, for the per-wall arithmetic of the matching (sec. 4.3).
@@ -559,11 +569,13 @@ def newest_reflection_table(
     # reading of every pair are those of all the readings.
     directions = readings[2]
     pairs = apcs_kernels.pair_table(readings, low, high, np.sin(directions), np.cos(directions))
+    # alpha of eqs (5)-(6) and the pair's mean beam axis: numpy's arctan2 acts element by
+    # element, so one call on both rows gives each row's angles
+    angles = np.arctan2(pairs[0:2], pairs[2:4])
     roots = apcs_kernels.root_table(
         pairs,
-        np.arctan2(pairs[0], pairs[1]),  # alpha of eqs (5)-(6)
-        np.arccos(pairs[2]),  # the offset of the roots of eq. (4)
-        np.arctan2(pairs[4], pairs[5]),  # the pair's mean beam axis
+        angles,
+        np.arccos(pairs[4]),  # the offset of the roots of eq. (4)
     )
     phi = roots[0]
     return apcs_kernels.erp_table(  # type: ignore[no-any-return]
@@ -677,11 +689,17 @@ class DetectedWall:
         residual_variance_m2)``, with its ValueError (:meth:`WallVector.unchecked`)."""
         segment = WallVector.unchecked(start, end, "detected")
         wall = object.__new__(cls)
-        object.__setattr__(wall, "start", start)
-        object.__setattr__(wall, "end", end)
-        object.__setattr__(wall, "erp_indices", erp_indices)
-        object.__setattr__(wall, "residual_variance_m2", residual_variance_m2)
-        object.__setattr__(wall, "_vector", segment)
+        object.__setattr__(  # the constructor's attributes, in its order, as one dictionary
+            wall,
+            "__dict__",
+            {
+                "start": start,
+                "end": end,
+                "erp_indices": erp_indices,
+                "residual_variance_m2": residual_variance_m2,
+                "_vector": segment,
+            },
+        )
         return wall
 
     @property
@@ -819,7 +837,8 @@ def fit_group_points(
     """
     # members.mean(axis=0), as it sums, and the ERPs relative to it, in one compiled loop
     centred, centroid_x, centroid_y = apcs_kernels.centred_group(members)
-    scatter = centred.T @ centred / len(indices)
+    scatter = centred.T @ centred
+    np.true_divide(scatter, len(indices), out=scatter)  # `/ len(indices)`, in place
     values, eigenvectors = np.linalg.eigh(scatter)
     eigenvalues: list[float] = values.tolist()  # ascending
     residual_variance = max(eigenvalues[0], 0.0)
@@ -830,10 +849,12 @@ def fit_group_points(
     along_x, along_y = along.tolist()
     occupied_side = np.array([-along_y, along_x])  # left of `along`
     if directions is not None:
-        # np.add.reduce is what ndarray.sum calls, without its Python wrapper
-        towards_wall = np.array(
-            [np.add.reduce(np.cos(directions)), np.add.reduce(np.sin(directions))]
-        )
+        # The sums of the cosines and of the sines, as ndarray.sum of each gives them: a
+        # reduction along the rows adds each row as the reduction of that row alone does.
+        trig = np.empty((2, len(directions)))
+        np.cos(directions, out=trig[0])
+        np.sin(directions, out=trig[1])
+        towards_wall = np.add.reduce(trig, axis=1)
         flip = float(occupied_side @ towards_wall) < 0.0
     else:
         flip = float((centred[-1] - centred[0]) @ along) < 0.0

@@ -23,6 +23,7 @@ from sonar_gym.pose import wrap_angles
 from tests.localization.apcs_fit_reference import (
     fit_group_points_arrays,
     fit_group_points_numpy_glue,
+    fit_group_points_two_sums,
 )
 from tests.localization.float_bits import canonical
 
@@ -64,6 +65,8 @@ def _check(members: np.ndarray, directions: np.ndarray | None, params: APCSParam
     assert _bits(got) == _bits(expected), (members.tolist(), directions)
     glue = fit_group_points_numpy_glue(members, directions, indices, params)
     assert _bits(got) == _bits(glue), (members.tolist(), directions)
+    two_sums = fit_group_points_two_sums(members, directions, indices, params)
+    assert _bits(got) == _bits(two_sums), (members.tolist(), directions)
     return got.status
 
 
@@ -111,3 +114,19 @@ def test_fit_group_points_goes_through_eigh_on_an_overflowing_group() -> None:
         got = fit_group_points(members, None, indices)
     assert _bits(got) == _bits(expected)
     assert [str(w.message) for w in got_warnings] == [str(w.message) for w in expected_warnings]
+
+
+def test_one_reduction_along_the_rows_sums_each_row_as_its_own_reduction() -> None:
+    """The fit sums the cosines and the sines of a group's directions as one ``(2, n)``
+    reduction along the rows: each sum has the bits of ``np.add.reduce`` of that row alone
+    (numpy's pairwise summation, for short and long groups)."""
+    rng = np.random.default_rng(20261207)
+    for _ in range(20000):
+        count = int(rng.integers(1, 140))
+        directions = rng.uniform(-4.0, 4.0, count) * 10.0 ** float(rng.integers(-6, 2))
+        trig = np.empty((2, count))
+        np.cos(directions, out=trig[0])
+        np.sin(directions, out=trig[1])
+        rows = np.add.reduce(trig, axis=1)
+        separate = np.array([np.add.reduce(np.cos(directions)), np.add.reduce(np.sin(directions))])
+        assert rows.tobytes() == separate.tobytes(), directions.tolist()

@@ -195,3 +195,18 @@ def test_wrapped_angles_of_any_angles(angles: list[float]) -> None:
     assert np.array_equal(
         apcs_kernels.wrapped_angles(values).view(np.int64), wrap_angles(values).view(np.int64)
     )
+
+
+def test_one_arctan2_of_two_rows_gives_each_rows_angles() -> None:
+    """``newest_reflection_table`` takes ``alpha`` and the mean beam axis from one
+    ``arctan2`` of a ``(2, K)`` block: each row has the bits of ``arctan2`` of that row alone."""
+    rng = np.random.default_rng(20261207)
+    for _ in range(20000):
+        count = int(rng.integers(0, 40))
+        rows = rng.normal(size=(4, count)) * 10.0 ** float(rng.integers(-5, 5))
+        if count and rng.random() < 0.1:
+            rows[rng.integers(4), rng.integers(count)] = rng.choice([0.0, -0.0, np.inf, np.nan])
+        block = np.arctan2(rows[0:2], rows[2:4])
+        assert_same_bits(
+            (block[0], block[1]), (np.arctan2(rows[0], rows[2]), np.arctan2(rows[1], rows[3]))
+        )
