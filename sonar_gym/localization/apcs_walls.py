@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -65,6 +65,19 @@ def _finite_pair(value: npt.ArrayLike, name: str) -> tuple[float, float]:
     if array.shape != (2,) or not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be a finite (x, y) pair in metres, got {value!r}")
     return float(array[0]), float(array[1])
+
+
+def _derived(start: tuple[float, float], end: tuple[float, float], length: float) -> dict[str, Any]:
+    """What the matching (sec. 4.3) derives once per wall vector from its end points (metres,
+    {W}) and ``length`` (their ``math.hypot`` distance): the length, the unit direction, the
+    signed offset of the wall's line from the origin and the direction angle (radians)."""
+    unit = ((end[0] - start[0]) / length, (end[1] - start[1]) / length)
+    return {
+        "_length": length,
+        "_unit": unit,
+        "_offset": -(unit[1] * start[0] - unit[0] * start[1]),
+        "_angle": math.atan2(end[1] - start[1], end[0] - start[0]),
+    }
 
 
 @dataclass(frozen=True)
@@ -108,37 +121,22 @@ class WallVector:
         and ``name``, without the conversions of the constructor: equal to
         ``WallVector(start, end, name)``, with the ValueError it raises for end points that
         coincide or (through it) are not finite."""
-        delta_x, delta_y = end[0] - start[0], end[1] - start[1]
-        length = math.hypot(delta_x, delta_y)
+        length = math.hypot(end[0] - start[0], end[1] - start[1])
         if not (math.isfinite(start[0] + start[1] + end[0] + end[1]) and length > ZERO_LENGTH_M):
             return cls(start, end, name)  # it raises, naming what is wrong
-        unit = (delta_x / length, delta_y / length)
         wall = object.__new__(cls)
         # The fields, then what _derive sets, in its order: one dictionary, not seven calls.
         object.__setattr__(
             wall,
             "__dict__",
-            {
-                "start": start,
-                "end": end,
-                "name": name,
-                "_length": length,
-                "_unit": unit,
-                "_offset": -(unit[1] * start[0] - unit[0] * start[1]),
-                "_angle": math.atan2(delta_y, delta_x),
-            },
+            {"start": start, "end": end, "name": name, **_derived(start, end, length)},
         )
         return wall
 
     def _derive(self, start: tuple[float, float], end: tuple[float, float]) -> None:
         """Set what the matching derives from the end points (as :meth:`unchecked` does)."""
         length = math.hypot(end[0] - start[0], end[1] - start[1])
-        unit = ((end[0] - start[0]) / length, (end[1] - start[1]) / length)
-        # Not fields: derived once, for the per-wall arithmetic of the matching (sec. 4.3).
-        object.__setattr__(self, "_length", length)
-        object.__setattr__(self, "_unit", unit)
-        object.__setattr__(self, "_offset", -(unit[1] * start[0] - unit[0] * start[1]))
-        object.__setattr__(self, "_angle", math.atan2(end[1] - start[1], end[0] - start[0]))
+        self.__dict__.update(_derived(start, end, length))
 
     @property
     def start_point(self) -> FloatArray:
