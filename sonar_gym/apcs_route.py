@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from sonar_gym import drive_kernels
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.localization.apcs import DetectedWall, MatchResult
 from sonar_gym.localization.apcs_online import SIDE_NAMES, APCSTracker, RunResult
 from sonar_gym.phase_timer import PhaseTimer
@@ -85,8 +86,8 @@ class WallDetection:
     ) -> WallDetection:
         """``WallDetection(leg, side, ...)``, its fields set as its ``__init__`` sets them
         (frozen: straight into ``__dict__``) at a fraction of the cost."""
-        detection = object.__new__(cls)
-        detection.__dict__.update(
+        return unchecked_instance(
+            cls,
             leg=leg,
             side=side,
             wall=wall,
@@ -98,7 +99,6 @@ class WallDetection:
             pose_after=pose_after,
             true_pose=true_pose,
         )
-        return detection
 
     @property
     def matched(self) -> bool:

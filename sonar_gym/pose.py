@@ -12,6 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
+
 FloatArray = npt.NDArray[np.float64]
 
 
@@ -66,12 +68,7 @@ class Pose:
         the same pose as ``Pose(x, y, theta)``, heading wrapped to (-pi, pi], at a fraction of
         the cost. Passing anything but finite floats is the caller's error.
         """
-        pose = object.__new__(cls)
-        fields = pose.__dict__  # frozen: the fields are set as __post_init__ sets them
-        fields["x"] = x
-        fields["y"] = y
-        fields["theta"] = wrap_angle(theta)
-        return pose
+        return unchecked_instance(cls, x=x, y=y, theta=wrap_angle(theta))
 
     @classmethod
     def from_array(cls, values: npt.ArrayLike) -> Pose:

@@ -50,6 +50,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.localization.apcs_walls import ZERO_LENGTH_M, DetectedWall, WallVector
 from sonar_gym.localization.result import OK, Localization
 from sonar_gym.pose import FloatArray, Pose, wrap_angle
@@ -150,11 +151,9 @@ class CorrectionResult(Localization):
         ``explain()``, written when first read: equal to ``CorrectionResult(status, None,
         explain(), covariance=covariance, method=method)``. ``explain`` must give the same text
         whenever called (and be picklable for the result to be)."""
-        result = object.__new__(cls)
-        result.__dict__.update(
-            status=status, pose=None, _message=explain, covariance=covariance, method=method
+        return unchecked_instance(
+            cls, status=status, pose=None, _message=explain, covariance=covariance, method=method
         )
-        return result
 
 
 def _check_positive(value: float, name: str, unit: str) -> float:

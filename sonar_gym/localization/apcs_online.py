@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.localization import apcs_kernels
 from sonar_gym.localization.apcs import (
     AMBIGUOUS,
@@ -470,8 +471,8 @@ class WallHandling:
     ) -> WallHandling:
         """``WallHandling(side, group, ...)``, its fields set as its ``__init__`` sets them
         (frozen: straight into ``__dict__``) at a fraction of the cost."""
-        handling = object.__new__(cls)
-        handling.__dict__.update(
+        return unchecked_instance(
+            cls,
             side=side,
             group=group,
             match=match,
@@ -481,7 +482,6 @@ class WallHandling:
             pose_after=pose_after,
             command_index=command_index,
         )
-        return handling
 
 
 @dataclass

@@ -29,6 +29,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.localization import apcs_kernels, apcs_match_kernels
 from sonar_gym.pose import FloatArray, wrap_angles
 
@@ -124,14 +125,10 @@ class WallVector:
         length = math.hypot(end[0] - start[0], end[1] - start[1])
         if not (math.isfinite(start[0] + start[1] + end[0] + end[1]) and length > ZERO_LENGTH_M):
             return cls(start, end, name)  # it raises, naming what is wrong
-        wall = object.__new__(cls)
-        # The fields, then what _derive sets, in its order: one dictionary, not seven calls.
-        object.__setattr__(
-            wall,
-            "__dict__",
-            {"start": start, "end": end, "name": name, **_derived(start, end, length)},
+        # The fields, then what _derive sets, in its order
+        return unchecked_instance(
+            cls, start=start, end=end, name=name, **_derived(start, end, length)
         )
-        return wall
 
     def _derive(self, start: tuple[float, float], end: tuple[float, float]) -> None:
         """Set what the matching derives from the end points (as :meth:`unchecked` does)."""
@@ -686,19 +683,14 @@ class DetectedWall:
         of the constructor: equal to ``DetectedWall(start, end, erp_indices,
         residual_variance_m2)``, with its ValueError (:meth:`WallVector.unchecked`)."""
         segment = WallVector.unchecked(start, end, "detected")
-        wall = object.__new__(cls)
-        object.__setattr__(  # the constructor's attributes, in its order, as one dictionary
-            wall,
-            "__dict__",
-            {
-                "start": start,
-                "end": end,
-                "erp_indices": erp_indices,
-                "residual_variance_m2": residual_variance_m2,
-                "_vector": segment,
-            },
+        return unchecked_instance(  # the constructor's attributes, in its order
+            cls,
+            start=start,
+            end=end,
+            erp_indices=erp_indices,
+            residual_variance_m2=residual_variance_m2,
+            _vector=segment,
         )
-        return wall
 
     @property
     def vector(self) -> WallVector:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.pose import wrap_angle
 
 __all__ = [
@@ -311,20 +312,18 @@ def make_rcd(angles_rad: np.ndarray, ranges_m: np.ndarray, indices: np.ndarray) 
     if not (math.isfinite(delta) and math.isfinite(gamma)):  # a dropout inside: RCD's checks
         return RCD(delta, 0.5 * (beta_start + beta_end), float(beta_end - beta_start), gamma)
     # Built without RCD's checks: every value here is finite and in range by construction.
-    rcd = object.__new__(RCD)
-    for name, value in (
-        ("delta", delta),
-        ("beta", wrap_angle(float(0.5 * (beta_start + beta_end)))),
-        ("eta", float(beta_end - beta_start)),
-        ("gamma", gamma),
-        ("start_index", start),
-        ("end_index", end),
-        ("indices", tuple(indices.tolist())),
-        ("sample_ranges", tuple(rcd_ranges.tolist())),
-        ("role", None),
-    ):
-        object.__setattr__(rcd, name, value)
-    return rcd
+    return unchecked_instance(
+        RCD,
+        delta=delta,
+        beta=wrap_angle(float(0.5 * (beta_start + beta_end))),
+        eta=float(beta_end - beta_start),
+        gamma=gamma,
+        start_index=start,
+        end_index=end,
+        indices=tuple(indices.tolist()),
+        sample_ranges=tuple(rcd_ranges.tolist()),
+        role=None,
+    )
 
 
 def _covers_full_turn(angles_rad: np.ndarray, increment_rad: float) -> bool:

@@ -68,6 +68,7 @@ from typing import Literal
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.localization.ekf import (
     INTEGRATIONS,
     Integration,
@@ -729,8 +730,8 @@ def _vote_fix(
     """``VoteLocalization(status=OK, pose=pose, votes=votes, heading_rad=heading_rad,
     last_sweep_pose=last_sweep_pose)``, its fields set as the frozen dataclass sets them,
     without its per-field setters and its check (which a pose with ``"ok"`` passes)."""
-    result = object.__new__(VoteLocalization)
-    result.__dict__.update(
+    return unchecked_instance(
+        VoteLocalization,
         status=OK,
         pose=pose,
         message="",
@@ -739,7 +740,6 @@ def _vote_fix(
         heading_rad=heading_rad,
         last_sweep_pose=last_sweep_pose,
     )
-    return result
 
 
 def _vote(

@@ -36,6 +36,7 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.pose import FloatArray, Pose
 from sonar_gym.scenario import Scenario
 
@@ -172,13 +173,13 @@ class Sweep:
         ``angles`` that nothing writes (a sweep grid's) and ``ranges`` that the caller keeps
         no other use of (a fresh sweep's), made read-only in place. The same sweep, two array
         copies cheaper."""
-        sweep = object.__new__(cls)
-        fields = sweep.__dict__  # frozen: the fields are set as __post_init__ sets them
-        fields["angles"] = _read_only(angles)
-        fields["ranges"] = _read_only(ranges)
-        fields["sensor_offset"] = (float(sensor_offset[0]), float(sensor_offset[1]))
-        fields["odometry"] = odometry
-        return sweep
+        return unchecked_instance(  # the fields as __post_init__ sets them
+            cls,
+            angles=_read_only(angles),
+            ranges=_read_only(ranges),
+            sensor_offset=(float(sensor_offset[0]), float(sensor_offset[1])),
+            odometry=odometry,
+        )
 
     @property
     def valid(self) -> BoolArray:

@@ -74,6 +74,7 @@ from enum import IntEnum
 import numpy as np
 import numpy.typing as npt
 
+from sonar_gym.frozen import unchecked_instance
 from sonar_gym.geometry import StaticGeometry
 from sonar_gym.pose import FloatArray
 from sonar_gym.sonar import kernels
@@ -183,20 +184,17 @@ class EchoCandidates:
         """The candidates of these fields, in the order of the attributes, set as the frozen
         dataclass's constructor sets them (it has no checks) at a fraction of its cost: for
         :func:`echo_candidates`, which runs once per sensor position."""
-        candidates = object.__new__(cls)
-        candidates.__dict__.update(
-            {
-                "position": position,
-                "directions": directions,
-                "path_lengths": path_lengths,
-                "amplitudes": amplitudes,
-                "_primitive_indices": primitive_indices,
-                "_concave": concave,
-                "_tables": tables,
-                "threshold": threshold,
-            }
+        return unchecked_instance(
+            cls,
+            position=position,
+            directions=directions,
+            path_lengths=path_lengths,
+            amplitudes=amplitudes,
+            _primitive_indices=primitive_indices,
+            _concave=concave,
+            _tables=tables,
+            threshold=threshold,
         )
-        return candidates
 
     def __len__(self) -> int:
         return len(self.path_lengths)
