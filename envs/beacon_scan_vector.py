@@ -314,8 +314,9 @@ def batch_infos(entries: InfoEntries, num_envs: int) -> dict[str, Any] | None:
     batched: dict[str, Any] = {}
     for key, (column_indices, column) in columns.items():
         kinds = {type(value) for value in column}
-        if key != "final_obs" and any(issubclass(kind, dict) for kind in kinds):
-            if not all(issubclass(kind, dict) for kind in kinds):
+        nested = [issubclass(kind, dict) for kind in kinds]
+        if key != "final_obs" and any(nested):
+            if not all(nested):
                 return None
             inner = batch_infos(list(zip(column_indices, column, strict=True)), num_envs)
             if inner is None:
