@@ -310,7 +310,10 @@ class BeaconScanEnv(SonarEnv):
     ## Version History
 
     * v0: first release. Later, without changing any default episode: ``n_bins`` renamed
-      ``n_range_bins`` (the old name still works, with a ``DeprecationWarning``).
+      ``n_range_bins`` (the old name still works, with a ``DeprecationWarning``); a native
+      vector env, ``gym.make_vec(..., vectorization_mode="vector_entry_point")`` (see
+      :mod:`sonar_gym.envs.beacon_scan_vector`), that gives the sync vector env's results bit
+      for bit.
 
     ## Example
 

@@ -30,12 +30,17 @@ class Registration:
         limit_reason: which argument and validation bound the longest episode follows from.
         default_episode_steps: the episode length at default arguments (most steps, for envs
             whose agent may end early).
+        vector_entry_point: ``"module:Class"`` of a native vector env, which ``gym.make_vec``
+            builds with ``vectorization_mode="vector_entry_point"`` (and by default); None
+            when the id has none (``make_vec`` then steps ``gym.make``'d envs in a
+            ``SyncVectorEnv``).
     """
 
     entry_point: str
     max_episode_steps: int
     limit_reason: str
     default_episode_steps: int
+    vector_entry_point: str | None = None
 
 
 REGISTRATIONS: dict[str, Registration] = {
@@ -45,6 +50,7 @@ REGISTRATIONS: dict[str, Registration] = {
         limit_reason="the env truncates itself after max_steps decisions (default 12, at most "
         "1000); the agent may localize earlier",
         default_episode_steps=12,
+        vector_entry_point="sonar_gym.envs.beacon_scan_vector:BeaconScanVectorEnv",
     ),
     "SonarGym/ActiveBeaconScan-v0": Registration(
         "sonar_gym.envs.active_beacon_scan:ActiveBeaconScanEnv",
@@ -100,5 +106,6 @@ def register_environments() -> None:
             gym.register(
                 id=env_id,
                 entry_point=registration.entry_point,
+                vector_entry_point=registration.vector_entry_point,
                 max_episode_steps=registration.max_episode_steps,
             )

@@ -519,6 +519,50 @@ def test_benchmark_phase_shares_split_the_wall_time():
     assert phase_shares(0.0, 0.0, {}) == {}
 
 
+def test_benchmark_vector_speed_alternates_sync_and_native_runs():
+    """The code path only (a tiny budget): no speed is asserted."""
+    from sonar_gym.train.benchmark import vector_speed
+
+    speed = vector_speed("SonarGym/BeaconScan-v0", 0.01, num_envs=2, pairs=2)
+    assert [run.mode for run in speed.runs] == ["sync", "vector_entry_point"] * 2
+    assert all(run.steps >= 1 and run.num_envs == 2 for run in speed.runs)
+    sync = [run for run in speed.runs if run.mode == "sync"]
+    assert speed.env_steps_per_s("sync") == pytest.approx(
+        sum(2 * run.steps for run in sync) / sum(run.seconds for run in sync)
+    )
+    data = speed.to_dict()
+    assert data["native_over_sync"] == pytest.approx(
+        data["native_env_steps_per_s"] / data["sync_env_steps_per_s"]
+    )
+    assert len(data["runs"]) == 4 and data["runs"][0]["env_steps_per_s"] > 0
+
+
+def test_benchmark_measures_vector_throughput_of_envs_with_a_native_vector_env(monkeypatch):
+    from sonar_gym.train import benchmark, report
+
+    monkeypatch.setattr(
+        benchmark, "ppo_rate", lambda env_id, *a, **k: benchmark.PPORate(env_id, 9, 1, 1.0, 0.0)
+    )
+    monkeypatch.setattr(
+        benchmark,
+        "random_rate",
+        lambda env_id, *a, **k: benchmark.RandomRate(env_id, 9, 2, 1.0, 0.5),
+    )
+    monkeypatch.setattr(
+        benchmark, "ceiling_rate", lambda env_id, *a, **k: benchmark.PPORate(env_id, 9, 1, 1.0, 0.0)
+    )
+    monkeypatch.setattr(benchmark, "VECTOR_SHARE_OF_BUDGET", 0.01)
+    ids = ["SonarGym/BeaconScan-v0", "SonarGym/Trilateration-v0"]  # only the first has one
+    measured = benchmark.run_benchmark(ids, 1.0, measure_pan=False)
+    assert [speed.env_id for speed in measured.vectors] == ids[:1]
+    assert len(measured.vectors[0].runs) == 2 * benchmark.VECTOR_PAIRS
+    data = measured.to_dict()
+    assert [entry["env_id"] for entry in data["vector"]] == ids[:1]
+    assert report.vector_table(measured).row_count == 1
+    skipped = benchmark.run_benchmark(ids[:1], 1.0, measure_pan=False, measure_vector=False)
+    assert skipped.vectors == () and "vector throughput skipped: not requested" in skipped.notes
+
+
 def test_benchmark_rates_each_env_against_the_cartpole_runs_around_it(monkeypatch):
     """CartPole runs before the first env and after every env, a failed one too; each env's
     ratios use the mean of the two runs around it, not of the whole run's."""

@@ -22,7 +22,11 @@ One run, one process, reported as tables and written to JSON:
   categorical distributions), and that part no env work can remove;
 - per env, the **share of wall time per phase**: the env's own ``env.unwrapped.timing``
   phases (e.g. ``sensing``, ``localization``), the rest of ``reset``/``step`` (``env other``),
-  and for PPO everything outside the env (``learner``: policy, rollout buffer, updates).
+  and for PPO everything outside the env (``learner``: policy, rollout buffer, updates);
+- per env with a native vector env (a ``vector_entry_point``, e.g. BeaconScan), **vector
+  throughput**: env-steps per second of :data:`VECTOR_NUM_ENVS` robots under random actions
+  through ``gym.make_vec(..., vectorization_mode="vector_entry_point")`` against
+  ``vectorization_mode="sync"``, in alternating runs of the same budget.
 
 The budget is wall time, so the numbers are rates, not counts: the machine's load moves them,
 which is why the ratio to CartPole in the same run is the number to compare across machines.
@@ -56,6 +60,13 @@ CEILING_SHARE_OF_BUDGET = 0.5
 REFERENCE_SHARE_OF_BUDGET = 0.5
 """Each CartPole-v1 PPO run gets this fraction of the per-env budget (one before the first env,
 one after every env)."""
+VECTOR_NUM_ENVS = 8
+"""Sub-envs of the vector throughput runs."""
+VECTOR_SHARE_OF_BUDGET = 0.1
+"""Each vector throughput run gets this fraction of the per-env budget (2 s at the default)."""
+VECTOR_PAIRS = 2
+"""Alternating sync / native run pairs per env (the machine's load drifts)."""
+VECTOR_MODES = ("sync", "vector_entry_point")
 ENV_OTHER = "env other"
 LEARNER = "learner"
 
@@ -321,6 +332,119 @@ def _train_for(env_id: str, env: gym.Env, seconds: float, seed: int, n_steps: in
     return PPORate(env_id, timesteps, updates, elapsed, clocked.env_seconds, phases)
 
 
+@dataclass(frozen=True)
+class VectorRate:
+    """Random actions on ``num_envs`` sub-envs of one vector env for a wall-time budget.
+
+    Attributes:
+        env_id: the env.
+        mode: ``make_vec``'s ``vectorization_mode``: ``"sync"`` or ``"vector_entry_point"``.
+        num_envs: sub-envs.
+        steps: vector ``step`` calls (each steps every sub-env, autoresets included).
+        seconds: wall time of the loop, seconds (the first ``reset`` included).
+    """
+
+    env_id: str
+    mode: str
+    num_envs: int
+    steps: int
+    seconds: float
+
+    @property
+    def env_steps_per_s(self) -> float:
+        """Sub-env steps per second (``steps * num_envs / seconds``)."""
+        return self.steps * self.num_envs / self.seconds if self.seconds > 0 else math.inf
+
+
+@dataclass(frozen=True)
+class VectorSpeed:
+    """One env's vector throughput: alternating ``sync`` and native runs, in the order run."""
+
+    env_id: str
+    num_envs: int
+    runs: tuple[VectorRate, ...]
+
+    def env_steps_per_s(self, mode: str) -> float:
+        """Sub-env steps per second over every run of ``mode`` (steps over summed seconds)."""
+        runs = [run for run in self.runs if run.mode == mode]
+        seconds = sum(run.seconds for run in runs)
+        steps = sum(run.steps * run.num_envs for run in runs)
+        return steps / seconds if seconds > 0 else math.nan
+
+    @property
+    def native_over_sync(self) -> float:
+        """The native vector env's rate over ``SyncVectorEnv``'s (above 1: the native is
+        faster)."""
+        sync = self.env_steps_per_s("sync")
+        return self.env_steps_per_s("vector_entry_point") / sync if sync > 0 else math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dict."""
+        return {
+            "env_id": self.env_id,
+            "num_envs": self.num_envs,
+            "runs": [{**vars(run), "env_steps_per_s": run.env_steps_per_s} for run in self.runs],
+            "sync_env_steps_per_s": self.env_steps_per_s("sync"),
+            "native_env_steps_per_s": self.env_steps_per_s("vector_entry_point"),
+            "native_over_sync": self.native_over_sync,
+        }
+
+
+def has_native_vector_env(env_id: str) -> bool:
+    """Whether ``env_id`` is registered, with a ``vector_entry_point``."""
+    spec = gym.registry.get(env_id)
+    return spec is not None and spec.vector_entry_point is not None
+
+
+def vector_rate(
+    env_id: str,
+    mode: str,
+    seconds: float,
+    num_envs: int = VECTOR_NUM_ENVS,
+    env_kwargs: Mapping[str, Any] | None = None,
+    seed: int = 0,
+) -> VectorRate:
+    """Step ``gym.make_vec(env_id, num_envs, vectorization_mode=mode)`` with
+    ``action_space.sample()`` until ``seconds`` of wall time pass (at least one step); the
+    sub-envs autoreset (``seed`` seeds the first reset and the actions)."""
+    if not seconds > 0.0:
+        raise ValueError(f"seconds must be positive, got {seconds}")
+    envs = gym.make_vec(
+        env_id, num_envs=num_envs, vectorization_mode=mode, **dict(env_kwargs or {})
+    )
+    try:
+        envs.action_space.seed(seed)
+        steps = 0
+        start = time.perf_counter()
+        envs.reset(seed=seed)
+        while True:
+            envs.step(envs.action_space.sample())
+            steps += 1
+            if time.perf_counter() - start >= seconds:
+                break
+        elapsed = time.perf_counter() - start
+    finally:
+        envs.close()
+    return VectorRate(env_id, mode, num_envs, steps, elapsed)
+
+
+def vector_speed(
+    env_id: str,
+    seconds: float,
+    num_envs: int = VECTOR_NUM_ENVS,
+    env_kwargs: Mapping[str, Any] | None = None,
+    pairs: int = VECTOR_PAIRS,
+) -> VectorSpeed:
+    """:func:`vector_rate` of ``sync`` then the native vector env, ``pairs`` times, each run
+    ``seconds`` long, with the same seed and actions in both modes."""
+    runs = [
+        vector_rate(env_id, mode, seconds, num_envs, env_kwargs)
+        for _ in range(pairs)
+        for mode in VECTOR_MODES
+    ]
+    return VectorSpeed(env_id, num_envs, tuple(runs))
+
+
 def pan_throughput() -> tuple[list[dict[str, Any]], str | None]:
     """Rows from ``sonar_gym.train.bench_sonar.pan_throughput()``, or no rows and the reason."""
     try:
@@ -401,6 +525,7 @@ class BenchmarkReport:
         envs: the rates per env that ran.
         failures: env id -> error text, for envs that could not run.
         notes: measurements skipped and why.
+        vectors: vector throughput of the envs with a native vector env.
     """
 
     seconds: float
@@ -411,6 +536,7 @@ class BenchmarkReport:
     envs: tuple[EnvSpeed, ...]
     failures: Mapping[str, str]
     notes: tuple[str, ...]
+    vectors: tuple[VectorSpeed, ...] = ()
 
     @property
     def reference_before(self) -> PPORate:
@@ -478,6 +604,7 @@ class BenchmarkReport:
                 }
                 for speed in self.envs
             ],
+            "vector": [speed.to_dict() for speed in self.vectors],
             "failures": dict(self.failures),
             "notes": list(self.notes),
         }
@@ -495,9 +622,11 @@ def run_benchmark(
     *,
     ppo_n_steps: int = PPO_N_STEPS,
     measure_pan: bool = True,
+    measure_vector: bool = True,
 ) -> BenchmarkReport:
     """Pan throughput, CartPole PPO, then per env random actions, PPO, PPO on the env's free
     stand-in and CartPole PPO again: each env's ratios are to the two CartPole runs around it.
+    Last, the vector throughput of the envs with a native vector env.
 
     Torch is set to one thread for the run (and restored after). An env that raises is
     recorded in ``failures`` and the others still run.
@@ -511,6 +640,9 @@ def run_benchmark(
         ppo_n_steps: PPO's rollout length (512 in every reported number; smaller only to
             test the plumbing quickly).
         measure_pan: False skips the pan rows and the large-room reset (with a note).
+        measure_vector: False skips the vector throughput (with a note); it takes
+            ``2 * VECTOR_PAIRS * VECTOR_SHARE_OF_BUDGET * seconds`` per env with a native
+            vector env (8 s at the default).
 
     Raises:
         UsageError: an env's constructor does not take a key of ``env_kwargs``.
@@ -573,6 +705,9 @@ def run_benchmark(
                 beside = 0.5 * (references[-2].steps_per_s + references[-1].steps_per_s)
                 random, ppo, ceiling = measured
                 speeds.append(EnvSpeed(env_id, random, ppo, beside, ceiling))
+        vectors = _vector_speeds(env_ids, seconds, env_kwargs, stage, failures, measure_vector)
+        if not measure_vector:
+            notes.append("vector throughput skipped: not requested")
     finally:
         torch.set_num_threads(threads)
     return BenchmarkReport(
@@ -584,4 +719,33 @@ def run_benchmark(
         envs=tuple(speeds),
         failures=failures,
         notes=tuple(notes),
+        vectors=vectors,
     )
+
+
+def _vector_speeds(
+    env_ids: Sequence[str],
+    seconds: float,
+    env_kwargs: Mapping[str, Any] | None,
+    stage: BenchmarkProgress,
+    failures: dict[str, str],
+    measure: bool,
+) -> tuple[VectorSpeed, ...]:
+    """:func:`vector_speed` of each env in ``env_ids`` with a native vector env that has not
+    failed already (an error is recorded in ``failures``, under ``"<id> (vector)"``)."""
+    if not measure:
+        return ()
+    run_seconds = VECTOR_SHARE_OF_BUDGET * seconds
+    speeds: list[VectorSpeed] = []
+    for env_id in env_ids:
+        if env_id in failures or not has_native_vector_env(env_id):
+            continue
+        stage(
+            f"{env_id}: {VECTOR_NUM_ENVS} envs, sync vs native vector, "
+            f"{VECTOR_PAIRS} x 2 runs of {run_seconds:g} s"
+        )
+        try:
+            speeds.append(vector_speed(env_id, run_seconds, env_kwargs=env_kwargs))
+        except Exception as error:  # a broken env must not hide the other envs' numbers
+            failures[f"{env_id} (vector)"] = f"{type(error).__name__}: {error}"
+    return tuple(speeds)

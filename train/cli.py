@@ -202,9 +202,10 @@ def build_parser() -> argparse.ArgumentParser:
         "and SB3 PPO env-steps/s (n_steps 512, batch 64, 4 epochs, one env, torch on one "
         "thread) against PPO on CartPole-v1 (measured before the first env and after each, "
         "every env's ratio to the two runs around it); the ceiling (PPO on a free stand-in "
-        "with the env's spaces); the share of time per phase. The whole run takes about "
-        "(0.5 + 2.5 x envs) x SECONDS plus the pan rows (about 6 min for every env at the "
-        "default).",
+        "with the env's spaces); the share of time per phase; for envs with a native vector "
+        "env (BeaconScan), env-steps/s of 8 sub-envs through it against SyncVectorEnv. The "
+        "whole run takes about (0.5 + 2.5 x envs) x SECONDS plus the pan rows and 0.4 x "
+        "SECONDS per vector env (about 6 min for every env at the default).",
     )
     benchmark.add_argument(
         "--env", nargs="+", default=["all"], metavar="ID", help="env ids or 'all' (default)"
@@ -222,6 +223,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-pan",
         action="store_true",
         help="skip the sonar pan throughput rows and the large-room reset",
+    )
+    benchmark.add_argument(
+        "--no-vector",
+        action="store_true",
+        help="skip the vector throughput (native vector env against SyncVectorEnv)",
     )
     benchmark.add_argument(
         "--json",
@@ -593,6 +599,7 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
             env_kwargs,
             on_stage=lambda text: status.update(f"measuring {text}"),
             measure_pan=not arguments.no_pan,
+            measure_vector=not arguments.no_vector,
         )
     elapsed_s = time.perf_counter() - started
     for note in results.notes:
@@ -603,6 +610,8 @@ def _benchmark(arguments: argparse.Namespace, console: Console) -> None:
         console.print(report.room_reset_line(results.room_reset), markup=False)
     if results.envs:
         console.print(report.speed_table(results))
+    if results.vectors:
+        console.print(report.vector_table(results))
     for env_id, failure in results.failures.items():
         console.print(f"{env_id} could not run: {failure}", style="red", markup=False)
     meta = {

@@ -402,6 +402,29 @@ def speed_table(report: BenchmarkReport) -> Table:
     return table
 
 
+def vector_table(report: BenchmarkReport) -> Table:
+    """Per env with a native vector env: env-steps per second of its sub-envs under random
+    actions through ``SyncVectorEnv`` and through the native vector env, and their ratio."""
+    table = Table(
+        title="vector env steps per second (random actions, alternating runs)",
+        title_justify="left",
+        header_style="bold",
+    )
+    table.add_column("env", no_wrap=True)
+    for column in ("envs", "runs", "sync env-steps/s", "native env-steps/s", "native vs sync"):
+        table.add_column(column, justify="right")
+    for speed in report.vectors:
+        table.add_row(
+            speed.env_id,
+            str(speed.num_envs),
+            str(len(speed.runs)),
+            f"{speed.env_steps_per_s('sync'):.0f}",
+            f"{speed.env_steps_per_s('vector_entry_point'):.0f}",
+            f"{speed.native_over_sync:.3f}",
+        )
+    return table
+
+
 # --------------------------------------------------------------------------------------------
 # reproductions
 
