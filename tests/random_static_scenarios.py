@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall
+from sonar_gym.apcs_route import with_wall_obstacles
+from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, load_scenario
 
 
 def _coordinate(rng: np.random.Generator) -> float:
@@ -55,3 +56,17 @@ def random_scenario(rng: np.random.Generator) -> Scenario:
         Cylinder(point(), float(rng.uniform(0.01, 0.5))) for _ in range(rng.integers(4))
     )
     return Scenario("random", room, tuple(walls), boxes, cylinders)
+
+
+def builtin_with_obstacles(name: str, seed: int, count: int = 5) -> list[Scenario]:
+    """The built-in scenario ``name`` and, if it has a room, ``count`` copies with four unmapped
+    boxes against its long walls (as WallCorrection draws them per episode), from ``seed``."""
+    scenario = load_scenario(name)
+    if scenario.room is None:
+        return [scenario]
+    rng = np.random.default_rng(seed)
+    (x0, _), (x1, _) = scenario.room.min, scenario.room.max
+    return [scenario] + [
+        with_wall_obstacles(scenario, rng, 4, (0.3, 1.2), (0.1, 0.4), (x0 + 0.5, x1 - 0.5))
+        for _ in range(count)
+    ]

@@ -5,9 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sonar_gym.apcs_route import with_wall_obstacles
 from sonar_gym.geometry import build_static_geometry
-from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, builtin_names, load_scenario
+from sonar_gym.scenario import Box, Cylinder, Room, Scenario, Wall, builtin_names
 from sonar_gym.sonar.echo_tables import (
     LOOP_TOLERANCE_M,
     _closer_than,
@@ -15,7 +14,7 @@ from sonar_gym.sonar.echo_tables import (
     convex_loops,
 )
 from sonar_gym.sonar.loop_kernels import closer_than
-from tests.random_static_scenarios import random_scenario
+from tests.random_static_scenarios import builtin_with_obstacles, random_scenario
 from tests.sonar.convex_loops_arrays_reference import reference_array_convex_loops
 from tests.sonar.convex_loops_reference import reference_convex_loops
 
@@ -44,16 +43,7 @@ def test_convex_loops_equal_the_reference_on_random_scenarios(seed: int) -> None
 
 @pytest.mark.parametrize("name", builtin_names())
 def test_convex_loops_equal_the_reference_on_the_builtin_scenarios(name: str) -> None:
-    scenario = load_scenario(name)
-    rng = np.random.default_rng(0)
-    scenarios = [scenario]
-    if scenario.room is not None:
-        (x0, _), (x1, _) = scenario.room.min, scenario.room.max
-        scenarios += [
-            with_wall_obstacles(scenario, rng, 4, (0.3, 1.2), (0.1, 0.4), (x0 + 0.5, x1 - 0.5))
-            for _ in range(5)
-        ]
-    for each in scenarios:
+    for each in builtin_with_obstacles(name, seed=0):
         geometry = build_static_geometry(each)
         args = (geometry.segment_starts, geometry.segment_ends, geometry.circles[:, :2])
         _assert_same_loops(name, args)

@@ -8,13 +8,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from sonar_gym.apcs_route import with_wall_obstacles
 from sonar_gym.geometry import StaticGeometry, build_static_geometry
-from sonar_gym.scenario import builtin_names, load_scenario
+from sonar_gym.scenario import builtin_names
 from sonar_gym.sonar.echo_tables import _build
 from sonar_gym.sonar.echoes import _CYLINDER, _EDGE, _PLANE
 from sonar_gym.sonar.table_kernels import WEDGE_CROSS_TOLERANCE
-from tests.random_static_scenarios import random_scenario
+from tests.random_static_scenarios import builtin_with_obstacles, random_scenario
 from tests.sonar.echo_tables_maps_reference import reference_linear_maps
 
 
@@ -42,16 +41,7 @@ def test_the_maps_equal_the_array_form_on_random_scenarios(seed: int) -> None:
 
 @pytest.mark.parametrize("name", builtin_names())
 def test_the_maps_equal_the_array_form_on_the_builtin_scenarios(name: str) -> None:
-    scenario = load_scenario(name)
-    rng = np.random.default_rng(1)
-    scenarios = [scenario]
-    if scenario.room is not None:
-        (x0, _), (x1, _) = scenario.room.min, scenario.room.max
-        scenarios += [
-            with_wall_obstacles(scenario, rng, 4, (0.3, 1.2), (0.1, 0.4), (x0 + 0.5, x1 - 0.5))
-            for _ in range(5)
-        ]
-    for each in scenarios:
+    for each in builtin_with_obstacles(name, seed=1):
         _assert_same_maps(build_static_geometry(each))
 
 
