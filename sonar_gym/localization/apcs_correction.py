@@ -302,7 +302,7 @@ def _paper_step(
     reduction = _IDENTITY_3 - gain @ constraint_jacobian
     reduced = reduction.dot(covariance) if c_ordered else reduction @ covariance
     corrected_covariance = (  # eq. (12), Joseph form: symmetric and PSD by construction
-        reduced @ reduction.T + (gain @ constraint_covariance).dot(gain.T)
+        reduced @ reduction.T + gain @ constraint_covariance @ gain.T
     )
     corrected_covariance = 0.5 * (corrected_covariance + corrected_covariance.T)
     return OK, corrected, corrected_covariance, ""
