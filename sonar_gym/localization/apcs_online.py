@@ -18,6 +18,7 @@ Everything here takes plain arrays and dataclasses; nothing reads a world.
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -676,13 +677,14 @@ class APCSTracker:
         event = 0
         while event < len(events) and sample_list[events[event][0]] < limit:
             first_sample = events[event][0]
-            rows = poses[samples[first_sample:] + 1]
+            # the readings the pass can reach: a correction stops the run at `limit`
+            rows = poses[samples[first_sample : bisect.bisect_left(sample_list, limit)] + 1]
             # Flat lists of floats, six a reading: no list per row to allocate.
             pending: dict[str, list[float]] = {
                 side: self.streams[side]._pending_rows(
                     _sensor_positions(rows, side, sensor_offset_m),
                     rows[:, 2],
-                    ranges[side][first_sample:],
+                    ranges[side][first_sample : first_sample + len(rows)],
                 )
                 for side in sides
             }
@@ -719,17 +721,18 @@ class APCSTracker:
                 later_stops = [stop for stop in stops if stop > command]
                 if later_stops:
                     limit = min(limit, later_stops[0])
+                # dead reckoning from the corrected estimate, up to where the run now stops
                 tail_poses, tail_covariances = predict_run_unchecked(
                     self.estimate,
                     self.covariance,
-                    left[command + 1 :],
-                    right[command + 1 :],
+                    left[command + 1 : limit],
+                    right[command + 1 : limit],
                     self.wheel_base_m,
                     variance_per_m,
                 )
                 poses = np.vstack([poses[: command + 1], tail_poses])
                 covariances = np.concatenate([covariances[: command + 1], tail_covariances])
-                result.estimated_path[command + 1 :] = tail_poses[1:]
+                result.estimated_path[command + 1 : limit] = tail_poses[1:]
         if limit < len(left):
             result.consumed = limit
             result.estimated_path = result.estimated_path[:limit]
