@@ -30,7 +30,7 @@ import numpy as np
 import numpy.typing as npt
 
 from sonar_gym.frozen import unchecked_instance
-from sonar_gym.localization import apcs_kernels, apcs_match_kernels
+from sonar_gym.localization import apcs_kernels, apcs_match_kernels, scatter_axis
 from sonar_gym.pose import FloatArray, wrap_angles
 
 IntArray = npt.NDArray[np.int64]
@@ -828,15 +828,18 @@ def fit_group_points(
     # members.mean(axis=0), as it sums, and the ERPs relative to it, in one compiled loop
     centred, centroid_x, centroid_y = apcs_kernels.centred_group(members)
     scatter = centred.T @ centred
-    np.true_divide(scatter, len(indices), out=scatter)  # `/ len(indices)`, in place
-    values, eigenvectors = np.linalg.eigh(scatter)
-    eigenvalues: list[float] = values.tolist()  # ascending
-    residual_variance = max(eigenvalues[0], 0.0)
+    # np.linalg.eigh(scatter / len(indices)) in one compiled loop, where LAPACK would not rescale
+    answered, smallest, along_x, along_y = scatter_axis.principal_axis(scatter, len(indices))
+    if not answered:
+        np.true_divide(scatter, len(indices), out=scatter)  # `/ len(indices)`, in place
+        values, eigenvectors = np.linalg.eigh(scatter)
+        smallest = values.tolist()[0]  # ascending
+        along_x, along_y = eigenvectors[:, 1].tolist()
+    residual_variance = max(smallest, 0.0)
     if residual_variance >= params.variance_threshold_m2:
         return WallFit(GROUP_TOO_MUCH_VARIANCE, indices, residual_variance)
 
-    along = eigenvectors[:, 1]
-    along_x, along_y = along.tolist()
+    along = np.array([along_x, along_y])
     occupied_side = np.array([-along_y, along_x])  # left of `along`
     if directions is not None:
         # The sums of the cosines and of the sines, as ndarray.sum of each gives them: a
