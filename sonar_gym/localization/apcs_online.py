@@ -677,14 +677,14 @@ class APCSTracker:
         event = 0
         while event < len(events) and sample_list[events[event][0]] < limit:
             first_sample = events[event][0]
-            # the readings the pass can reach: a correction stops the run at `limit`
-            rows = poses[samples[first_sample : bisect.bisect_left(sample_list, limit)] + 1]
+            reachable = bisect.bisect_left(sample_list, limit)  # a correction stops at `limit`
+            rows = poses[samples[first_sample:reachable] + 1]
             # Flat lists of floats, six a reading: no list per row to allocate.
             pending: dict[str, list[float]] = {
                 side: self.streams[side]._pending_rows(
                     _sensor_positions(rows, side, sensor_offset_m),
                     rows[:, 2],
-                    ranges[side][first_sample : first_sample + len(rows)],
+                    ranges[side][first_sample:reachable],
                 )
                 for side in sides
             }

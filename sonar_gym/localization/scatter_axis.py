@@ -149,8 +149,6 @@ def principal_axis(scatter: FloatArray, count: float) -> tuple[bool, float, floa
             z22 = c * temp - s * z21
             z21 = s * temp + c * z21
             d1, d2 = rt1, rt2
-    if d2 < d1:  # the selection sort's one possible swap
-        d1, d2 = d2, d1
-        z12 = z11
-        z22 = z21
+    if d2 < d1:  # the selection sort's one swap, of the values and of the eigenvector columns
+        return True, d2, z11, z21
     return True, d1, z12, z22
